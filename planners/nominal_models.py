@@ -1,0 +1,182 @@
+"""Nominal motion models, defined once in CasADi and usable as NumPy functions.
+
+Each model is continuous time, ``x_dot = f(x, u)``, discretised with RK4. A learned residual
+plugs in as ``x_dot = f(x, u) + B_z g(z)`` (paper 000, eq. 1): ``g`` returns a 3-vector of
+velocity-rate residuals in m/s^2 (NED), and ``residual_map`` (B_z) says how it enters the state.
+
+Models:
+    kinematic_4dof: paper 000's planner model. State (pos_n, pos_e, pos_d [m], yaw [rad]);
+        input (vel_n, vel_e, vel_d [m/s], yaw_rate [rad/s]). The vehicle is assumed to fly the
+        commanded velocity; a residual y [m/s^2] corrects that velocity by ``y * residual_dt_s``,
+        exactly as the residual was measured: y = (v_actual - v_cmd) / dt.
+    first_order_lag: adds the velocity to the state, v_dot = (v_cmd - v) / tau; a residual adds
+        to v_dot. State (pos[3], vel[3], yaw), same input.
+    unicycle: paper 004's ground robot. State (x_n, x_e [m], heading [rad]); input (speed [m/s],
+        turn rate [rad/s]); a residual (3-vector) adds to the state rates directly.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+
+@dataclass(frozen=True)
+class NominalModel:
+    """A continuous-time model ``x_dot = f(x, u)`` with its residual map.
+
+    Attributes:
+        name: identifier recorded in model files and logs.
+        state_names, input_names: element names with units, in order.
+        f: CasADi Function (x[nx], u[nu]) -> x_dot[nx].
+        residual_map: B_z, shape (nx, 3): how a residual g(z) in m/s^2 enters x_dot.
+        velocity_of: CasADi Function (x, u) -> the velocity [m/s] the model says the vehicle has
+            (the command itself for the kinematic model, the velocity state for the lag model).
+    """
+
+    name: str
+    state_names: tuple[str, ...]
+    input_names: tuple[str, ...]
+    f: ca.Function
+    residual_map: np.ndarray
+    velocity_of: ca.Function
+
+    @property
+    def nx(self) -> int:
+        return len(self.state_names)
+
+    @property
+    def nu(self) -> int:
+        return len(self.input_names)
+
+    def xdot(self, x, u, residual=None):
+        """Symbolic (or DM) state derivative, with an optional residual 3-vector [m/s^2]."""
+        out = self.f(x, u)
+        if residual is not None:
+            out = out + ca.DM(self.residual_map) @ residual
+        return out
+
+    def rk4_step(self, x, u, dt_s: float, residual_fn=None):
+        """One RK4 step of length ``dt_s`` (symbolic or DM).
+
+        ``residual_fn(x, u)`` -> 3-vector, if given, is evaluated at every RK4 stage.
+        """
+
+        def rate(xs):
+            r = residual_fn(xs, u) if residual_fn is not None else None
+            return self.xdot(xs, u, r)
+
+        k1 = rate(x)
+        k2 = rate(x + dt_s / 2 * k1)
+        k3 = rate(x + dt_s / 2 * k2)
+        k4 = rate(x + dt_s * k3)
+        return x + dt_s / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+
+    def step_function(self, dt_s: float) -> ca.Function:
+        """CasADi Function (x, u) -> x_next for a fixed step, without residual."""
+        x = ca.SX.sym("x", self.nx)
+        u = ca.SX.sym("u", self.nu)
+        return ca.Function(f"{self.name}_rk4", [x, u], [self.rk4_step(x, u, dt_s)], ["x", "u"], ["x_next"])
+
+    def xdot_np(self, x: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """NumPy x_dot for a batch: x (n, nx) or (nx,), u (n, nu) or (nu,) -> same leading shape."""
+        return _batch_call(self.f, x, u, self.nx, self.nu)
+
+    def step_np(self, x: np.ndarray, u: np.ndarray, dt_s: float) -> np.ndarray:
+        """NumPy RK4 step for a batch, shapes as :meth:`xdot_np`."""
+        return _batch_call(self.step_function(dt_s), x, u, self.nx, self.nu)
+
+    def predicted_velocity_np(self, x: np.ndarray, u: np.ndarray, dt_s: float) -> np.ndarray:
+        """Velocity [m/s] the model predicts ``dt_s`` after state x under input u, shape (n, 3).
+
+        This is v_bar in paper 000's residual y = (v_actual - v_bar) / dt.
+        """
+        x_next = self.step_np(x, u, dt_s)
+        return _batch_call(self.velocity_of, x_next, u, self.nx, self.nu)
+
+
+def _batch_call(fn: ca.Function, x: np.ndarray, u: np.ndarray, nx: int, nu: int) -> np.ndarray:
+    x = np.asarray(x, dtype=float)
+    u = np.asarray(u, dtype=float)
+    single = x.ndim == 1
+    x2 = np.atleast_2d(x)
+    u2 = np.atleast_2d(u)
+    if x2.shape[1] != nx or u2.shape[1] != nu or x2.shape[0] != u2.shape[0]:
+        raise ValueError(
+            f"{fn.name()}: expected x of shape (n, {nx}) and u of shape (n, {nu}), "
+            f"got {x.shape} and {u.shape}"
+        )
+    out = np.asarray(fn.map(x2.shape[0])(x2.T, u2.T)).T
+    return out[0] if single else out
+
+
+def kinematic_4dof(residual_dt_s: float = 0.05) -> NominalModel:
+    """Paper 000's 4-DOF kinematic model; ``residual_dt_s`` is δ_v, the residual's time base."""
+    x = ca.SX.sym("x", 4)
+    u = ca.SX.sym("u", 4)
+    f = ca.Function("kinematic_4dof", [x, u], [u], ["x", "u"], ["x_dot"])
+    b = np.zeros((4, 3))
+    b[:3, :3] = residual_dt_s * np.eye(3)
+    vel = ca.Function("kinematic_4dof_velocity", [x, u], [u[:3]], ["x", "u"], ["vel"])
+    return NominalModel(
+        "kinematic_4dof",
+        ("pos_n_m", "pos_e_m", "pos_d_m", "yaw_rad"),
+        ("vel_n_mps", "vel_e_mps", "vel_d_mps", "yaw_rate_radps"),
+        f,
+        b,
+        vel,
+    )
+
+
+def first_order_lag(tau_s: float = 0.3) -> NominalModel:
+    """Velocity follows the command with time constant ``tau_s`` [s]."""
+    if not tau_s > 0:
+        raise ValueError(f"first_order_lag: tau_s must be > 0 s, got {tau_s}")
+    x = ca.SX.sym("x", 7)
+    u = ca.SX.sym("u", 4)
+    vel_dot = (u[:3] - x[3:6]) / tau_s
+    f = ca.Function("first_order_lag", [x, u], [ca.vertcat(x[3:6], vel_dot, u[3])], ["x", "u"], ["x_dot"])
+    b = np.zeros((7, 3))
+    b[3:6, :3] = np.eye(3)
+    vel = ca.Function("first_order_lag_velocity", [x, u], [x[3:6]], ["x", "u"], ["vel"])
+    return NominalModel(
+        "first_order_lag",
+        ("pos_n_m", "pos_e_m", "pos_d_m", "vel_n_mps", "vel_e_mps", "vel_d_mps", "yaw_rad"),
+        ("vel_n_mps", "vel_e_mps", "vel_d_mps", "yaw_rate_radps"),
+        f,
+        b,
+        vel,
+    )
+
+
+def unicycle() -> NominalModel:
+    """Paper 004's unicycle: (x_n, x_e, heading) driven by (speed, turn rate)."""
+    x = ca.SX.sym("x", 3)
+    u = ca.SX.sym("u", 2)
+    xdot = ca.vertcat(u[0] * ca.cos(x[2]), u[0] * ca.sin(x[2]), u[1])
+    f = ca.Function("unicycle", [x, u], [xdot], ["x", "u"], ["x_dot"])
+    vel = ca.Function(
+        "unicycle_velocity", [x, u], [ca.vertcat(u[0] * ca.cos(x[2]), u[0] * ca.sin(x[2]), 0)], ["x", "u"], ["vel"]
+    )
+    return NominalModel(
+        "unicycle",
+        ("pos_n_m", "pos_e_m", "heading_rad"),
+        ("speed_mps", "turn_rate_radps"),
+        f,
+        np.eye(3),
+        vel,
+    )
+
+
+MODELS = {"kinematic_4dof": kinematic_4dof, "first_order_lag": first_order_lag, "unicycle": unicycle}
+
+
+def make_model(name: str, **params: float) -> NominalModel:
+    """Build a model by name; a bad name raises ValueError listing the valid ones."""
+    try:
+        factory = MODELS[name]
+    except KeyError:
+        raise ValueError(f"unknown nominal model {name!r}; choose one of {', '.join(MODELS)}") from None
+    return factory(**params)

@@ -1,0 +1,86 @@
+"""`bench`: measure the project's speed and accuracy figures and print them as a table.
+
+Each part lives in ``scripts/bench_<part>.py`` and exposes ``run(progress, quick) -> dict``
+of named figures (names are stable so they can be followed over time; see BENCHMARKS.md).
+Timings are only compared against baselines measured in the same run: machines are noisy.
+
+Usage:
+    bench                      # every part, Markdown table on stdout
+    bench --only gp --json     # one part, one JSON object
+    bench --quick              # small sizes, for a smoke run
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import json
+import sys
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+PARTS: dict[str, str] = {
+    "sim": "scripts.bench_sim",
+    "jsbsim": "scripts.bench_jsbsim",
+    "gp": "scripts.bench_gp",
+    "nmpc": "scripts.bench_nmpc",
+    "link": "scripts.bench_link",
+}
+
+
+@dataclass(frozen=True)
+class BenchConfig:
+    """What to run: ``parts`` in order, ``quick`` for small sizes, ``as_json`` for the output."""
+
+    parts: tuple[str, ...]
+    quick: bool = False
+    as_json: bool = False
+
+
+def parse_args(argv: Sequence[str] | None) -> BenchConfig:
+    parser = argparse.ArgumentParser(prog="bench", description=__doc__.splitlines()[0])
+    parser.add_argument("--only", action="append", metavar="PART",
+                        help=f"run only this part (repeatable): {', '.join(PARTS)}")
+    parser.add_argument("--quick", action="store_true", help="small sizes, for a smoke run")
+    parser.add_argument("--json", action="store_true", help="print one JSON object of figures")
+    args = parser.parse_args(argv)
+    parts = tuple(args.only) if args.only else tuple(PARTS)
+    unknown = [p for p in parts if p not in PARTS]
+    if unknown:
+        parser.error(f"unknown part {unknown[0]!r}; choose from {', '.join(PARTS)}")
+    return BenchConfig(parts=parts, quick=args.quick, as_json=args.json)
+
+
+def run_parts(config: BenchConfig, progress: Callable[[str], None]) -> dict[str, float]:
+    """Run the configured parts in order and merge their figures."""
+    figures: dict[str, float] = {}
+    for part in config.parts:
+        module = importlib.import_module(PARTS[part])
+        progress(f"[bench] {part} ...")
+        start = time.perf_counter()
+        figures.update(module.run(progress=progress, quick=config.quick))
+        progress(f"[bench] {part} done in {time.perf_counter() - start:.1f} s")
+    return figures
+
+
+def format_table(figures: dict[str, float]) -> str:
+    """Figures as a two-column Markdown table."""
+    lines = ["| figure | value |", "|---|---|"]
+    lines += [f"| `{name}` | {value:.4g} |" for name, value in figures.items()]
+    return "\n".join(lines)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    config = parse_args(argv)
+
+    def progress(message: str) -> None:
+        print(message, file=sys.stderr, flush=True)
+
+    figures = run_parts(config, progress)
+    print(json.dumps(figures, sort_keys=True) if config.as_json else format_table(figures))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,101 @@
+"""Public value types of the simulated vehicle: its state, the setpoints it takes, its modes.
+
+Frames as PX4: world local NED, body FRD, quaternion (w, x, y, z) body-to-NED. SI units.
+These are what the in-process API returns and what the MAVLink endpoint translates to wire units.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+
+class FlightMode(enum.Enum):
+    """PX4 flight modes the simulator implements; values are PX4's MAVLink custom_mode."""
+
+    POSCTL = 196608
+    HOLD = 50593792
+    TAKEOFF = 33816576
+    LAND = 100925440
+    RTL = 84148224
+    MISSION = 67371008
+    OFFBOARD = 393216
+
+    @classmethod
+    def parse(cls, name: str) -> FlightMode:
+        """Mode by case-insensitive name; a bad name raises ValueError listing the valid ones."""
+        try:
+            return cls[name.upper()]
+        except KeyError:
+            raise ValueError(
+                f"unknown flight mode {name!r}; choose one of {', '.join(m.name for m in cls)}"
+            ) from None
+
+
+class LandedState(enum.IntEnum):
+    """MAVLink MAV_LANDED_STATE values."""
+
+    ON_GROUND = 1
+    IN_AIR = 2
+    TAKEOFF = 3
+    LANDING = 4
+
+
+SetpointFrame = Literal["ned", "body"]
+
+
+@dataclass(frozen=True)
+class VelocitySetpoint:
+    """A velocity + yaw-rate setpoint, as an offboard app streams it.
+
+    Attributes:
+        vel_mps: (3,) velocity; NED for frame "ned", FRD body axes for frame "body" (horizontal
+            components rotated by yaw only, as PX4 does for BODY_NED).
+        yaw_rate_radps: yaw rate [rad/s]; ignored when ``yaw_rad`` is given.
+        yaw_rad: absolute yaw [rad] (NED heading), or None to use the yaw rate.
+        frame: "ned" or "body".
+    """
+
+    vel_mps: tuple[float, float, float]
+    yaw_rate_radps: float = 0.0
+    yaw_rad: float | None = None
+    frame: SetpointFrame = "ned"
+
+
+@dataclass(frozen=True)
+class VehicleState:
+    """True state of the simulated vehicle at time ``t_s``.
+
+    Attributes:
+        t_s: simulated time [s].
+        pos_ned_m, vel_ned_mps, acc_ned_mps2: (3,) position, velocity, acceleration in NED;
+            the acceleration is the measured kinematic one (includes gravity's effect, i.e. it is
+            d(vel)/dt, not specific force).
+        q_wxyz: (4,) attitude quaternion, body-to-NED.
+        rates_frd_radps: (3,) body angular rates.
+        thrust_n: total rotor thrust [N].
+        motor_speeds_norm: (4,) normalised motor outputs in [0, 1].
+        battery_v: battery voltage [V].
+        armed, mode, landed_state: the flight controller's view.
+    """
+
+    t_s: float
+    pos_ned_m: np.ndarray
+    vel_ned_mps: np.ndarray
+    acc_ned_mps2: np.ndarray
+    q_wxyz: np.ndarray
+    rates_frd_radps: np.ndarray
+    thrust_n: float
+    motor_speeds_norm: np.ndarray
+    battery_v: float
+    armed: bool
+    mode: FlightMode
+    landed_state: LandedState
+
+    @property
+    def yaw_rad(self) -> float:
+        w, x, y, z = self.q_wxyz
+        return float(np.arctan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z)))
