@@ -78,7 +78,9 @@ class NominalModel:
         """CasADi Function (x, u) -> x_next for a fixed step, without residual."""
         x = ca.SX.sym("x", self.nx)
         u = ca.SX.sym("u", self.nu)
-        return ca.Function(f"{self.name}_rk4", [x, u], [self.rk4_step(x, u, dt_s)], ["x", "u"], ["x_next"])
+        return ca.Function(
+            f"{self.name}_rk4", [x, u], [self.rk4_step(x, u, dt_s)], ["x", "u"], ["x_next"]
+        )
 
     def xdot_np(self, x: np.ndarray, u: np.ndarray) -> np.ndarray:
         """NumPy x_dot for a batch: x (n, nx) or (nx,), u (n, nu) or (nu,) -> same leading shape."""
@@ -137,7 +139,9 @@ def first_order_lag(tau_s: float = 0.3) -> NominalModel:
     x = ca.SX.sym("x", 7)
     u = ca.SX.sym("u", 4)
     vel_dot = (u[:3] - x[3:6]) / tau_s
-    f = ca.Function("first_order_lag", [x, u], [ca.vertcat(x[3:6], vel_dot, u[3])], ["x", "u"], ["x_dot"])
+    f = ca.Function(
+        "first_order_lag", [x, u], [ca.vertcat(x[3:6], vel_dot, u[3])], ["x", "u"], ["x_dot"]
+    )
     b = np.zeros((7, 3))
     b[3:6, :3] = np.eye(3)
     vel = ca.Function("first_order_lag_velocity", [x, u], [x[3:6]], ["x", "u"], ["vel"])
@@ -158,7 +162,11 @@ def unicycle() -> NominalModel:
     xdot = ca.vertcat(u[0] * ca.cos(x[2]), u[0] * ca.sin(x[2]), u[1])
     f = ca.Function("unicycle", [x, u], [xdot], ["x", "u"], ["x_dot"])
     vel = ca.Function(
-        "unicycle_velocity", [x, u], [ca.vertcat(u[0] * ca.cos(x[2]), u[0] * ca.sin(x[2]), 0)], ["x", "u"], ["vel"]
+        "unicycle_velocity",
+        [x, u],
+        [ca.vertcat(u[0] * ca.cos(x[2]), u[0] * ca.sin(x[2]), 0)],
+        ["x", "u"],
+        ["vel"],
     )
     return NominalModel(
         "unicycle",
@@ -170,7 +178,11 @@ def unicycle() -> NominalModel:
     )
 
 
-MODELS = {"kinematic_4dof": kinematic_4dof, "first_order_lag": first_order_lag, "unicycle": unicycle}
+MODELS = {
+    "kinematic_4dof": kinematic_4dof,
+    "first_order_lag": first_order_lag,
+    "unicycle": unicycle,
+}
 
 
 def make_model(name: str, **params: float) -> NominalModel:
@@ -178,5 +190,7 @@ def make_model(name: str, **params: float) -> NominalModel:
     try:
         factory = MODELS[name]
     except KeyError:
-        raise ValueError(f"unknown nominal model {name!r}; choose one of {', '.join(MODELS)}") from None
+        raise ValueError(
+            f"unknown nominal model {name!r}; choose one of {', '.join(MODELS)}"
+        ) from None
     return factory(**params)

@@ -26,6 +26,8 @@ PARTS: dict[str, str] = {
     "gp": "scripts.bench_gp",
     "nmpc": "scripts.bench_nmpc",
     "link": "scripts.bench_link",
+    "loop": "scripts.bench_loop",
+    "diagnose": "scripts.bench_diagnose",
 }
 
 

@@ -186,11 +186,15 @@ def read_flight_log(path: str | Path, max_gap_s: float | None = None) -> FlightL
             reader = csv.reader(fh)
             header = next(reader, None)
             if not header:
-                raise FlightLogError(f"{path}: empty file, expected a CSV header with {REQUIRED_COLUMNS[0]}, ...")
+                raise FlightLogError(
+                    f"{path}: empty file, expected a CSV header with {REQUIRED_COLUMNS[0]}, ..."
+                )
             header = [h.strip() for h in header]
             rows = list(reader)
     except UnicodeDecodeError as exc:
-        raise FlightLogError(f"{path}: not a text CSV file ({exc.reason}); is it a ULog? use the ULog reader") from None
+        raise FlightLogError(
+            f"{path}: not a text CSV file ({exc.reason}); is it a ULog? use the ULog reader"
+        ) from None
     missing = [c for c in REQUIRED_COLUMNS if c not in header]
     if missing:
         raise FlightLogError(
@@ -226,10 +230,14 @@ def read_flight_log(path: str | Path, max_gap_s: float | None = None) -> FlightL
         try:
             meta = json.loads(side.read_text())
         except json.JSONDecodeError as exc:
-            raise FlightLogError(f"{side}: sidecar is not valid JSON ({exc.msg} at line {exc.lineno})") from None
+            raise FlightLogError(
+                f"{side}: sidecar is not valid JSON ({exc.msg} at line {exc.lineno})"
+            ) from None
         version = meta.get("schema_version", SCHEMA_VERSION)
         if version != SCHEMA_VERSION:
-            raise FlightLogError(f"{side}: schema_version {version!r}, this reader understands {SCHEMA_VERSION}")
+            raise FlightLogError(
+                f"{side}: schema_version {version!r}, this reader understands {SCHEMA_VERSION}"
+            )
     log = FlightLog(cols, meta, path)
     validate_flight_log(log, max_gap_s=max_gap_s)
     return log
@@ -283,7 +291,9 @@ def split_at_gaps(log: FlightLog, max_gap_s: float) -> list[FlightLog]:
     return [log.slice(a, b) for a, b in zip(cuts[:-1], cuts[1:], strict=True) if b > a]
 
 
-def concat_rows(rows: Iterable[Mapping[str, float | str]], metadata: Mapping[str, object] | None = None) -> FlightLog:
+def concat_rows(
+    rows: Iterable[Mapping[str, float | str]], metadata: Mapping[str, object] | None = None
+) -> FlightLog:
     """Build a validated log from an iterable of row mappings."""
     rec = FlightLogRecorder(metadata)
     for r in rows:

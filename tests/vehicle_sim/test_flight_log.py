@@ -49,7 +49,8 @@ def test_missing_required_column_is_named(tmp_path):
     path = _write(tmp_path, [_row(0.0), _row(0.1)])
     text = path.read_text().replace("cmd_yaw_rate_radps", "something_else")
     path.write_text(text)
-    with pytest.raises(FlightLogError, match=r"flight\.csv: missing required column\(s\) cmd_yaw_rate_radps"):
+    match = r"flight\.csv: missing required column\(s\) cmd_yaw_rate_radps"
+    with pytest.raises(FlightLogError, match=match):
         read_flight_log(path)
 
 
@@ -61,7 +62,8 @@ def test_nan_names_file_row_and_column(tmp_path):
     cells[header.index("vel_e_mps")] = "nan"
     lines[3] = ",".join(cells)
     path.write_text("\n".join(lines) + "\n")
-    with pytest.raises(FlightLogError, match=r"flight\.csv: row 3, column vel_e_mps: nan is not finite"):
+    match = r"flight\.csv: row 3, column vel_e_mps: nan is not finite"
+    with pytest.raises(FlightLogError, match=match):
         read_flight_log(path)
 
 

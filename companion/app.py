@@ -1,0 +1,150 @@
+"""The companion application: build link, planner and reference, fly, write the log.
+
+This is the edge where files and connections are opened; ``scripts/companion_cli.py`` only
+parses arguments into a :class:`CompanionConfig` and maps the outcome to an exit code.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Literal, get_args
+
+from companion.flight_recorder import FlightRecorder
+from companion.link import Link
+from companion.mission import Mission, load_mission
+from companion.mission_reference import reference_of
+from companion.planner_registry import make_planner, velocity_state_of
+from companion.runner import FlightOutcome, RunnerConfig, fly_mission
+from vehicle_sim.flight_log import write_flight_log
+
+LinkKind = Literal["mavsdk", "pymavlink", "inprocess"]
+LINK_KINDS: tuple[str, ...] = get_args(LinkKind)
+DEFAULT_URL = "udpin://127.0.0.1:14540"
+LOG_SOURCE = "companion"
+LOG_VERSION = 1
+LOCKSTEP_PLAN_BUDGET_S = 1.0  # simulated time stands still while planning in process [s]
+
+
+class CompanionInputError(ValueError):
+    """Bad mission, planner or vehicle, found before anything flies; one line."""
+
+
+@dataclass(frozen=True)
+class CompanionConfig:
+    """One companion run.
+
+    Attributes:
+        mission_path: the mission file (TOML).
+        link: "mavsdk", "pymavlink" or "inprocess".
+        url: MAVLink connection URL (ignored in process).
+        planner: planner name (see companion.planner_registry).
+        gp_model: residual model file (from fit-gp) for the NMPC, or None for nominal.
+        log_path: where the schema-v1 CSV log goes (sidecar beside it).
+        seed: simulator seed (in process).
+        vehicle: simulator preset or config file (in process).
+        runner: timing of the mission sequence (loop rate, deadlines).
+    """
+
+    mission_path: Path
+    link: LinkKind = "mavsdk"
+    url: str = DEFAULT_URL
+    planner: str = "pd"
+    gp_model: Path | None = None
+    log_path: Path = Path("out/flight.csv")
+    seed: int = 0
+    vehicle: str = "iris"
+    runner: RunnerConfig = field(default_factory=RunnerConfig)
+
+    def __post_init__(self) -> None:
+        if self.link not in LINK_KINDS:
+            raise ValueError(f"unknown link {self.link!r}; choose one of {', '.join(LINK_KINDS)}")
+
+
+@dataclass(frozen=True)
+class CompanionResult:
+    """A finished run: the flight outcome and where its log went (None if nothing flown)."""
+
+    outcome: FlightOutcome
+    log_path: Path | None
+
+
+def run_companion(config: CompanionConfig, progress: Callable[[str], None]) -> CompanionResult:
+    """Fly ``config``'s mission and write its log.
+
+    Raises:
+        CompanionInputError: bad mission, planner or vehicle (before anything flies).
+    """
+    try:
+        mission = load_mission(config.mission_path)
+        planner = make_planner(
+            config.planner,
+            mission.speed_limit_mps,
+            gp_model=config.gp_model,
+            rate_hz=config.runner.rate_hz,
+            time_budget_s=LOCKSTEP_PLAN_BUDGET_S if config.link == "inprocess" else None,
+        )
+        runner = replace(config.runner, velocity_state=velocity_state_of(config.planner))
+        reference = reference_of(mission)
+        link = open_link(config)
+    except ValueError as exc:  # MissionError, SimConfigError, unknown planner or URL
+        raise CompanionInputError(str(exc)) from None
+    recorder = FlightRecorder(
+        period_s=1.0 / config.runner.rate_hz, wall_clock_columns=config.link != "inprocess"
+    )
+    outcome: FlightOutcome | None = None
+    try:
+        outcome = fly_mission(link, planner, reference, mission, runner, recorder.record, progress)
+    finally:
+        link.close()
+        log_path = _write_log(config, mission, link, recorder, outcome, progress)
+    return CompanionResult(outcome, log_path)
+
+
+def open_link(config: CompanionConfig) -> Link:
+    """The link ``config`` asks for (not yet connected)."""
+    if config.link == "mavsdk":
+        from companion.mavsdk_link import MavsdkLink
+
+        return MavsdkLink(config.url)
+    if config.link == "pymavlink":
+        from companion.pymavlink_link import PymavlinkLink
+
+        return PymavlinkLink(config.url)
+    from companion.inprocess_link import InProcessLink
+
+    return InProcessLink.from_vehicle(config.vehicle, config.seed)
+
+
+def _write_log(
+    config: CompanionConfig,
+    mission: Mission,
+    link: Link,
+    recorder: FlightRecorder,
+    outcome: FlightOutcome | None,
+    progress: Callable[[str], None],
+) -> Path | None:
+    if len(recorder) == 0:
+        progress("no control steps flown; no flight log written")
+        return None
+    metadata = {
+        "source": LOG_SOURCE,
+        "companion_log_version": LOG_VERSION,
+        "mission": mission.name,
+        "planner": config.planner,
+        "gp_model": None if config.gp_model is None else str(config.gp_model),
+        "rate_hz": config.runner.rate_hz,
+        **link.metadata(),
+    }
+    if outcome is not None:
+        metadata |= {
+            "outcome": outcome.status,
+            "goal_error_m": outcome.goal_error_m,
+            "landed_error_m": outcome.landed_error_m,
+            "loop_ticks": outcome.ticks,
+            "loop_deadline_misses": outcome.deadline_misses,
+        }
+    path = write_flight_log(config.log_path, recorder.to_log(metadata))
+    progress(f"flight log: {path} ({len(recorder)} rows)")
+    return path

@@ -1,0 +1,202 @@
+"""A Link over MAVSDK 4.x (the native binding: ``Mavsdk``, ``first_autopilot``, plugins).
+
+Uses MAVSDK's synchronous API; its own threads receive telemetry and, once a setpoint is set,
+re-send it at 20 Hz, so the loop's clock is the plain wall clock. Telemetry is read with the
+plugins' polling getters (newest values), commands block until the autopilot answers.
+
+MAVSDK's NED velocity setpoint carries an absolute yaw, not a yaw rate, so the commanded yaw
+rate is integrated here into a yaw target (starting from the vehicle's heading when streaming
+starts); with zero yaw rate the vehicle keeps its heading.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import time
+from collections.abc import Callable, Mapping
+from typing import TypeVar
+
+import numpy as np
+from mavsdk import (
+    ComponentType,
+    Configuration,
+    ConnectionResult,
+    LogLevel,
+    Mavsdk,
+    MavsdkError,
+    System,
+    log_subscribe,
+)
+from mavsdk.plugins.action import Action, ActionError
+from mavsdk.plugins.offboard import Offboard, OffboardError, VelocityNedYaw
+from mavsdk.plugins.telemetry import Telemetry, TelemetryError
+
+from companion.clocks import WallClock
+from companion.link import (
+    FLIGHT_MODE_NAMES,
+    CommandOutcome,
+    LandedPhase,
+    LinkError,
+    LinkState,
+    VelocityCommand,
+)
+
+_MODE_ALIASES = {"RETURN_TO_LAUNCH": "RTL"}
+_Plugin = TypeVar("_Plugin")
+
+
+class MavsdkLink:
+    """A Link to a PX4-like autopilot through MAVSDK.
+
+    Args:
+        url: MAVSDK connection URL; ``udpin://127.0.0.1:14540`` listens where PX4 SITL sends.
+        telemetry_rate_hz: rate requested for position/velocity and attitude [Hz].
+        debug_log: keep MAVSDK's debug messages on stderr (they are dropped by default; the
+            setting is process-wide, as MAVSDK's logging is).
+    """
+
+    def __init__(
+        self, url: str, *, telemetry_rate_hz: float = 50.0, debug_log: bool = False
+    ) -> None:
+        self._url = url
+        self._debug_log = debug_log
+        self._telemetry_rate_hz = telemetry_rate_hz
+        self._clock = WallClock()
+        self._mavsdk: Mavsdk | None = None
+        self._action: Action | None = None
+        self._telemetry: Telemetry | None = None
+        self._offboard: Offboard | None = None
+        self._system: System | None = None
+        self._yaw_target_rad: float | None = None
+        self._yaw_updated_s = 0.0
+
+    @property
+    def name(self) -> str:
+        return "mavsdk"
+
+    @property
+    def clock(self) -> WallClock:
+        return self._clock
+
+    def connect(self, timeout_s: float) -> None:
+        deadline_s = self._clock.now_s() + timeout_s
+        if not self._debug_log:
+            log_subscribe(_drop_debug)
+        self._mavsdk = Mavsdk(
+            Configuration.create_with_component_type(ComponentType.GROUND_STATION)
+        )
+        result = self._mavsdk.add_any_connection(self._url)
+        if result != ConnectionResult.SUCCESS:
+            raise LinkError(f"MAVSDK cannot open {self._url}: {result.name}")
+        system = self._mavsdk.first_autopilot(max(0.1, deadline_s - self._clock.now_s()))
+        if system is None:
+            raise LinkError(f"no autopilot on {self._url} within {timeout_s:g} s")
+        self._system = system
+        self._action = Action(system)
+        self._telemetry = Telemetry(system)
+        self._offboard = Offboard(system)
+        for set_rate in (
+            self._telemetry.set_rate_position_velocity_ned,
+            self._telemetry.set_rate_attitude_quaternion,
+        ):
+            with contextlib.suppress(TelemetryError):  # else the default rate stays: fine
+                set_rate(self._telemetry_rate_hz)
+        while not (self._telemetry.health_all_ok() and self.read_state().is_finite()):
+            if self._clock.now_s() >= deadline_s:
+                raise LinkError(
+                    f"vehicle on {self._url} not healthy or without position within {timeout_s:g} s"
+                )
+            time.sleep(0.05)
+
+    def read_state(self) -> LinkState:
+        telemetry = self._require(self._telemetry)
+        if not self._require(self._system).is_connected():
+            raise LinkError(f"link lost: MAVSDK reports the vehicle on {self._url} disconnected")
+        pv = telemetry.position_velocity_ned()
+        q = telemetry.attitude_quaternion()
+        rates = telemetry.attitude_angular_velocity_body()
+        battery_v = float(telemetry.battery().voltage_v)
+        mode = telemetry.flight_mode().name
+        mode = _MODE_ALIASES.get(mode, mode)
+        return LinkState(
+            t_s=self._clock.now_s(),
+            pos_ned_m=np.array([pv.position.north_m, pv.position.east_m, pv.position.down_m]),
+            vel_ned_mps=np.array(
+                [pv.velocity.north_m_s, pv.velocity.east_m_s, pv.velocity.down_m_s]
+            ),
+            q_wxyz=np.array([q.w, q.x, q.y, q.z], dtype=float),
+            rates_frd_radps=np.array([rates.roll_rad_s, rates.pitch_rad_s, rates.yaw_rad_s]),
+            armed=bool(telemetry.armed()),
+            mode=mode if mode in FLIGHT_MODE_NAMES else "UNKNOWN",
+            landed=LandedPhase.of(int(telemetry.landed_state())),
+            battery_v=battery_v if math.isfinite(battery_v) and battery_v > 0.0 else None,
+        )
+
+    def arm(self) -> CommandOutcome:
+        return _call(lambda: self._require(self._action).arm())
+
+    def takeoff(self, alt_m: float) -> CommandOutcome:
+        action = self._require(self._action)
+        set_alt = _call(lambda: action.set_takeoff_altitude(float(alt_m)))
+        return set_alt if not set_alt.accepted else _call(action.takeoff)
+
+    def send_velocity(self, command: VelocityCommand) -> None:
+        offboard = self._require(self._offboard)
+        now_s = self._clock.now_s()
+        if self._yaw_target_rad is None:
+            self._yaw_target_rad = self.read_state().yaw_rad
+        else:
+            dt_s = min(now_s - self._yaw_updated_s, 0.5)
+            self._yaw_target_rad += command.yaw_rate_radps * dt_s
+        self._yaw_updated_s = now_s
+        vn, ve, vd = command.vel_ned_mps
+        yaw_deg = math.degrees(math.remainder(self._yaw_target_rad, 2.0 * math.pi))
+        try:
+            offboard.set_velocity_ned(VelocityNedYaw(vn, ve, vd, yaw_deg))
+        except OffboardError as exc:
+            raise LinkError(f"MAVSDK refused the setpoint: {exc}") from None
+
+    def start_offboard(self) -> CommandOutcome:
+        return _call(self._require(self._offboard).start)
+
+    def hold(self) -> CommandOutcome:
+        """Stop offboard (MAVSDK stops re-sending, PX4 goes to HOLD); else plain HOLD."""
+        self._yaw_target_rad = None
+        stopped = _call(self._require(self._offboard).stop)
+        if stopped.accepted:
+            return stopped
+        return _call(self._require(self._action).hold)
+
+    def land(self) -> CommandOutcome:
+        return _call(self._require(self._action).land)
+
+    def metadata(self) -> Mapping[str, object]:
+        return {"link": self.name, "url": self._url}
+
+    def close(self) -> None:
+        if self._mavsdk is not None:
+            self._mavsdk.destroy()
+            self._mavsdk = None
+            self._system = self._action = self._telemetry = self._offboard = None
+
+    def _require(self, plugin: _Plugin | None) -> _Plugin:
+        if plugin is None or self._mavsdk is None:
+            raise LinkError(f"link {self._url} is not connected; call connect() first")
+        return plugin
+
+
+def _drop_debug(level: LogLevel, _message: str, _file: str | None, _line: int) -> bool:
+    """MAVSDK log filter: True suppresses a message (here: debug ones)."""
+    return level == LogLevel.DEBUG
+
+
+def _call(command: Callable[[], object]) -> CommandOutcome:
+    """Run a blocking MAVSDK command; its exception becomes a refused outcome."""
+    try:
+        command()
+    except (ActionError, OffboardError) as exc:
+        return CommandOutcome(False, exc.result.name)
+    except MavsdkError as exc:
+        return CommandOutcome(False, str(exc))
+    return CommandOutcome(True, "")

@@ -1,0 +1,237 @@
+"""The NMPC as the companion flies it: paper 000's planner, nominal or with a learned residual.
+
+The planner model is a nominal model from :mod:`planners.nominal_models`: paper 000's 4-DOF
+kinematic model (velocity and yaw-rate commands; the default) or the first-order velocity lag
+(an a-priori model in the sense of paper 004). Augmented, a residual model file from
+``fit-gp`` adds its mean g(z) [m/s^2] as in paper 000, eq. 1; the file names the nominal model
+and features it was trained on, and the planner is built for exactly those. The reference is
+time-parametrised and the NMPC's input reference is its velocity (feed-forward), so the nominal
+planner already tracks well and what is left is the residual.
+
+Besides planning, the planner states its own one-step velocity prediction for the command
+that was actually sent (:meth:`CompanionNmpc.one_step_velocity`): that is what the flight log
+records as ``pred_vel_*``, so the residual of exactly the model that flew can be computed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+
+from gp.errors import ModelFileError
+from gp.model_io import ResidualModel, load_model
+from planners.model_vectors import state_vector
+from planners.nmpc import NmpcPlanner
+from planners.nmpc_formulation import NmpcConfig
+from planners.nominal_models import NominalModel, make_model
+from planners.plan_result import PlanResult
+from planners.reference import PlannerState, Reference, ReferenceSample
+from planners.residual import ResidualTerm
+
+MULTIROTOR_MODELS = ("kinematic_4dof", "first_order_lag")
+_VEL_STATES = ("vel_n_mps", "vel_e_mps", "vel_d_mps")
+_DT_TOLERANCE = 0.05
+
+
+@dataclass(frozen=True)
+class NmpcSettings:
+    """How the companion's NMPC is set up.
+
+    Attributes:
+        speed_limit_mps: bound on each velocity command component [m/s].
+        period_s: control loop period [s] (the one-step prediction's horizon).
+        time_budget_s: a plan taking longer (wall clock) is replaced by the safe command [s].
+            In lockstep (in-process) flights simulated time stands still while the planner
+            works, so a generous budget keeps flights deterministic on a loaded machine.
+        nominal_model, nominal_params: the nominal model when flying without a residual model
+            (with one, the model file decides); kinematic_4dof's residual_dt_s defaults to
+            ``period_s``.
+        horizon_steps, dt_s: NMPC horizon N and interval [s] (paper 000: 20 x 0.1 s).
+        yaw_rate_limit_radps: bound on the yaw-rate command [rad/s].
+        max_iterations: SQP iterations per plan (None: the solver's default, 10 with early
+            stop; 1 is the real-time iteration scheme).
+        compile_functions: compile the solver's linearisation to C (cached per machine and
+            formulation); each new residual model is a new formulation, so a short flight
+            with a fresh model is faster uncompiled.
+    """
+
+    speed_limit_mps: float
+    period_s: float = 0.02
+    time_budget_s: float = 0.02
+    nominal_model: str = "kinematic_4dof"
+    nominal_params: tuple[tuple[str, float], ...] = ()
+    horizon_steps: int = 20
+    dt_s: float = 0.1
+    yaw_rate_limit_radps: float = 1.0
+    max_iterations: int | None = None
+    compile_functions: bool = True
+
+    def __post_init__(self) -> None:
+        if self.nominal_model not in MULTIROTOR_MODELS:
+            raise ValueError(
+                f"unknown NMPC model {self.nominal_model!r}; choose one of "
+                f"{', '.join(MULTIROTOR_MODELS)}"
+            )
+
+
+class CompanionNmpc:
+    """:class:`NmpcPlanner` on a multirotor nominal model, with an optional residual model.
+
+    Attributes:
+        model: the nominal model the NMPC plans with.
+        residual_model: the learned residual, or None for the nominal planner.
+    """
+
+    def __init__(self, settings: NmpcSettings, residual_model: ResidualModel | None = None):
+        self.residual_model = residual_model
+        residual = None
+        if residual_model is None:
+            params = dict(settings.nominal_params)
+            if settings.nominal_model == "kinematic_4dof":
+                params.setdefault("residual_dt_s", settings.period_s)
+            self.model = make_model(settings.nominal_model, **params)
+        else:
+            check_residual_model(residual_model, settings.period_s)
+            self.model = residual_model.features.nominal()
+            mean_fn = _bounded(residual_model)
+            residual = ResidualTerm(mean_fn, _feature_map(residual_model.features.name, self.model))
+        v, w = settings.speed_limit_mps, settings.yaw_rate_limit_radps
+        config = NmpcConfig(
+            horizon_steps=settings.horizon_steps,
+            dt_s=settings.dt_s,
+            input_max=(v, v, v, w),
+            n_obstacles=0,
+            time_budget_s=settings.time_budget_s,
+            max_iterations=settings.max_iterations,
+        )
+        self._planner = NmpcPlanner(
+            self.model, config, residual, compile_functions=settings.compile_functions
+        )
+        self._one_step = _one_step_function(self.model, residual, settings.period_s)
+        self._warm_up()
+
+    def _warm_up(self) -> None:
+        """Plan once on a dummy problem, so that the solver's linearisation is compiled (or
+        loaded from the cache) now, before flight, not on the first plan in the air."""
+        hover = PlannerState(np.array([0.0, 0.0, -3.0]), np.zeros(3), 0.0)
+        self._planner.plan(hover, _HoverReference(), 0.0)
+        self._planner.reset()
+
+    @property
+    def augmented(self) -> bool:
+        return self.residual_model is not None
+
+    def plan(self, state: PlannerState, reference: Reference, t_s: float) -> PlanResult:
+        """One NMPC step (see :meth:`NmpcPlanner.plan`); never raises."""
+        return self._planner.plan(state, reference, t_s)
+
+    def one_step_velocity(
+        self, vel_ned_mps: np.ndarray, cmd_vel_ned_mps: np.ndarray
+    ) -> np.ndarray:
+        """Velocity [m/s] (3,) this planner's model (with its residual) predicts one control
+        period after sending ``cmd_vel_ned_mps`` (3,) at velocity ``vel_ned_mps`` (3,); the
+        yaw-rate command is taken as zero (the study's references hold their yaw)."""
+        state = PlannerState(np.zeros(3), np.asarray(vel_ned_mps, dtype=float), 0.0)
+        x = state_vector(self.model, state)
+        u = np.append(np.asarray(cmd_vel_ned_mps, dtype=float).reshape(3), 0.0)
+        return np.asarray(self._one_step(x, u), dtype=float).reshape(3)
+
+
+RESIDUAL_BOUND_STD = 4.0
+
+
+def _bounded(model: ResidualModel) -> ca.Function:
+    """The model's mean g(z), clipped per axis to the training residuals' mean +- 4 std (from
+    the model file's training summary), so that a badly conditioned fit cannot command the
+    vehicle with residuals it never saw. Unclipped if the summary is missing."""
+    mean_fn = model.casadi_function(include_variance=False).expand()
+    mean = model.training.get("residual_mean")
+    std = model.training.get("residual_std")
+    if mean is None or std is None:
+        return mean_fn
+    lo = np.asarray(mean, dtype=float) - RESIDUAL_BOUND_STD * np.asarray(std, dtype=float)
+    hi = np.asarray(mean, dtype=float) + RESIDUAL_BOUND_STD * np.asarray(std, dtype=float)
+    z = ca.SX.sym("z", mean_fn.numel_in(0))
+    g = ca.fmin(ca.fmax(mean_fn(z), ca.DM(lo)), ca.DM(hi))
+    return ca.Function("gp_residual_bounded", [z], [g], ["z"], ["mean"])
+
+
+class _HoverReference:
+    """Hold (0, 0, -3) m at rest: the warm-up problem."""
+
+    duration_s = 1.0
+
+    def sample(self, t_s: np.ndarray | float) -> ReferenceSample:
+        n = np.size(t_s)
+        pos = np.tile([0.0, 0.0, -3.0], (n, 1))
+        zeros = np.zeros((n, 3))
+        return ReferenceSample(pos, zeros, zeros, np.zeros(n), np.zeros(n))
+
+
+def _feature_map(name: str, model: NominalModel):
+    """z(x, u) for a feature set, in its input order (see gp.features)."""
+    if name == "velocity":
+        return lambda x, u: model.velocity_of(x, u)
+    return lambda x, u: ca.vertcat(model.velocity_of(x, u), u[:3], u[3])
+
+
+def _one_step_function(
+    model: NominalModel, residual: ResidualTerm | None, period_s: float
+) -> ca.Function:
+    """(x, u) -> velocity [m/s] after one period: the velocity state if the model has one,
+    else the mean velocity of the position step (the kinematic model: u + dt g)."""
+    x = ca.SX.sym("x", model.nx)
+    u = ca.SX.sym("u", model.nu)
+    x_next = model.rk4_step(x, u, period_s, residual)
+    if all(n in model.state_names for n in _VEL_STATES):
+        vel = model.velocity_of(x_next, u)
+    else:
+        pos = [model.state_names.index(n) for n in ("pos_n_m", "pos_e_m", "pos_d_m")]
+        vel = (x_next[pos] - x[pos]) / period_s
+    return ca.Function("one_step_velocity", [x, u], [vel])
+
+
+def check_residual_model(model: ResidualModel, period_s: float) -> None:
+    """Raise ModelFileError (one line) unless the NMPC can fly ``model`` at this period."""
+    features = model.features
+    if features.nominal_model not in MULTIROTOR_MODELS:
+        raise ModelFileError(
+            f"residual model is taken against {features.nominal_model}; the NMPC flies "
+            f"{' or '.join(MULTIROTOR_MODELS)}; refit with fit-gp --nominal kinematic_4dof"
+        )
+    try:
+        check_feature_set(features.name, features.nominal_model)
+    except ValueError as exc:
+        raise ModelFileError(f"residual model: {exc}; refit with fit-gp") from None
+    has_velocity = features.nominal_model == "first_order_lag"
+    dt_s = dict(features.nominal_params).get("residual_dt_s")
+    if not has_velocity and (dt_s is None or abs(dt_s - period_s) > _DT_TOLERANCE * period_s):
+        raise ModelFileError(
+            f"residual model was measured over steps of {dt_s} s but the control loop runs "
+            f"every {period_s:g} s; refit from logs flown at the same rate"
+        )
+
+
+def check_feature_set(features: str, nominal_model: str) -> None:
+    """Raise ValueError unless the NMPC can build feature set ``features`` from the state and
+    input of ``nominal_model``: "velocity" with any model, "state_input" (velocity and command)
+    only with a velocity state (first_order_lag)."""
+    if features == "velocity" or (features == "state_input" and nominal_model == "first_order_lag"):
+        return
+    raise ValueError(
+        f"the NMPC cannot feed features {features!r} from {nominal_model}'s state; use "
+        "'velocity', or 'state_input' with first_order_lag"
+    )
+
+
+def load_nmpc(settings: NmpcSettings, gp_model_path: Path | None) -> CompanionNmpc:
+    """The nominal NMPC, or the augmented one with the model file at ``gp_model_path``.
+
+    Raises:
+        ModelFileError: missing, corrupt or mismatched model file (one line).
+    """
+    model = None if gp_model_path is None else load_model(gp_model_path)
+    return CompanionNmpc(settings, model)

@@ -1,0 +1,59 @@
+"""Planners the companion can fly with, by name (the CLI's ``--planner`` choices)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from planners.reference import Planner
+
+PLANNER_NAMES: tuple[str, ...] = ("pd", "nmpc")
+
+_VELOCITY_STATE: dict[str, tuple[int, int] | None] = {"pd": None, "nmpc": None}
+
+
+def make_planner(
+    name: str,
+    speed_limit_mps: float,
+    *,
+    gp_model: Path | None = None,
+    rate_hz: float = 50.0,
+    time_budget_s: float | None = None,
+) -> Planner:
+    """A planner with its paper defaults, its speed limited to ``speed_limit_mps`` [m/s];
+    ValueError listing the names for an unknown one.
+
+    pd: paper 000's PD regulator, v = Kp e - Kd vel (horizontal 1.2 / 0.25, vertical
+    0.9 / 0.25).
+    nmpc: paper 000's NMPC on the kinematic model (20 x 0.1 s, velocity feed-forward),
+    nominal, or augmented with the residual model file ``gp_model`` (from fit-gp, measured at
+    ``rate_hz``). ``time_budget_s`` [s] defaults to one control period.
+
+    Raises:
+        ValueError: unknown name, a model file for a planner that takes none, or a missing,
+            corrupt or mismatched model file (gp.errors.ModelFileError, one line).
+    """
+    if name not in PLANNER_NAMES:
+        raise ValueError(f"unknown planner {name!r}; choose one of {', '.join(PLANNER_NAMES)}")
+    if name == "pd":
+        if gp_model is not None:
+            raise ValueError("planner 'pd' takes no residual model; use --planner nmpc")
+        from planners.pd_regulator import PdGains, PdRegulator
+
+        return PdRegulator(PdGains(max_speed_mps=speed_limit_mps))
+    from companion.nmpc_planner import NmpcSettings, load_nmpc
+
+    period_s = 1.0 / rate_hz
+    settings = NmpcSettings(
+        speed_limit_mps=speed_limit_mps,
+        period_s=period_s,
+        time_budget_s=period_s if time_budget_s is None else time_budget_s,
+    )
+    return load_nmpc(settings, gp_model)
+
+
+def velocity_state_of(name: str) -> tuple[int, int] | None:
+    """Where the named planner's predicted states hold the velocity (see PlannerPolicy);
+    None when it predicts none or its model flies the command (kinematic)."""
+    if name not in _VELOCITY_STATE:
+        raise ValueError(f"unknown planner {name!r}; choose one of {', '.join(PLANNER_NAMES)}")
+    return _VELOCITY_STATE[name]

@@ -1,0 +1,305 @@
+"""The mission sequence: takeoff, stream, offboard, follow, hold, land - with a safe exit.
+
+``fly_mission`` never leaves the vehicle with a stale setpoint: whatever ends the flight early
+(a refused command, a timeout, a lost link, Ctrl-C) it sends a zero-velocity setpoint, leaves
+OFFBOARD for HOLD, commands LAND and waits (with a deadline) for the vehicle to disarm.
+The outcome is returned, never raised; Ctrl-C is reported as status "interrupted".
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from companion.control_loop import LoopCounters, Tick, run_fixed_rate
+from companion.decision import CommandLimits, HoverPolicy
+from companion.link import ZERO_VELOCITY, CommandOutcome, LandedPhase, Link, LinkError, LinkState
+from companion.mission import Mission
+from companion.planner_policy import PlannerPolicy
+from companion.waiting import command_until_accepted, describe, wait_for
+from planners.reference import Planner, Reference
+
+FlightStatus = Literal["completed", "goal_not_reached", "failed", "interrupted"]
+
+
+@dataclass(frozen=True)
+class RunnerConfig:
+    """Timing of the mission sequence; every wait has a deadline (link clock seconds).
+
+    Attributes:
+        rate_hz: control loop rate [Hz].
+        stream_s: setpoint stream before switching to OFFBOARD [s].
+        connect_timeout_s, arm_timeout_s, takeoff_timeout_s, offboard_timeout_s,
+        land_timeout_s: deadlines of each phase [s].
+        settle_timeout_s: time allowed after the reference ends to arrive at the goal [s].
+        arrive_speed_mps: speed below which the vehicle counts as stopped at the goal [m/s].
+        offboard_grace_s: time after the switch before a non-OFFBOARD mode ends the follow
+            phase (telemetry may lag a mode change by one heartbeat) [s].
+        vertical_limit_up_mps, vertical_limit_down_mps: command limits [m/s].
+        velocity_state: where the planner's predicted state holds velocity (see
+            PlannerPolicy), or None.
+    """
+
+    rate_hz: float = 50.0
+    stream_s: float = 1.0
+    connect_timeout_s: float = 15.0
+    arm_timeout_s: float = 10.0
+    takeoff_timeout_s: float = 30.0
+    offboard_timeout_s: float = 5.0
+    settle_timeout_s: float = 20.0
+    land_timeout_s: float = 60.0
+    arrive_speed_mps: float = 0.3
+    offboard_grace_s: float = 2.5
+    vertical_limit_up_mps: float = 1.5
+    vertical_limit_down_mps: float = 1.0
+    velocity_state: tuple[int, int] | None = None
+
+    def __post_init__(self) -> None:
+        if not 1.0 <= self.rate_hz <= 500.0:
+            raise ValueError(f"rate_hz must be within [1, 500] Hz, got {self.rate_hz}")
+
+
+@dataclass(frozen=True)
+class FlightOutcome:
+    """How the flight went.
+
+    Attributes:
+        status: "completed" (goal reached, landed, disarmed), "goal_not_reached" (followed
+            until the deadline, landed), "failed" (a phase failed; safe stop done) or
+            "interrupted" (Ctrl-C; safe stop done).
+        detail: one line saying what happened.
+        goal_error_m: distance to the goal when following ended [m], None if never followed.
+        landed_error_m: horizontal distance from the goal after landing [m], or None.
+        disarmed: True if the vehicle was seen disarmed at the end.
+        ticks, deadline_misses: control loop counts over the whole flight.
+    """
+
+    status: FlightStatus
+    detail: str
+    goal_error_m: float | None
+    landed_error_m: float | None
+    disarmed: bool
+    ticks: int
+    deadline_misses: int
+
+
+def fly_mission(
+    link: Link,
+    planner: Planner,
+    reference: Reference,
+    mission: Mission,
+    config: RunnerConfig,
+    on_tick: Callable[[Tick], None],
+    progress: Callable[[str], None],
+) -> FlightOutcome:
+    """Fly ``mission`` over a connected-or-not ``link``; see the module docstring."""
+    counters = LoopCounters()
+    goal = np.asarray(mission.goal_ned_m, dtype=float)
+    airborne = False
+    goal_error_m: float | None = None
+    status: FlightStatus = "failed"
+    detail = ""
+    try:
+        link.connect(config.connect_timeout_s)
+        progress(f"connected over {link.name}; {describe(link.read_state())}")
+        wait_for(link, lambda s: s.is_finite(), config.connect_timeout_s, "finite telemetry")
+        command_until_accepted(link, link.arm, config.arm_timeout_s, "arm")
+        airborne = True
+        progress("armed; taking off")
+        command_until_accepted(
+            link, lambda: link.takeoff(mission.altitude_m), config.arm_timeout_s, "takeoff"
+        )
+        hover = wait_for(
+            link,
+            lambda s: s.altitude_m >= mission.altitude_m - 0.25 and s.landed != LandedPhase.TAKEOFF,
+            config.takeoff_timeout_s,
+            f"takeoff to {mission.altitude_m:g} m",
+        )
+        progress(f"airborne at {hover.altitude_m:.2f} m; streaming setpoints")
+        _start_offboard(link, config, hover, counters, on_tick)
+        progress("offboard; following the reference")
+        last = _follow(link, planner, reference, mission, config, counters, on_tick, progress)
+        goal_error_m = float(np.linalg.norm(last.state.pos_ned_m - goal))
+        if last.stop_reason == "done":
+            status, detail = "completed", f"reached the goal ({goal_error_m:.2f} m)"
+        else:
+            status = "goal_not_reached"
+            detail = f"{last.detail}; {goal_error_m:.2f} m from the goal"
+        progress(f"following ended: {detail}; holding")
+        _require(link.hold(), "hold")
+        _require(link.land(), "land")
+        progress("landing")
+        wait_for(link, lambda s: not s.armed, config.land_timeout_s, "landing and disarm")
+        airborne = False
+    except KeyboardInterrupt:
+        status, detail = "interrupted", "interrupted by Ctrl-C"
+        progress(f"{detail}: holding and landing")
+    except LinkError as exc:
+        status, detail = "failed", str(exc)
+        progress(f"failed: {detail}")
+    finally:
+        if airborne:
+            _safe_stop(link, config, progress)
+    final = _final_state(link)
+    disarmed = final is not None and not final.armed
+    if status == "completed" and not disarmed:
+        status, detail = "failed", f"{detail}, but the vehicle was not seen to disarm"
+    landed_error_m = None
+    if final is not None and goal_error_m is not None:
+        landed_error_m = float(np.hypot(*(final.pos_ned_m[:2] - goal[:2])))
+    return FlightOutcome(
+        status=status,
+        detail=detail,
+        goal_error_m=goal_error_m,
+        landed_error_m=landed_error_m,
+        disarmed=disarmed,
+        ticks=counters.ticks,
+        deadline_misses=counters.deadline_misses,
+    )
+
+
+def _start_offboard(
+    link: Link,
+    config: RunnerConfig,
+    hover: LinkState,
+    counters: LoopCounters,
+    on_tick: Callable[[Tick], None],
+) -> None:
+    """Stream zero-velocity setpoints, then switch to OFFBOARD (stream more and retry)."""
+    clock = link.clock
+    deadline_s = clock.now_s() + config.offboard_timeout_s + config.stream_s
+    policy = HoverPolicy(hover.pos_ned_m)
+    while True:
+        run_fixed_rate(
+            link,
+            policy,
+            rate_hz=config.rate_hz,
+            until=lambda _state, _t_s: False,
+            timeout_s=config.stream_s,
+            on_tick=on_tick,
+            counters=counters,
+        )
+        outcome = link.start_offboard()
+        if outcome.accepted:
+            return
+        if clock.now_s() >= deadline_s:
+            raise LinkError(f"OFFBOARD refused: {outcome.detail or 'no reason given'}")
+
+
+@dataclass(frozen=True)
+class _FollowEnd:
+    state: LinkState
+    stop_reason: Literal["done", "timeout", "left_offboard"]
+    detail: str
+
+
+def _follow(
+    link: Link,
+    planner: Planner,
+    reference: Reference,
+    mission: Mission,
+    config: RunnerConfig,
+    counters: LoopCounters,
+    on_tick: Callable[[Tick], None],
+    progress: Callable[[str], None],
+) -> _FollowEnd:
+    goal = np.asarray(mission.goal_ned_m, dtype=float)
+    limits = CommandLimits(
+        horizontal_mps=mission.speed_limit_mps,
+        up_mps=config.vertical_limit_up_mps,
+        down_mps=config.vertical_limit_down_mps,
+    )
+    t0_s = link.clock.now_s()
+    policy = PlannerPolicy(planner, reference, t0_s, limits, config.velocity_state)
+    monitor = _FollowMonitor(t0_s, goal, reference.duration_s, mission, config, progress)
+    result = run_fixed_rate(
+        link,
+        policy,
+        rate_hz=config.rate_hz,
+        until=monitor.finished,
+        timeout_s=reference.duration_s + config.settle_timeout_s,
+        on_tick=on_tick,
+        counters=counters,
+    )
+    if monitor.left_offboard_for is not None:
+        detail = f"vehicle left OFFBOARD for {monitor.left_offboard_for}"
+        return _FollowEnd(result.last_state, "left_offboard", detail)
+    if result.stop_reason == "timeout":
+        return _FollowEnd(result.last_state, "timeout", "follow deadline passed")
+    return _FollowEnd(result.last_state, "done", "")
+
+
+class _FollowMonitor:
+    """Decides when following is over (arrived, or the vehicle left OFFBOARD); reports."""
+
+    def __init__(
+        self,
+        t0_s: float,
+        goal_ned_m: np.ndarray,
+        duration_s: float,
+        mission: Mission,
+        config: RunnerConfig,
+        progress: Callable[[str], None],
+    ) -> None:
+        self._t0_s = t0_s
+        self._goal_ned_m = goal_ned_m
+        self._duration_s = duration_s
+        self._mission = mission
+        self._config = config
+        self._progress = progress
+        self._next_report_s = t0_s
+        self.left_offboard_for: str | None = None
+
+    def finished(self, state: LinkState, t_s: float) -> bool:
+        elapsed_s = t_s - self._t0_s
+        if elapsed_s > self._config.offboard_grace_s and state.mode != "OFFBOARD":
+            self.left_offboard_for = state.mode
+            return True
+        distance_m = float(np.linalg.norm(state.pos_ned_m - self._goal_ned_m))
+        if t_s >= self._next_report_s:
+            self._progress(f"t={elapsed_s:5.1f} s  {distance_m:6.2f} m to goal")
+            self._next_report_s += 2.0
+        return (
+            elapsed_s >= self._duration_s
+            and distance_m <= self._mission.goal_tolerance_m
+            and float(np.linalg.norm(state.vel_ned_mps)) <= self._config.arrive_speed_mps
+        )
+
+
+def _final_state(link: Link) -> LinkState | None:
+    """The last telemetry, or None when the link can no longer tell."""
+    try:
+        return link.read_state()
+    except LinkError:
+        return None
+
+
+def _require(outcome: CommandOutcome, what: str) -> None:
+    if not outcome.accepted:
+        raise LinkError(f"{what} refused: {outcome.detail or 'no reason given'}")
+
+
+def _safe_stop(link: Link, config: RunnerConfig, progress: Callable[[str], None]) -> None:
+    """Zero velocity, HOLD, LAND, wait for disarm; each step tried even if one fails."""
+    try:
+        link.send_velocity(ZERO_VELOCITY)
+    except LinkError as exc:
+        progress(f"safe stop: zero velocity failed: {exc}")
+    for what, command in (("hold", link.hold), ("land", link.land)):
+        try:
+            outcome = command()
+        except LinkError as exc:
+            progress(f"safe stop: {what} failed: {exc}")
+            continue
+        if outcome.accepted:
+            progress(f"safe stop: {what} accepted")
+        else:
+            progress(f"safe stop: {what} refused: {outcome.detail or 'no reason given'}")
+    try:
+        state = wait_for(link, lambda s: not s.armed, config.land_timeout_s, "landing and disarm")
+        progress(f"safe stop: landed and disarmed; {describe(state)}")
+    except LinkError as exc:
+        progress(f"safe stop: {exc}")

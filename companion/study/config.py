@@ -1,0 +1,68 @@
+"""What the study flies and learns (a frozen config; the CLI builds it)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+from companion.nmpc_planner import NmpcSettings
+
+STUDY_VEHICLE = "iris_study"
+SELECTIONS: tuple[str, ...] = ("low_speed", "cluster")
+
+
+@dataclass(frozen=True)
+class StudyConfig:
+    """The study's settings.
+
+    Attributes:
+        out_dir: where report.md, the PNGs and the model files go.
+        vehicle: simulator preset or config file (default: the study vehicle, see
+            vehicle_sim/presets/iris_study.toml).
+        n_trajectories: random trajectories of paper 000's experiment.
+        length_range_m: their length range [m]; max_speed_mps: their speed limit [m/s].
+        repeats: flights per trajectory and planner (nominal seeds 0.., augmented after them).
+        selections: inducing-point selections compared at equal ``m``.
+        m: inducing points per output.
+        n_trials: paper 004 view: trials on one repeated path (1 nominal, then augmented with a
+            model refitted on all trials so far).
+        trajectory_seed: seed of the trajectory generator.
+        workers: processes flying in parallel.
+        nmpc: the planner (nominal model, command limit, loop period).
+        features: GP feature set ("velocity" for paper 000; "state_input" needs first_order_lag).
+        gp_restarts: hyperparameter restarts per fit.
+        compile_augmented: compile each augmented planner to C (about 1-2 min per new model,
+            then cached on disk; its solves are several times faster).
+    """
+
+    out_dir: Path = Path("out/study")
+    vehicle: str = STUDY_VEHICLE
+    n_trajectories: int = 20
+    length_range_m: tuple[float, float] = (40.0, 60.0)
+    max_speed_mps: float = 1.5
+    repeats: int = 3
+    selections: tuple[str, ...] = SELECTIONS
+    m: int = 30
+    n_trials: int = 6
+    trajectory_seed: int = 0
+    workers: int = 2
+    nmpc: NmpcSettings = NmpcSettings(speed_limit_mps=2.5)
+    features: str = "velocity"
+    gp_restarts: int = 2
+    compile_augmented: bool = True
+
+    def __post_init__(self) -> None:
+        if self.n_trajectories < 1 or self.repeats < 1 or self.n_trials < 2:
+            raise ValueError(
+                "need n_trajectories >= 1, repeats >= 1 and n_trials >= 2, got "
+                f"{self.n_trajectories}, {self.repeats}, {self.n_trials}"
+            )
+        if self.workers < 1:
+            raise ValueError(f"workers must be >= 1, got {self.workers}")
+
+    def quick(self) -> StudyConfig:
+        """A small smoke version: 2 short trajectories, 1 flight each, 3 trials, no compile."""
+        return replace(
+            self, n_trajectories=2, length_range_m=(8.0, 10.0), repeats=1, n_trials=3, m=15,
+            gp_restarts=1, compile_augmented=False,
+        )  # fmt: skip

@@ -1,0 +1,60 @@
+"""Fit the residual model from study flights with fit-gp's library function (pure: no files)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+import numpy as np
+
+from companion.nmpc_planner import NmpcSettings
+from gp.training import TrainingConfig, TrainingResult, train_residual_model
+from vehicle_sim.flight_log import FlightLog
+
+FOLLOWING_MODES = ("OFFBOARD",)
+
+
+def fit_residual(
+    logs: Sequence[FlightLog],
+    inducing: str,
+    settings: NmpcSettings,
+    *,
+    features: str = "velocity",
+    m: int = 30,
+    seed: int = 0,
+    restarts: int = 2,
+    progress: Callable[[str], None] = lambda message: None,
+) -> TrainingResult:
+    """An SGPR residual model against the NMPC's nominal model (kinematic_4dof: time base one
+    control period) from the following phase (OFFBOARD rows) of ``logs``, with ``m``
+    inducing points chosen by ``inducing`` ("low_speed", "cluster" or "random")."""
+    params = dict(settings.nominal_params)
+    if settings.nominal_model == "kinematic_4dof":
+        params["residual_dt_s"] = settings.period_s
+    config = TrainingConfig(
+        features=features,
+        nominal=settings.nominal_model,
+        nominal_params=tuple(sorted(params.items())),
+        inducing=inducing,
+        m=m,
+        restarts=restarts,
+        modes=FOLLOWING_MODES,
+        seed=seed,
+    )
+    regular = [regular_rows(log, settings.period_s) for log in logs]
+    return train_residual_model(regular, config, progress)
+
+
+def regular_rows(log: FlightLog, period_s: float, min_fraction: float = 0.5) -> FlightLog:
+    """``log`` without the rows that follow their predecessor by less than ``min_fraction`` of
+    a period [s] (a wall-clock loop catching up after a late tick): a residual divides by the
+    step, so a near-zero step would turn telemetry jitter into a huge residual."""
+    t = log["t_s"]
+    keep = np.zeros(t.size, dtype=bool)
+    last = -np.inf
+    for i, ti in enumerate(t):
+        if ti - last >= min_fraction * period_s:
+            keep[i] = True
+            last = ti
+    if keep.all():
+        return log
+    return FlightLog({k: v[keep] for k, v in log.columns.items()}, log.metadata, log.path)

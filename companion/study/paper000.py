@@ -1,0 +1,92 @@
+"""Paper 000's experiment: random trajectories flown nominal, the residual learned offline,
+then flown augmented, per inducing-point selection at equal m.
+
+Nominal flights use seeds 0..R-1 per trajectory, augmented flights seeds R..2R-1: the
+augmented flights are held out from the model's training data (and fly other gusts).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from concurrent.futures import Executor
+from dataclasses import dataclass
+
+from companion.study.config import StudyConfig
+from companion.study.fitting import fit_residual
+from companion.study.jobs import FlightJob, FlightSummary, run_flight_job, warm_up_planner
+from gp.training import TrainingResult
+from planners.bspline import BSplineReference
+from planners.trajectory_generator import TrajectorySpec, generate_trajectories
+
+NOMINAL = "nominal"
+
+
+@dataclass(frozen=True, eq=False)
+class Paper000Result:
+    """Flights per planner ("nominal" and each selection) and the fitted models."""
+
+    references: list[BSplineReference]
+    flights: dict[str, list[FlightSummary]]
+    fits: dict[str, TrainingResult]
+
+
+def study_trajectories(config: StudyConfig) -> list[BSplineReference]:
+    """The seeded random trajectories of the experiment."""
+    spec = TrajectorySpec(length_range_m=config.length_range_m, max_speed_mps=config.max_speed_mps)
+    return generate_trajectories(config.n_trajectories, config.trajectory_seed, spec)
+
+
+def run_paper000(
+    config: StudyConfig, pool: Executor, progress: Callable[[str], None]
+) -> Paper000Result:
+    """Fly, fit and fly again; flights run on ``pool``, fits one per selection on it too."""
+    refs = study_trajectories(config)
+    jobs = [
+        FlightJob(i, ref, NOMINAL, seed, config.vehicle, config.nmpc)
+        for i, ref in enumerate(refs)
+        for seed in range(config.repeats)
+    ]
+    flights = {NOMINAL: _fly_all(jobs, pool, "nominal", progress)}
+    logs = [f.log for f in flights[NOMINAL]]
+    progress(f"fitting {len(config.selections)} residual models on {len(logs)} nominal flights")
+    futures = {
+        sel: pool.submit(fit_residual, logs, sel, config.nmpc, features=config.features,
+                         m=config.m, restarts=config.gp_restarts)  # fmt: skip
+        for sel in config.selections
+    }
+    fits = {sel: fut.result() for sel, fut in futures.items()}
+    for sel, fit in fits.items():
+        nom, aug = fit.metrics["nominal_rmse_mps"], fit.metrics["augmented_rmse_mps"]
+        progress(f"fit {sel}: held-out rows nominal {_fmt(nom)} -> augmented {_fmt(aug)} m/s")
+    if config.compile_augmented:
+        progress("compiling the augmented planners (once per model, cached on disk)")
+        models = [fits[sel].model for sel in config.selections]
+        list(pool.map(warm_up_planner, [config.nmpc] * len(models), models))
+    aug_jobs = [
+        FlightJob(i, ref, sel, config.repeats + seed, config.vehicle, config.nmpc,
+                  fits[sel].model, config.compile_augmented)  # fmt: skip
+        for sel in config.selections
+        for i, ref in enumerate(refs)
+        for seed in range(config.repeats)
+    ]
+    for summary in _fly_all(aug_jobs, pool, "augmented", progress):
+        flights.setdefault(summary.planner, []).append(summary)
+    return Paper000Result(refs, flights, fits)
+
+
+def _fly_all(
+    jobs: list[FlightJob], pool: Executor, what: str, progress: Callable[[str], None]
+) -> list[FlightSummary]:
+    out = []
+    for n, summary in enumerate(pool.map(run_flight_job, jobs), start=1):
+        progress(
+            f"{what} flight {n}/{len(jobs)}: trajectory {summary.trajectory} {summary.planner} "
+            f"seed {summary.seed}: {summary.status}, tracking {summary.tracking_rmse_m:.3f} m, "
+            f"residual {summary.residual_rmse_mps:.4f} m/s"
+        )
+        out.append(summary)
+    return out
+
+
+def _fmt(values: list[float]) -> str:
+    return "/".join(f"{v:.4f}" for v in values)

@@ -1,0 +1,31 @@
+"""A ranked cause as report.json lists it, and effect parameters flattened for it."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Cause:
+    """One ranked cause, as in report.json (params flattened to floats)."""
+
+    name: str
+    params: dict[str, float]
+    explained_fraction: float
+    confidence: float
+    evidence: str
+
+
+def flatten_params(name: str, params: dict[str, object]) -> dict[str, float]:
+    """Effect parameters as name -> float; vectors get an axis suffix (x/y/z body, n/e/d NED)."""
+    axes = "ned" if name == "wind" else "xyz"
+    out: dict[str, float] = {}
+    for key, value in params.items():
+        if isinstance(value, (tuple, list, np.ndarray)):
+            for axis, v in zip(axes, value, strict=True):
+                out[f"{key}_{axis}"] = float(v)
+        else:
+            out[key] = float(value)
+    return out

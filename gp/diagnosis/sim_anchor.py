@@ -1,0 +1,40 @@
+"""The simulated vehicle a replay re-anchors at measured states.
+
+A hovering OFFBOARD template of the config is copied for each airborne run and each replay
+window; the copies are put into measured states with the simulator's public
+``Simulator.anchor`` (position, velocity, attitude, rates, rotor thrust and, while the
+controller warms up, the velocity-loop integral that reproduces the measured thrust vector).
+"""
+
+from __future__ import annotations
+
+import copy
+
+from vehicle_sim import FlightMode, SimConfig, Simulator, VelocitySetpoint
+
+TEMPLATE_ALT_M = 5.0
+
+
+class AnchorError(RuntimeError):
+    """The template vehicle could not be brought into OFFBOARD flight."""
+
+
+def hovering_template(config: SimConfig) -> Simulator:
+    """A vehicle of ``config`` hovering in OFFBOARD, to be copied for each replay window."""
+    sim = Simulator(config, seed=0)
+    sim.arm()
+    sim.takeoff(TEMPLATE_ALT_M)
+    for _ in range(120):
+        if sim.state.mode is FlightMode.HOLD:
+            break
+        sim.step(0.5)
+    sim.set_velocity_setpoint(VelocitySetpoint((0.0, 0.0, 0.0)))
+    sim.step(0.05)
+    if not sim.set_mode(FlightMode.OFFBOARD).accepted:
+        raise AnchorError(f"replay vehicle {config.preset_name!r} refused OFFBOARD")
+    return sim
+
+
+def fresh_copy(template: Simulator) -> Simulator:
+    """An independent copy of ``template``."""
+    return copy.deepcopy(template)

@@ -1,0 +1,124 @@
+"""Feature definitions: which logged signals (at which lags) form the GP input vector.
+
+A :class:`FeatureDefinition` is recorded in every model file; the NMPC builds its GP query in
+exactly this order, and loading a model against another definition is an error.
+
+Built-in sets (outputs are always the NED velocity-rate residuals in m/s^2):
+    velocity: paper 000. z = measured velocity (vel_n, vel_e, vel_d) [m/s].
+    state_input: measured velocity and the command: (vel_ned [m/s], cmd_vel_ned [m/s],
+        cmd_yaw_rate [rad/s]), 7 features.
+    history: paper 004's a_k = (x_k, v_{k-1}, u_k, u_{k-1}) for a velocity-commanded
+        multirotor: the velocity state now and one step ago, the command now and one step ago
+        (vel_ned[k], vel_ned[k-1], cmd_vel_ned[k], cmd_vel_ned[k-1]), 12 features in m/s.
+In the NMPC, "vel" is the velocity the (augmented) model predicts for the vehicle.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+from planners.nominal_models import MODELS, NominalModel, make_model
+
+RESIDUAL_OUTPUTS: tuple[str, ...] = ("res_acc_n_mps2", "res_acc_e_mps2", "res_acc_d_mps2")
+_VEL = ("vel_n_mps", "vel_e_mps", "vel_d_mps")
+_CMD = ("cmd_vel_n_mps", "cmd_vel_e_mps", "cmd_vel_d_mps")
+
+FEATURE_SETS: dict[str, tuple[tuple[str, int], ...]] = {
+    "velocity": tuple((c, 0) for c in _VEL),
+    "state_input": tuple((c, 0) for c in (*_VEL, *_CMD, "cmd_yaw_rate_radps")),
+    "history": tuple(
+        [(c, 0) for c in _VEL] + [(c, 1) for c in _VEL]
+        + [(c, 0) for c in _CMD] + [(c, 1) for c in _CMD]
+    ),
+}  # fmt: skip
+
+
+@dataclass(frozen=True)
+class FeatureDefinition:
+    """What a residual model was trained on.
+
+    Attributes:
+        name: feature-set name (a key of FEATURE_SETS).
+        inputs: (log column, lag in control steps) per feature, in input-vector order.
+        outputs: residual names, in output order (units in the names).
+        nominal_model: name of the planners' nominal model the residual is taken against.
+        nominal_params: that model's parameters as sorted (name, value) pairs.
+    """
+
+    name: str
+    inputs: tuple[tuple[str, int], ...]
+    outputs: tuple[str, ...] = RESIDUAL_OUTPUTS
+    nominal_model: str = "kinematic_4dof"
+    nominal_params: tuple[tuple[str, float], ...] = ()
+
+    @property
+    def input_names(self) -> tuple[str, ...]:
+        """Feature names: the column, with ``[k-L]`` for a lag L > 0 (e.g. vel_n_mps[k-1])."""
+        return tuple(c if lag == 0 else f"{c}[k-{lag}]" for c, lag in self.inputs)
+
+    @property
+    def n_features(self) -> int:
+        return len(self.inputs)
+
+    @property
+    def max_lag(self) -> int:
+        return max(lag for _, lag in self.inputs)
+
+    @property
+    def speed_columns(self) -> tuple[int, ...]:
+        """Indices of the current measured velocity components (used by low_speed inducing)."""
+        return tuple(i for i, (c, lag) in enumerate(self.inputs) if c in _VEL and lag == 0)
+
+    def nominal(self) -> NominalModel:
+        """The nominal model instance."""
+        return make_model(self.nominal_model, **dict(self.nominal_params))
+
+    def to_dict(self) -> dict[str, object]:
+        return {
+            "name": self.name,
+            "inputs": [[c, lag] for c, lag in self.inputs],
+            "input_names": list(self.input_names),
+            "outputs": list(self.outputs),
+            "nominal_model": {"name": self.nominal_model, "params": dict(self.nominal_params)},
+        }
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, object]) -> FeatureDefinition:
+        nominal = data["nominal_model"]
+        return cls(
+            name=str(data["name"]),
+            inputs=tuple((str(c), int(lag)) for c, lag in data["inputs"]),
+            outputs=tuple(str(o) for o in data["outputs"]),
+            nominal_model=str(nominal["name"]),
+            nominal_params=tuple(sorted((str(k), float(v)) for k, v in nominal["params"].items())),
+        )
+
+    def describe(self) -> str:
+        """One line: name, inputs and nominal model."""
+        params = ", ".join(f"{k}={v:g}" for k, v in self.nominal_params)
+        return (
+            f"{self.name!r} ({', '.join(self.input_names)}) against {self.nominal_model}({params})"
+        )
+
+
+def feature_definition(
+    name: str = "velocity", nominal_model: str = "kinematic_4dof", **nominal_params: float
+) -> FeatureDefinition:
+    """A built-in feature set against a nominal model; bad names raise ValueError."""
+    if name not in FEATURE_SETS:
+        raise ValueError(f"unknown feature set {name!r}; choose one of {', '.join(FEATURE_SETS)}")
+    if nominal_model not in MODELS:
+        raise ValueError(
+            f"unknown nominal model {nominal_model!r}; choose one of {', '.join(MODELS)}"
+        )
+    params = tuple(sorted((k, float(v)) for k, v in nominal_params.items()))
+    definition = FeatureDefinition(name, FEATURE_SETS[name], nominal_model=nominal_model,
+                                   nominal_params=params)  # fmt: skip
+    try:
+        definition.nominal()
+    except TypeError as exc:
+        raise ValueError(
+            f"bad parameters {dict(params)} for nominal model {nominal_model}: {exc}"
+        ) from None
+    return definition

@@ -1,0 +1,70 @@
+"""Compile a CasADi Function to C once per machine and load it back.
+
+The C code is generated from our own formulation at first use, built with the system C
+compiler (``$CC``, default ``cc``) into a user cache directory (``$RESIDUAL_COMPANION_CACHE``,
+else ``$XDG_CACHE_HOME/residual-companion``, else ``~/.cache/residual-companion``) under a name
+that hashes the source, so a changed formulation gets a new library and concurrent processes
+never see a half-written one. Without a working compiler the Function is returned unchanged
+(the CasADi virtual machine evaluates it, slower but identical).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import subprocess
+import tempfile
+from pathlib import Path
+
+import casadi as ca
+
+
+def cache_dir() -> Path:
+    """Directory for compiled libraries (created on demand)."""
+    explicit = os.environ.get("RESIDUAL_COMPANION_CACHE")
+    if explicit:
+        return Path(explicit)
+    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+    return Path(base) / "residual-companion"
+
+
+def compiled(fn: ca.Function) -> ca.Function:
+    """``fn`` compiled to C and loaded as an external Function, or ``fn`` if that fails."""
+    name = fn.name()
+    with tempfile.TemporaryDirectory() as tmp:
+        c_file = Path(tmp) / f"{name}.c"
+        gen = ca.CodeGenerator(c_file.name, {"with_header": False})
+        gen.add(fn)
+        gen.generate(tmp + os.sep)
+        source = c_file.read_text()
+    digest = hashlib.sha256(source.encode()).hexdigest()[:20]
+    directory = cache_dir()
+    library = directory / f"{name}_{digest}.so"
+    if not library.exists() and not _build(source, library):
+        return fn
+    return ca.external(name, str(library))
+
+
+def _build(source: str, library: Path) -> bool:
+    try:
+        library.parent.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryDirectory(dir=library.parent) as tmp:
+            c_file = Path(tmp) / "source.c"
+            c_file.write_text(source)
+            out = Path(tmp) / library.name
+            cmd = [
+                os.environ.get("CC", "cc"),
+                "-O2",
+                "-shared",
+                "-fPIC",
+                str(c_file),
+                "-o",
+                str(out),
+            ]
+            done = subprocess.run(cmd, capture_output=True, timeout=300, check=False)
+            if done.returncode != 0:
+                return False
+            os.replace(out, library)
+        return True
+    except (OSError, subprocess.SubprocessError):
+        return False

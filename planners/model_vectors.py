@@ -1,0 +1,58 @@
+"""Map named vehicle quantities onto a nominal model's state and input vectors.
+
+Models name their elements with units (``pos_n_m``, ``vel_e_mps``, ``yaw_rad``, ...); this
+module fills those vectors from a :class:`PlannerState` or a :class:`ReferenceSample`, so
+the planners work for any of the models in :mod:`planners.nominal_models`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from planners.nominal_models import NominalModel
+from planners.reference import PlannerState, ReferenceSample
+
+_AXES = {"n": 0, "e": 1, "d": 2}
+ANGLE_SUFFIX = "_rad"
+
+
+def _element(name: str, pos: np.ndarray, vel: np.ndarray, yaw, yaw_rate) -> np.ndarray:
+    """One named quantity from (n, 3) positions/velocities and (n,) yaw/yaw rate."""
+    kind, _, axis = name.rpartition("_")[0].partition("_")
+    if kind == "pos" and axis in _AXES:
+        return pos[:, _AXES[axis]]
+    if kind == "vel" and axis in _AXES:
+        return vel[:, _AXES[axis]]
+    if name in ("yaw_rad", "heading_rad"):
+        return np.asarray(yaw, dtype=float)
+    if name in ("yaw_rate_radps", "turn_rate_radps"):
+        return np.asarray(yaw_rate, dtype=float)
+    if name == "speed_mps":
+        return np.linalg.norm(vel[:, :2], axis=1)
+    raise ValueError(
+        f"no mapping for model element {name!r}; known: pos_*_m, vel_*_mps, yaw_rad, "
+        "heading_rad, yaw_rate_radps, turn_rate_radps, speed_mps"
+    )
+
+
+def state_vector(model: NominalModel, state: PlannerState) -> np.ndarray:
+    """The model state (nx,) for a vehicle state."""
+    pos = np.reshape(np.asarray(state.pos_ned_m, dtype=float), (1, 3))
+    vel = np.reshape(np.asarray(state.vel_ned_mps, dtype=float), (1, 3))
+    cols = [_element(n, pos, vel, [state.yaw_rad], [0.0]) for n in model.state_names]
+    return np.concatenate(cols)
+
+
+def reference_vectors(
+    model: NominalModel, sample: ReferenceSample
+) -> tuple[np.ndarray, np.ndarray]:
+    """(x_ref (n, nx), u_ref (n, nu)) for a reference sampled at n times."""
+    args = (sample.pos_ned_m, sample.vel_ned_mps, sample.yaw_rad, sample.yaw_rate_radps)
+    x_ref = np.column_stack([_element(n, *args) for n in model.state_names])
+    u_ref = np.column_stack([_element(n, *args) for n in model.input_names])
+    return x_ref, u_ref
+
+
+def angle_indices(model: NominalModel) -> list[int]:
+    """Indices of angle states (names ending in ``_rad``), which wrap at +-pi."""
+    return [i for i, n in enumerate(model.state_names) if n.endswith(ANGLE_SUFFIX)]

@@ -1,0 +1,176 @@
+"""Paper 000's NMPC local planner behind the :class:`~planners.reference.Planner` contract.
+
+Build it for the kinematic model, with or without a learned residual::
+
+    model = kinematic_4dof(residual_dt_s=0.05)
+    planner = NmpcPlanner(model, NmpcConfig(), world=ObstacleWorld([...]))
+    planner = NmpcPlanner(model, NmpcConfig(), ResidualTerm.of_velocity(gp_mean_fn, model))
+    result = planner.plan(state, reference, t_s)   # never raises
+
+Each call samples the reference on the horizon grid t_s + i dt, warm-starts from the previous
+solution (interpolated onto the new grid; the reference on the first call or after a
+failure), selects the N_o obstacles nearest to that guess and to the reference, and solves.
+A non-finite state, a start inside an obstacle, a failed or late solve, or a plan whose
+simulation violates the constraints gives the safe command (zero velocity and yaw rate) with
+``ok=False`` and the reason.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from planners.model_vectors import angle_indices, reference_vectors, state_vector
+from planners.nmpc_formulation import UNUSED_SLOT, NmpcConfig, NmpcFormulation
+from planners.nmpc_solvers import make_solver
+from planners.nominal_models import NominalModel
+from planners.obstacles import ObstacleWorld
+from planners.plan_result import PlanResult, safe_result
+from planners.reference import PlannerState, Reference
+from planners.residual import ResidualTerm
+
+_BOUND_TOL = 1e-6
+
+
+class NmpcPlanner:
+    """NMPC local planner; see the module docstring.
+
+    Arguments: the nominal model, the problem and solver settings, an optional learned
+    residual, the obstacle world, and ``compile_functions`` (compile the fast path's
+    linearisation to C at first use, cached per machine; see ``SqpOptions.compile``).
+
+    Attributes:
+        formulation: the NLP (model, config, residual).
+        world: obstacles to avoid (None: free space); may be replaced between calls.
+    """
+
+    def __init__(
+        self,
+        model: NominalModel,
+        config: NmpcConfig | None = None,
+        residual: ResidualTerm | None = None,
+        world: ObstacleWorld | None = None,
+        compile_functions: bool = False,
+    ) -> None:
+        self.formulation = NmpcFormulation(model, config or NmpcConfig(), residual)
+        self.world = world
+        cfg = self.formulation.config
+        self._solver = make_solver(
+            cfg.solver, self.formulation, cfg.max_iterations, compile_functions, cfg.time_budget_s
+        )
+        self._angles = angle_indices(model)
+        self._pos_index = [
+            model.state_names.index(n)
+            for n in ("pos_n_m", "pos_e_m", "pos_d_m")
+            if n in model.state_names
+        ]
+        self._warm: tuple[float, np.ndarray, np.ndarray] | None = None
+
+    def reset(self) -> None:
+        """Forget the warm start (e.g. after a new reference)."""
+        self._warm = None
+
+    def plan(self, state: PlannerState, reference: Reference, t_s: float) -> PlanResult:
+        """One NMPC step at time ``t_s`` [s] on the reference's clock; never raises."""
+        start = time.perf_counter()
+        try:
+            return self._plan(state, reference, float(t_s), start)
+        except Exception as err:  # the flight loop must get a command, whatever happened
+            self._warm = None
+            return self._safe(f"planner error: {type(err).__name__}: {err}", start)
+
+    def _safe(self, reason: str, start: float) -> PlanResult:
+        m = self.formulation.model
+        return safe_result(m.nu, m.nx, reason, time.perf_counter() - start)
+
+    def _positions(self, states: np.ndarray) -> np.ndarray:
+        pos = np.zeros((states.shape[0], 3))
+        pos[:, : len(self._pos_index)] = states[:, self._pos_index]
+        return pos
+
+    def _plan(
+        self, state: PlannerState, reference: Reference, t_s: float, start: float
+    ) -> PlanResult:
+        f = self.formulation
+        cfg = f.config
+        if not (state.is_finite() and np.isfinite(t_s)):
+            self._warm = None
+            return self._safe("non-finite state or time", start)
+        grid = t_s + cfg.dt_s * np.arange(cfg.horizon_steps + 1)
+        x_ref, u_ref = reference_vectors(f.model, reference.sample(grid))
+        x_now = state_vector(f.model, state)
+        for i in self._angles:  # express angles on the reference's branch
+            x_now[i] = x_ref[0, i] + np.angle(np.exp(1j * (x_now[i] - x_ref[0, i])))
+        cold_start = self._warm is None
+        w0, guess = self._warm_start(grid, x_now, x_ref, u_ref[:-1])
+        slots = np.tile(UNUSED_SLOT, (cfg.n_obstacles, 1))
+        if self.world is not None and cfg.n_obstacles:
+            if self.world.clearance_m(self._positions(x_now[None, :]))[0] < 0.0:
+                self._warm = None
+                return self._safe("start inside an obstacle", start)
+            # Obstacles nearest to where the plan is expected to go (guess) and to the reference.
+            near = self._positions(np.vstack([guess[::2], x_ref[::4]]))
+            slots = self.world.slots(near, cfg.n_obstacles, cfg.safe_distance_m)
+        p = f.pack_parameters(x_now, x_ref, u_ref[:-1], slots)
+        budget = cfg.time_budget_s - (time.perf_counter() - start)
+        out = self._solver.solve(w0, p, budget, cold_start)
+        if not out.ok:
+            self._warm = None
+            return self._safe(f"solver failed: {out.reason}", start)
+        states, inputs = f.split_w(out.w)
+        predicted = f.rollout(x_now, inputs)
+        problem = self._check(predicted, inputs, slots)
+        if problem:
+            self._warm = None
+            return self._safe(problem, start)
+        self._warm = (t_s, states, inputs)
+        elapsed = time.perf_counter() - start
+        if elapsed > cfg.time_budget_s:
+            return safe_result(
+                f.model.nu,
+                f.model.nx,
+                f"late: solve took {elapsed:.4f} s > budget {cfg.time_budget_s} s",
+                elapsed,
+            )
+        return PlanResult(inputs[0], predicted, True, "", elapsed, inputs)
+
+    def _warm_start(
+        self, grid: np.ndarray, x_now: np.ndarray, x_ref: np.ndarray, u_ref: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(w0, its states (N+1, nx)): the previous solution moved onto the new time grid, else
+        the reference itself; row 0 is the current state."""
+        f = self.formulation
+        if self._warm is None:
+            states = x_ref.copy()
+            inputs = u_ref.copy()
+        else:
+            t_prev, prev_x, prev_u = self._warm
+            dt = f.config.dt_s
+            old_x = t_prev + dt * np.arange(prev_x.shape[0])
+            old_u = old_x[:-1]
+            states = np.column_stack([np.interp(grid, old_x, c) for c in prev_x.T])
+            inputs = np.column_stack([np.interp(grid[:-1], old_u, c) for c in prev_u.T])
+        states[0] = x_now
+        return f.pack_w(states, inputs), states
+
+    def _check(self, predicted: np.ndarray, inputs: np.ndarray, slots: np.ndarray) -> str:
+        """Why the simulated plan is unacceptable, or "" if it is fine."""
+        f = self.formulation
+        if not (np.all(np.isfinite(predicted)) and np.all(np.isfinite(inputs))):
+            return "non-finite plan"
+        if np.any(inputs < f.u_min - _BOUND_TOL) or np.any(inputs > f.u_max + _BOUND_TOL):
+            return "plan violates input bounds"
+        later = predicted[1:]
+        if np.any(later < f.x_min - f.config.clearance_tolerance_m) or np.any(
+            later > f.x_max + f.config.clearance_tolerance_m
+        ):
+            return "plan violates state bounds"
+        pos = self._positions(later)
+        if slots.size:
+            diff = pos[:, None, :] - slots[None, :, 0:3]
+            clear = np.sqrt(np.sum(slots[None, :, 3:6] * diff**2, axis=2)) - slots[None, :, 6]
+            worst = float(np.min(clear))
+            if worst < -f.config.clearance_tolerance_m:
+                return f"plan violates obstacle clearance by {-worst:.3f} m"
+        return ""

@@ -1,0 +1,74 @@
+"""The reference and planner contracts shared by the PD regulator and the NMPC."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from planners.plan_result import PlanResult
+
+
+@dataclass(frozen=True)
+class ReferenceSample:
+    """A reference sampled at n times (NED, SI).
+
+    Attributes:
+        pos_ned_m: positions, shape (n, 3).
+        vel_ned_mps: velocities, shape (n, 3).
+        acc_ned_mps2: accelerations, shape (n, 3).
+        yaw_rad: yaw angles, shape (n,).
+        yaw_rate_radps: yaw rates, shape (n,).
+    """
+
+    pos_ned_m: np.ndarray
+    vel_ned_mps: np.ndarray
+    acc_ned_mps2: np.ndarray
+    yaw_rad: np.ndarray
+    yaw_rate_radps: np.ndarray
+
+
+class Reference(Protocol):
+    """A time-parametrised reference trajectory (t in seconds from its start).
+
+    ``x_ref``/``u_ref`` follow the 4-DOF kinematic model: x = (pos_n, pos_e, pos_d [m], yaw
+    [rad]) and u = (vel_n, vel_e, vel_d [m/s], yaw_rate [rad/s]). Before t = 0 and after the
+    end the reference holds its end points at rest.
+    """
+
+    @property
+    def duration_s(self) -> float: ...
+
+    def sample(self, t_s: np.ndarray | float) -> ReferenceSample: ...
+
+    def x_ref(self, t_s: np.ndarray | float) -> np.ndarray:
+        """Shape (4,) for a scalar t, (n, 4) for n times."""
+        ...
+
+    def u_ref(self, t_s: np.ndarray | float) -> np.ndarray:
+        """Shape (4,) for a scalar t, (n, 4) for n times."""
+        ...
+
+
+@dataclass(frozen=True)
+class PlannerState:
+    """The vehicle state a planner sees (NED, SI)."""
+
+    pos_ned_m: np.ndarray
+    vel_ned_mps: np.ndarray
+    yaw_rad: float
+
+    def is_finite(self) -> bool:
+        """True when every element is finite (no NaN or inf)."""
+        return bool(
+            np.all(np.isfinite(self.pos_ned_m))
+            and np.all(np.isfinite(self.vel_ned_mps))
+            and np.isfinite(self.yaw_rad)
+        )
+
+
+class Planner(Protocol):
+    """One planning step: state and reference in, command out. Never raises on bad input."""
+
+    def plan(self, state: PlannerState, reference: Reference, t_s: float) -> PlanResult: ...

@@ -1,0 +1,97 @@
+"""NMPC benchmark (`bench --only nmpc`): fast solver path vs IPOPT on one set of problems.
+
+Problems: paper 000's planner (4-DOF kinematic model, N = 20, dt = 0.1 s, 10 obstacle slots
+per node, d_o = 0.5 m) with a GP-like residual of the velocity: an SE-kernel mean
+sum_i alpha_i k(v, Z_i) with 30 seeded inducing points Z_i and 3 outputs (the form the gp
+package exports). A closed loop flown by the fast planner on the residual-augmented plant,
+at one plan per 0.1 s, along a seeded 40-60 m B-spline through a seeded forest of vertical
+cylinders, some standing on the path (constraints active in about a third of the plans),
+records the (state, time) pairs; the IPOPT planner (CasADi defaults) then solves the same
+sequence, warm-started the same way. The fast path is the default configuration: one
+Gauss-Newton SQP iteration per plan (more on a cold start), CasADi virtual machine. Times are
+wall-clock per plan() call, everything included. Figures:
+    nmpc_fast_median_ms, nmpc_fast_p99_ms   time per plan() of the fast path [ms]
+    nmpc_ipopt_median_ms                    time per plan() of IPOPT [ms]
+    nmpc_fast_ok_fraction, nmpc_ipopt_ok_fraction   plans returned with ok=True [-]
+    nmpc_cmd_diff_median_mps                median |command difference| fast vs IPOPT [m/s]
+``quick=True`` flies 3 s instead of 30 s, for a smoke test.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+
+import casadi as ca
+import numpy as np
+
+from planners.nmpc import NmpcPlanner
+from planners.nmpc_formulation import NmpcConfig
+from planners.nominal_models import kinematic_4dof
+from planners.obstacles import random_forest
+from planners.reference import PlannerState
+from planners.residual import ResidualTerm
+from planners.trajectory_generator import generate_trajectories
+
+_N_INDUCING = 30
+_RESIDUAL_DT_S = 0.05
+_PLAN_DT_S = 0.1
+
+
+def gp_like_residual(seed: int = 0) -> ca.Function:
+    """SE-kernel mean g(v) = k(v, Z) @ alpha, Z (30, 3) [m/s], alpha (30, 3) [m/s^2]."""
+    rng = np.random.default_rng(seed)
+    inducing = rng.uniform(-1.5, 1.5, (_N_INDUCING, 3))
+    alpha = rng.normal(0.0, 0.5, (_N_INDUCING, 3))
+    v = ca.SX.sym("v", 3)
+    sq_dist = ca.sum2((ca.repmat(v.T, _N_INDUCING, 1) - ca.DM(inducing)) ** 2)
+    k = 0.5 * ca.exp(-0.5 * sq_dist / 0.7**2)
+    return ca.Function("gp_like_mean", [v], [(k.T @ ca.DM(alpha)).T], ["v"], ["mean"])
+
+
+def run(progress: Callable[[str], None] = print, quick: bool = False) -> dict[str, float]:
+    """Run the NMPC benchmark; returns the figures named in the module docstring."""
+    model = kinematic_4dof(_RESIDUAL_DT_S)
+    gp = gp_like_residual()
+    residual = ResidualTerm.of_velocity(gp, model)
+    reference = generate_trajectories(1, seed=11)[0]
+    path = reference.sample(np.linspace(0.0, reference.duration_s, 500)).pos_ned_m
+    world = random_forest(path, n_trees=80, seed=5, keep_out_m=-0.3, spread_m=5.0)
+    base = NmpcConfig(n_obstacles=10, safe_distance_m=0.5)
+    progress("nmpc: building the planners")
+    fast = NmpcPlanner(model, base, residual, world)
+    ipopt = NmpcPlanner(
+        model, dataclasses.replace(base, solver="ipopt", time_budget_s=10.0), residual, world
+    )
+
+    t_end = 3.0 if quick else 30.0
+    progress(f"nmpc: fast planner closed loop, {t_end:.0f} s at {1 / _PLAN_DT_S:.0f} Hz")
+    x = reference.x_ref(0.0)
+    fast.plan(PlannerState(x[:3], np.zeros(3), x[3]), reference, 0.0)  # first call: setup
+    fast.reset()
+    problems, fast_res = [], []
+    for k in range(int(round(t_end / _PLAN_DT_S))):
+        t = k * _PLAN_DT_S
+        state = PlannerState(x[:3].copy(), np.zeros(3), float(x[3]))
+        res = fast.plan(state, reference, t)
+        problems.append((state, t))
+        fast_res.append(res)
+        u = res.command
+        vel = u[:3] + _RESIDUAL_DT_S * np.asarray(gp(u[:3])).ravel()
+        x = x + _PLAN_DT_S * np.append(vel, u[3])
+
+    progress(f"nmpc: IPOPT on the same {len(problems)} problems")
+    ipopt_res = [ipopt.plan(state, reference, t) for state, t in problems]
+    fast_ms = 1e3 * np.array([r.solve_time_s for r in fast_res])
+    ipopt_ms = 1e3 * np.array([r.solve_time_s for r in ipopt_res])
+    pairs = zip(fast_res, ipopt_res, strict=True)
+    both = [(a, b) for a, b in pairs if a.ok and b.ok]
+    diff = [np.max(np.abs(a.command - b.command)) for a, b in both]
+    return {
+        "nmpc_fast_median_ms": float(np.median(fast_ms)),
+        "nmpc_fast_p99_ms": float(np.percentile(fast_ms, 99)),
+        "nmpc_ipopt_median_ms": float(np.median(ipopt_ms)),
+        "nmpc_fast_ok_fraction": float(np.mean([r.ok for r in fast_res])),
+        "nmpc_ipopt_ok_fraction": float(np.mean([r.ok for r in ipopt_res])),
+        "nmpc_cmd_diff_median_mps": float(np.median(diff)) if diff else float("nan"),
+    }

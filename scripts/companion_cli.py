@@ -1,0 +1,113 @@
+"""`companion`: fly a mission file over a Link and write a schema-v1 flight log.
+
+    companion MISSION --link {mavsdk,pymavlink,inprocess} [--url udpin://127.0.0.1:14540]
+              [--planner pd|nmpc] [--gp-model MODEL.json] [--rate-hz 50]
+              [--log out/flight.csv] [--seed 0] [--vehicle iris]
+
+Progress goes to stderr. Exit codes: 0 mission completed (goal reached, landed, disarmed);
+1 flight failed or goal not reached (the vehicle was brought to HOLD and LAND); 2 bad input
+(mission file, option); 130 interrupted by Ctrl-C or SIGTERM (the vehicle was sent a zero
+velocity, HOLD and LAND, and the companion waited for it to disarm).
+"""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+from pathlib import Path
+from types import FrameType
+
+from companion.app import (
+    DEFAULT_URL,
+    LINK_KINDS,
+    CompanionConfig,
+    CompanionInputError,
+    run_companion,
+)
+from companion.planner_registry import PLANNER_NAMES
+from companion.runner import RunnerConfig
+
+EXIT_COMPLETED = 0
+EXIT_FAILED = 1
+EXIT_BAD_INPUT = 2
+EXIT_INTERRUPTED = 130
+
+
+def parse_args(argv: list[str] | None) -> CompanionConfig:
+    """Command line -> config; argparse exits with code 2 on bad options."""
+    parser = argparse.ArgumentParser(
+        prog="companion",
+        description="Fly a mission file over MAVLink (MAVSDK or pymavlink) or in process.",
+        epilog="Exit codes: 0 completed, 1 failed or goal not reached, 2 bad input, "
+        "130 interrupted (vehicle sent HOLD and LAND).",
+    )
+    parser.add_argument("mission", type=Path, help="mission file (TOML)")
+    parser.add_argument("--link", choices=LINK_KINDS, default="mavsdk", help="how to reach it")
+    parser.add_argument("--url", default=DEFAULT_URL, help=f"MAVLink URL (default {DEFAULT_URL})")
+    parser.add_argument("--planner", choices=PLANNER_NAMES, default="pd")
+    parser.add_argument(
+        "--gp-model", type=Path, default=None,
+        help="residual model from fit-gp: fly the NMPC augmented with it (needs --planner nmpc)",
+    )  # fmt: skip
+    parser.add_argument("--rate-hz", type=float, default=50.0, help="control loop rate [Hz]")
+    parser.add_argument("--log", type=Path, default=Path("out/flight.csv"), help="flight log")
+    parser.add_argument("--seed", type=int, default=0, help="simulator seed (inprocess)")
+    parser.add_argument("--vehicle", default="iris", help="simulator preset or config (inprocess)")
+    args = parser.parse_args(argv)
+    try:
+        runner = RunnerConfig(rate_hz=args.rate_hz)
+    except ValueError as exc:
+        parser.error(str(exc))
+    return CompanionConfig(
+        mission_path=args.mission,
+        link=args.link,
+        url=args.url,
+        planner=args.planner,
+        gp_model=args.gp_model,
+        log_path=args.log,
+        seed=args.seed,
+        vehicle=args.vehicle,
+        runner=runner,
+    )
+
+
+def _progress(message: str) -> None:
+    print(f"companion: {message}", file=sys.stderr, flush=True)
+
+
+def _metres(value: float | None) -> str:
+    return "n/a" if value is None else f"{value:.2f} m"
+
+
+def _sigterm_as_interrupt(_signum: int, _frame: FrameType | None) -> None:
+    raise KeyboardInterrupt
+
+
+def main(argv: list[str] | None = None) -> int:
+    config = parse_args(argv)
+    previous = signal.signal(signal.SIGTERM, _sigterm_as_interrupt)
+    try:
+        result = run_companion(config, _progress)
+    except CompanionInputError as exc:
+        print(f"companion: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        _progress("interrupted again during the safe stop; the vehicle was commanded to land")
+        return EXIT_INTERRUPTED
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+    outcome = result.outcome
+    _progress(
+        f"{outcome.status}: {outcome.detail}; landed {_metres(outcome.landed_error_m)} from the "
+        f"goal; {outcome.deadline_misses} deadline misses in {outcome.ticks} steps"
+    )
+    if outcome.status == "completed":
+        return EXIT_COMPLETED
+    if outcome.status == "interrupted":
+        return EXIT_INTERRUPTED
+    return EXIT_FAILED
+
+
+if __name__ == "__main__":
+    sys.exit(main())

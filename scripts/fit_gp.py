@@ -1,0 +1,131 @@
+"""fit-gp: learn a residual model from flight logs.
+
+    fit-gp LOGS... --out MODEL [--features velocity|state_input|history]
+           [--nominal kinematic_4dof] [--nominal-param residual_dt_s=0.05]
+           [--inducing low_speed|cluster|random] [--m 30] [--optimize-inducing]
+           [--seed 0] [--holdout-fraction 0.2] [--restarts 3] [--mode offboard] [--no-plots]
+
+Writes MODEL.json + MODEL.npz and MODEL_residual_{n,e,d}.png, prints the held-out nominal and
+augmented RMSE per axis (paper 000, Table 2) on stdout; progress goes to stderr. Exit code 0 on
+success, 2 with a one-line reason on bad input.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from gp.errors import DatasetError, GPInputError, ModelFileError
+from gp.features import FEATURE_SETS
+from gp.inducing import STRATEGIES
+from gp.model_io import model_paths, save_model
+from gp.plots import plot_residuals
+from gp.training import TrainingConfig, train_residual_model
+from planners.nominal_models import MODELS
+from vehicle_sim.flight_log import FlightLogError, read_flight_log
+
+
+@dataclass(frozen=True)
+class FitGpConfig:
+    """Parsed command line: the logs, where to write, and the training settings."""
+
+    logs: tuple[Path, ...]
+    out: Path
+    training: TrainingConfig
+    plots: bool = True
+
+
+class _Parser(argparse.ArgumentParser):
+    """ArgumentParser whose errors are one line (no usage dump)."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        self.exit(2, f"{self.prog}: error: {message}; see --help\n")
+
+
+def parse_args(argv: list[str] | None) -> FitGpConfig:
+    """Parse the command line into a FitGpConfig (exits with code 2 on bad arguments)."""
+    parser = _Parser(prog="fit-gp", description="Fit a sparse-GP residual model from flight logs.")
+    parser.add_argument("logs", nargs="+", type=Path, help="schema-v1 flight log CSV files")
+    parser.add_argument("--out", required=True, type=Path, help="model path (MODEL.json/.npz)")
+    parser.add_argument("--features", default="velocity", choices=list(FEATURE_SETS))
+    parser.add_argument("--nominal", default="kinematic_4dof", choices=list(MODELS))
+    parser.add_argument(
+        "--nominal-param", action="append", default=[], metavar="NAME=VALUE",
+        help="nominal model parameter (repeatable), e.g. residual_dt_s=0.05",
+    )  # fmt: skip
+    parser.add_argument("--inducing", default="low_speed", choices=list(STRATEGIES))
+    parser.add_argument("--m", type=int, default=30, help="number of inducing points")
+    parser.add_argument("--optimize-inducing", action="store_true", help="refine positions")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--holdout-fraction", type=float, default=0.2)
+    parser.add_argument("--restarts", type=int, default=3)
+    parser.add_argument("--mode", action="append", default=None, help="keep only this mode")
+    parser.add_argument("--no-plots", action="store_true")
+    args = parser.parse_args(argv)
+    params = []
+    for item in args.nominal_param:
+        name, sep, value = item.partition("=")
+        try:
+            params.append((name, float(value)))
+        except ValueError:
+            sep = ""
+        if not sep:
+            parser.error(f"--nominal-param {item!r}: expected NAME=NUMBER")
+    if args.m < 1:
+        parser.error(f"--m must be >= 1, got {args.m}")
+    if not 0.0 < args.holdout_fraction < 1.0:
+        parser.error(f"--holdout-fraction must be in (0, 1), got {args.holdout_fraction}")
+    training = TrainingConfig(
+        features=args.features,
+        nominal=args.nominal,
+        nominal_params=tuple(sorted(params)),
+        inducing=args.inducing,
+        m=args.m,
+        optimize_inducing=args.optimize_inducing,
+        restarts=args.restarts,
+        holdout_fraction=args.holdout_fraction,
+        modes=tuple(args.mode) if args.mode else None,
+        seed=args.seed,
+    )
+    return FitGpConfig(tuple(args.logs), args.out, training, plots=not args.no_plots)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run fit-gp; returns the exit code (0 ok, 2 bad input)."""
+    try:
+        config = parse_args(argv)
+    except SystemExit as exc:  # --help (0) or a bad argument (2, message already printed)
+        return int(exc.code or 0)
+    start = time.perf_counter()
+
+    def progress(message: str) -> None:
+        print(f"fit-gp [{time.perf_counter() - start:6.1f} s] {message}", file=sys.stderr)
+
+    try:
+        logs = []
+        for path in config.logs:
+            logs.append(read_flight_log(path))
+            progress(f"read {path} ({logs[-1].n_rows} rows)")
+        result = train_residual_model(logs, config.training, progress)
+        json_path = save_model(config.out, result.model)
+        progress(f"wrote {json_path} and {model_paths(config.out)[1]}")
+        if config.plots:
+            for png in plot_residuals(result.model, result.test, json_path.with_suffix("")):
+                progress(f"wrote {png}")
+    except (FlightLogError, DatasetError, GPInputError, ModelFileError, ValueError) as exc:
+        print(f"fit-gp: error: {exc}", file=sys.stderr)
+        return 2
+    print("axis  nominal_rmse_mps  augmented_rmse_mps")
+    for axis, nom, aug in zip(
+        "ned", result.metrics["nominal_rmse_mps"], result.metrics["augmented_rmse_mps"],
+        strict=False,
+    ):  # fmt: skip
+        print(f"{axis:>4}  {nom:16.4f}  {aug:18.4f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

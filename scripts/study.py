@@ -1,0 +1,99 @@
+"""`study`: paper 000's residual-learning experiment and paper 004's trials, in simulation.
+
+    study [--out out/study] [--trajectories 20] [--repeats 3] [--trials 6] [--m 30]
+          [--workers 2] [--vehicle iris_study] [--model kinematic_4dof|first_order_lag]
+          [--tau-s 0.5] [--features velocity|state_input] [--seed 0] [--quick]
+
+Flies every flight in process (lockstep, deterministic, seeded) on ``--workers`` processes and
+writes OUT/report.md with PNG plots and the fitted model files. Progress goes to stderr; the
+headline figures are printed on stdout. Exit code 0 on success, 2 with a one-line reason on
+bad input.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+from companion.nmpc_planner import MULTIROTOR_MODELS, NmpcSettings
+from companion.study.config import STUDY_VEHICLE, StudyConfig
+from companion.study.run import run_study
+from gp.features import FEATURE_SETS
+from vehicle_sim.effects.base import SimConfigError
+
+
+def parse_args(argv: list[str] | None) -> StudyConfig:
+    """Command line -> StudyConfig (argparse exits with code 2 on bad options)."""
+    parser = argparse.ArgumentParser(prog="study", description=__doc__.splitlines()[0])
+    parser.add_argument("--out", type=Path, default=Path("out/study"), help="output folder")
+    parser.add_argument("--trajectories", type=int, default=20, help="random trajectories")
+    parser.add_argument("--repeats", type=int, default=3, help="flights per trajectory")
+    parser.add_argument("--trials", type=int, default=6, help="trials on the repeated path")
+    parser.add_argument("--m", type=int, default=30, help="inducing points per output")
+    parser.add_argument("--workers", type=int, default=2, help="processes flying in parallel")
+    parser.add_argument("--vehicle", default=STUDY_VEHICLE, help="simulator preset or config")
+    parser.add_argument("--model", choices=MULTIROTOR_MODELS, default="kinematic_4dof",
+                        help="the NMPC's nominal model")  # fmt: skip
+    parser.add_argument("--tau-s", type=float, default=0.5, help="first_order_lag's tau [s]")
+    parser.add_argument("--features", choices=list(FEATURE_SETS), default="velocity")
+    parser.add_argument("--seed", type=int, default=0, help="trajectory generator seed")
+    parser.add_argument("--quick", action="store_true", help="small smoke version")
+    args = parser.parse_args(argv)
+    params = (("tau_s", args.tau_s),) if args.model == "first_order_lag" else ()
+    try:
+        config = StudyConfig(
+            out_dir=args.out,
+            vehicle=args.vehicle,
+            n_trajectories=args.trajectories,
+            repeats=args.repeats,
+            n_trials=args.trials,
+            m=args.m,
+            workers=args.workers,
+            trajectory_seed=args.seed,
+            nmpc=NmpcSettings(
+                speed_limit_mps=2.5, nominal_model=args.model, nominal_params=params
+            ),
+            features=args.features,
+        )
+    except ValueError as exc:
+        parser.error(str(exc))
+    return config.quick() if args.quick else config
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the study; returns the exit code."""
+    try:
+        config = parse_args(argv)
+    except SystemExit as exc:
+        return int(exc.code or 0)
+    start = time.perf_counter()
+
+    def progress(message: str) -> None:
+        print(f"study [{time.perf_counter() - start:6.1f} s] {message}", file=sys.stderr,
+              flush=True)  # fmt: skip
+
+    try:
+        _check_inputs(config)
+        result = run_study(config, progress)
+    except (SimConfigError, ValueError) as exc:
+        print(f"study: error: {exc}", file=sys.stderr)
+        return 2
+    for name, value in result.headline.items():
+        print(f"{name} = {value:.4f}")
+    print(f"report: {result.report_path}")
+    return 0
+
+
+def _check_inputs(config: StudyConfig) -> None:
+    """Fail before flying: the vehicle must load, the features must suit the model."""
+    from companion.nmpc_planner import check_feature_set
+    from vehicle_sim import load_sim_config
+
+    load_sim_config(config.vehicle)
+    check_feature_set(config.features, config.nmpc.nominal_model)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,230 @@
+"""`vehicle-sim`: run the simulated vehicle as a MAVLink endpoint, like PX4 SITL.
+
+Two UDP links on loopback, as PX4 SITL opens them: the offboard API link sends to 14540
+(MAVSDK: ``udpin://127.0.0.1:14540``) and the GCS link sends to 14550 (MAVProxy / QGC /
+pymavlink: ``udpin:127.0.0.1:14550``). Runs in real time or at ``--speed`` until SIGINT/SIGTERM
+(or ``--duration-s``).
+
+Usage:
+    vehicle-sim                                        # iris, real time
+    vehicle-sim --vehicle m100 --speed 2 --effect rotor_drag --effect wind.vel_ned_mps=[3,0,0]
+    vehicle-sim --vehicle my_quad.toml --signing-key link.key
+    vehicle-sim --vehicle f450 --backend jsbsim          # JSBSim's F450 under the same control
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import signal
+import sys
+import threading
+import time
+import tomllib
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from vehicle_sim import EFFECT_NAMES, SimConfigError, Simulator, load_sim_config
+from vehicle_sim.backends import BACKEND_NAMES
+from vehicle_sim.mavlink import (
+    EndpointConfig,
+    MavlinkEndpoint,
+    SigningKeyError,
+    load_signing_key,
+    px4_sitl_links,
+)
+
+PROG = "vehicle-sim"
+
+
+class UsageError(ValueError):
+    """Bad command-line input; the message is one line."""
+
+
+@dataclass(frozen=True)
+class VehicleSimCliConfig:
+    """What to run.
+
+    Attributes:
+        vehicle: preset name ("iris", "m100") or path of a config TOML file.
+        effects: effect name -> parameter overrides ({} for the effect's defaults).
+        backend: physics backend ("builtin" or "jsbsim"); None: the config's ``[sim] backend``.
+        seed: simulator seed.
+        speed: simulated seconds per wall-clock second.
+        host: address the links bind to and send to (loopback by default).
+        offboard_port, gcs_port: where the offboard API and GCS links send first.
+        offboard_bind_port, gcs_bind_port: the links' own ports (0: any free port).
+        signing_key_path: key file to require MAVLink 2 signing on both links, or None.
+        duration_s: stop after this wall-clock time [s]; None runs until a signal.
+    """
+
+    vehicle: str = "iris"
+    effects: tuple[tuple[str, tuple[tuple[str, Any], ...]], ...] = ()
+    backend: str | None = None
+    seed: int = 0
+    speed: float = 1.0
+    host: str = "127.0.0.1"
+    offboard_port: int = 14540
+    gcs_port: int = 14550
+    offboard_bind_port: int = 14580
+    gcs_bind_port: int = 18570
+    signing_key_path: str | None = None
+    duration_s: float | None = None
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> None:  # one line instead of usage + message
+        raise UsageError(message)
+
+
+def _effect_overrides(specs: Sequence[str]) -> tuple[tuple[str, tuple[tuple[str, Any], ...]], ...]:
+    """``NAME`` or ``NAME.KEY=TOML_VALUE`` specs -> ((name, ((key, value), ...)), ...)."""
+    effects: dict[str, dict[str, Any]] = {}
+    for spec in specs:
+        name, _, assignment = spec.partition(".")
+        if name not in EFFECT_NAMES:
+            raise UsageError(f"--effect {spec}: unknown effect {name!r}; choose from "
+                             f"{', '.join(EFFECT_NAMES)}")  # fmt: skip
+        params = effects.setdefault(name, {})
+        if not assignment:
+            continue
+        key, eq, raw = assignment.partition("=")
+        if not eq or not key:
+            raise UsageError(f"--effect {spec}: use NAME or NAME.KEY=VALUE")
+        try:
+            params[key] = tomllib.loads(f"v = {raw}")["v"]
+        except tomllib.TOMLDecodeError:
+            raise UsageError(f"--effect {spec}: {raw!r} is not a TOML value "
+                             "(e.g. 0.3 or [3, 0, 0])") from None  # fmt: skip
+    return tuple((name, tuple(params.items())) for name, params in effects.items())
+
+
+def parse_args(argv: Sequence[str] | None) -> VehicleSimCliConfig:
+    parser = _Parser(prog=PROG, description=__doc__.splitlines()[0])
+    parser.add_argument("--vehicle", default="iris", help="preset name or config TOML path")
+    parser.add_argument("--effect", action="append", default=[], metavar="NAME[.KEY=VALUE]",
+                        help="switch an effect on, optionally setting one parameter "
+                             "(repeatable)")  # fmt: skip
+    parser.add_argument("--backend", choices=BACKEND_NAMES,
+                        help="physics backend (default: the config's [sim] backend, "
+                             "else builtin)")  # fmt: skip
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--speed", type=float, default=1.0,
+                        help="simulated seconds per wall-clock second")  # fmt: skip
+    parser.add_argument("--host", default="127.0.0.1", help="address to bind and send to")
+    parser.add_argument("--offboard-port", type=int, default=14540)
+    parser.add_argument("--gcs-port", type=int, default=14550)
+    parser.add_argument("--offboard-bind-port", type=int, default=14580)
+    parser.add_argument("--gcs-bind-port", type=int, default=18570)
+    parser.add_argument("--signing-key", metavar="FILE",
+                        help="require MAVLink 2 signing with this key (64 hex digits or a "
+                             "passphrase)")  # fmt: skip
+    parser.add_argument("--duration-s", type=float, help="stop after this wall-clock time")
+    args = parser.parse_args(argv)
+    if not (math.isfinite(args.speed) and 0.01 <= args.speed <= 100.0):
+        raise UsageError(f"--speed {args.speed}: must be within [0.01, 100]")
+    if args.duration_s is not None and not (math.isfinite(args.duration_s) and args.duration_s > 0):
+        raise UsageError(f"--duration-s {args.duration_s}: must be > 0")
+    return VehicleSimCliConfig(
+        vehicle=args.vehicle,
+        effects=_effect_overrides(args.effect),
+        backend=args.backend,
+        seed=args.seed,
+        speed=args.speed,
+        host=args.host,
+        offboard_port=args.offboard_port,
+        gcs_port=args.gcs_port,
+        offboard_bind_port=args.offboard_bind_port,
+        gcs_bind_port=args.gcs_bind_port,
+        signing_key_path=args.signing_key,
+        duration_s=args.duration_s,
+    )
+
+
+def build_endpoint(config: VehicleSimCliConfig) -> MavlinkEndpoint:
+    """The simulator and its endpoint (not started); raises ValueError on bad config."""
+    effects = {name: dict(params) for name, params in config.effects} or None
+    sim = Simulator(
+        load_sim_config(config.vehicle, effects=effects), seed=config.seed, backend=config.backend
+    )
+    key = load_signing_key(config.signing_key_path) if config.signing_key_path else None
+    links = px4_sitl_links(
+        offboard_port=config.offboard_port,
+        gcs_port=config.gcs_port,
+        host=config.host,
+        signing_key=key,
+        offboard_bind_port=config.offboard_bind_port,
+        gcs_bind_port=config.gcs_bind_port,
+    )
+    return MavlinkEndpoint(sim, EndpointConfig(links=links, speed=config.speed))
+
+
+def _announce(config: VehicleSimCliConfig, endpoint: MavlinkEndpoint) -> None:
+    ports = endpoint.local_ports
+    host = config.host
+    signing = "on (unsigned commands refused)" if config.signing_key_path else "off"
+    print(f"{PROG}: {config.vehicle} on {endpoint.sim.backend_name} at {config.speed:g}x "
+          f"real time, seed {config.seed}, signing {signing}")  # fmt: skip
+    print(f"MAVSDK: udpin://{host}:{config.offboard_port}")
+    print(f"pymavlink: udpin:{host}:{config.gcs_port} (or udpout:{host}:{ports['gcs']})")
+    print(f"MAVProxy: mavproxy.py --master udpin:{host}:{config.gcs_port}")
+    print("Ctrl-C to stop", flush=True)
+
+
+def serve(endpoint: MavlinkEndpoint, stop: threading.Event, duration_s: float | None) -> None:
+    """Run until ``stop`` is set, the deadline passes or the endpoint's loop dies."""
+    deadline = math.inf if duration_s is None else time.monotonic() + duration_s
+    while not stop.is_set() and endpoint.running and time.monotonic() < deadline:
+        stop.wait(min(0.2, max(0.0, deadline - time.monotonic())))
+
+
+def _stop(endpoint: MavlinkEndpoint) -> str:
+    """Stop the endpoint; the reason it failed ("" if it stopped cleanly)."""
+    try:
+        endpoint.stop()
+    except RuntimeError as exc:
+        return str(exc)
+    return ""
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    try:
+        config = parse_args(argv)
+    except UsageError as exc:
+        print(f"{PROG}: error: {exc}", file=sys.stderr)
+        return 2
+    stop = threading.Event()
+    previous = {sig: signal.signal(sig, lambda *_: stop.set())
+                for sig in (signal.SIGINT, signal.SIGTERM)}  # fmt: skip
+    try:
+        return _run(config, stop)
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+
+
+def _run(config: VehicleSimCliConfig, stop: threading.Event) -> int:
+    try:
+        endpoint = build_endpoint(config)
+        endpoint.start()
+    except (SimConfigError, SigningKeyError, ValueError, OSError) as exc:
+        print(f"{PROG}: error: {exc}", file=sys.stderr)
+        return 2
+    try:
+        _announce(config, endpoint)
+        serve(endpoint, stop, config.duration_s)
+    finally:
+        failure = _stop(endpoint)
+    if failure:
+        print(f"{PROG}: error: {failure}", file=sys.stderr)
+        return 1
+    stats = endpoint.stats
+    print(f"{PROG}: stopped at t = {endpoint.state.t_s:.1f} s sim; received "
+          f"{stats.messages_received} messages, rejected {stats.garbage_datagrams} garbage "
+          f"datagrams and {stats.setpoints_rejected} setpoints", flush=True)  # fmt: skip
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

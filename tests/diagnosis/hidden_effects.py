@@ -1,0 +1,56 @@
+"""Hidden-effect flights for the diagnosis tests: draw an effect's parameters, fly the excitation
+mission with it on, write the log under a neutral name. The truth stays in the test."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from gp.diagnosis.excitation import ExcitationSchedule, load_schedule
+from gp.diagnosis.fly_schedule import fly_schedule
+from vehicle_sim import load_sim_config
+from vehicle_sim.flight_log import FlightLog, read_flight_log, write_flight_log
+
+MISSION = Path(__file__).resolve().parents[2] / "missions" / "excite_full.toml"
+DEFAULT_ROTOR_DRAG = {"k_n_per_mps": [0.35, 0.35, 0.1]}
+
+
+def schedule() -> ExcitationSchedule:
+    return load_schedule(MISSION)
+
+
+def draw(name: str, rng: np.random.Generator) -> tuple[dict, dict]:
+    """(truth effects, effects of the config given to the diagnosis) for hidden effect ``name``,
+    parameters drawn within physical ranges."""
+    u = rng.uniform
+    if name == "rotor_drag":
+        return {name: {"k_n_per_mps": [u(0.2, 0.6), u(0.2, 0.6), u(0.05, 0.2)]}}, {}
+    if name == "body_drag":
+        return {name: {"c_n_per_mps2": [u(0.02, 0.08), u(0.02, 0.08), u(0.03, 0.1)]}}, {}
+    if name == "wind":
+        speed, heading = u(2.0, 6.0), u(0.0, 2.0 * np.pi)
+        wind = [speed * np.cos(heading), speed * np.sin(heading), 0.0]
+        base = {"rotor_drag": DEFAULT_ROTOR_DRAG}
+        return {**base, "wind": {"vel_ned_mps": wind}}, base
+    if name == "gusts":
+        base = {"rotor_drag": DEFAULT_ROTOR_DRAG}
+        return {**base, "gusts": {"intensity_mps": u(1.0, 2.5), "length_scale_m": 20.0}}, base
+    if name == "payload":
+        return {name: {"mass_ratio": u(1.1, 1.5)}}, {}
+    if name == "battery_sag":
+        return {name: {"full_flight_time_s": u(300.0, 900.0), "max_thrust_loss": u(0.15, 0.35)}}, {}
+    if name == "ground_effect":
+        return {name: {"max_gain": u(0.15, 0.4), "rotor_radius_m": u(0.11, 0.16)}}, {}
+    if name == "motor_lag":
+        return {name: {"tau_s": u(0.04, 0.12)}}, {}
+    if name == "command_delay":
+        return {name: {"delay_s": u(0.05, 0.3)}}, {}
+    raise ValueError(name)
+
+
+def fly_hidden(truth: dict, tmp_path: Path, seed: int) -> list[FlightLog]:
+    """Fly the excitation mission with ``truth`` on; the log as the diagnosis would read it."""
+    log = fly_schedule(load_sim_config("iris", truth), schedule(), seed=seed)
+    path = write_flight_log(tmp_path / "flight_0.csv", log)
+    return [read_flight_log(path)]

@@ -1,0 +1,22 @@
+"""`bench --only diagnose` in quick mode gives finite, positive figures (no timing limits)."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from scripts.bench import PARTS
+from scripts.bench_diagnose import run
+
+
+@pytest.mark.slow
+def test_quick_bench_gives_finite_positive_figures():
+    figures = run(progress=lambda msg: None, quick=True)
+    assert PARTS["diagnose"] == "scripts.bench_diagnose"
+    assert {"diagnose_5min_s", "diagnose_speedup_vs_realtime", "diagnose_log_sim_s"} <= set(figures)
+    assert all(math.isfinite(v) and v > 0.0 for v in figures.values()), figures
+    assert math.isclose(
+        figures["diagnose_speedup_vs_realtime"],
+        figures["diagnose_log_s"] / figures["diagnose_5min_s"],
+    )

@@ -1,0 +1,68 @@
+"""The `diagnose` command: files in, report.json / report.md / plots / extended config out."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from scripts.diagnose import main
+from tests.diagnosis.hidden_effects import draw, fly_hidden
+from vehicle_sim import load_sim_config
+
+SCHEMA_KEYS = {"schema", "baseline", "causes", "verdict", "extended"}
+CAUSE_KEYS = {"name", "params", "explained_fraction", "confidence", "evidence"}
+CLOSED_LOOP_KEYS = {"baseline_vel_rmse_mps", "extended_vel_rmse_mps", "gain"}
+
+
+@pytest.mark.slow
+def test_cli_writes_schema_report_plots_and_a_loadable_extended_config(tmp_path, capsys):
+    truth, _ = draw("payload", np.random.default_rng(21))
+    log_path = tmp_path / "flight_0.csv"
+    fly_hidden(truth, tmp_path, seed=21)
+    out = tmp_path / "out"
+    assert main([str(log_path), "--sim-config", "iris", "--out", str(out)]) == 0
+    assert "verdict: payload" in capsys.readouterr().err
+    doc = json.loads((out / "report.json").read_text())
+    assert set(doc) == SCHEMA_KEYS | {"closed_loop"} and doc["schema"] == "diagnosis/1"
+    assert set(doc["baseline"]) == {"replay_vel_rmse_mps"}
+    assert set(doc["extended"]) == {"replay_vel_rmse_mps", "gain"}
+    assert all(set(c) == CAUSE_KEYS for c in doc["causes"])
+    assert doc["verdict"] == ["payload"] and doc["causes"][0]["name"] == "payload"
+    assert doc["extended"]["gain"] >= 3.0
+    assert set(doc["closed_loop"]) == CLOSED_LOOP_KEYS
+    assert doc["closed_loop"]["gain"] >= 3.0
+    md = (out / "report.md").read_text()
+    assert "## Closed-loop tracking" in md
+    for png in ("replay_velocity.png", "residual_payload.png", "closed_loop_velocity.png"):
+        assert f"]({png})" in md and (out / png).stat().st_size > 1000
+    extended = load_sim_config(out / "extended_config.toml")
+    assert extended.effect("payload").mass_ratio == pytest.approx(
+        truth["payload"]["mass_ratio"], rel=0.02
+    )
+    assert extended.vehicle == load_sim_config("iris").vehicle
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["missing.csv", "--sim-config", "iris"], "no such flight log"),
+        (["LOG", "--sim-config", "no_such_preset"], "no such config file or preset"),
+    ],
+)
+def test_cli_bad_input_gives_one_line_and_exit_2(args, message, tmp_path, capsys):
+    log = tmp_path / "flight_0.csv"
+    log.write_text("t_s,pos_n_m\n0,0\n")
+    argv = [str(log) if a == "LOG" else str(tmp_path / a) if a.endswith(".csv") else a
+            for a in args]  # fmt: skip
+    assert main([*argv, "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message in err[0]
+
+
+def test_cli_rejects_a_log_without_required_columns(tmp_path, capsys):
+    log = tmp_path / "flight_0.csv"
+    log.write_text("t_s,pos_n_m\n0,0\n")
+    assert main([str(log), "--sim-config", "iris", "--out", str(tmp_path / "out")]) == 2
+    assert "missing required column" in capsys.readouterr().err

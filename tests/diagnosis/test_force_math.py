@@ -1,0 +1,110 @@
+"""The force residual and the candidate fits on arrays with known parameters."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from gp.diagnosis.candidates import fit_jointly, make_candidate
+from gp.diagnosis.force_model import (
+    BatteryModel,
+    flight_time_from_voltage,
+    predicted_residual,
+)
+from gp.diagnosis.forces import ForceData, acceleration, rotation_matrices
+from vehicle_sim.flight_log import FlightLog
+
+BATTERY = BatteryModel(full_v=16.8, empty_v=14.0)
+MASS_KG = 1.5
+
+
+def synthetic(n: int = 600, seed: int = 0, alt_m: np.ndarray | None = None) -> ForceData:
+    """Rows with random attitude, velocity and acceleration; residual left at zero."""
+    rng = np.random.default_rng(seed)
+    rot = Rotation.from_euler("xyz", rng.uniform(-0.4, 0.4, (n, 3))).as_matrix()
+    t = np.arange(n) * 0.05
+    return ForceData(
+        t_s=t, segment=np.zeros(n, int), vel_ned_mps=rng.uniform(-8.0, 8.0, (n, 3)),
+        acc_ned_mps2=rng.normal(0.0, 1.0, (n, 3)), rot=rot,
+        thrust_n=rng.uniform(12.0, 18.0, n),
+        alt_m=rng.uniform(0.02, 0.4, n) if alt_m is None else alt_m,
+        battery_v=16.8 - 0.004 * t, mass_kg=MASS_KG, resid_ned_n=np.zeros((n, 3)),
+    )  # fmt: skip
+
+
+def with_residual(data: ForceData, effects: dict, noise_n: float = 0.0) -> ForceData:
+    rng = np.random.default_rng(1)
+    r = predicted_residual(effects, data, BATTERY) + noise_n * rng.standard_normal((data.n_rows, 3))
+    return ForceData(**{**data.__dict__, "resid_ned_n": r})
+
+
+def test_rotation_matrices_match_scipy():
+    q_xyzw = Rotation.random(50, random_state=3).as_quat()
+    q_wxyz = np.column_stack([q_xyzw[:, 3], q_xyzw[:, :3]])
+    expected = Rotation.from_quat(q_xyzw).as_matrix()
+    np.testing.assert_allclose(rotation_matrices(q_wxyz), expected, atol=1e-12)
+
+
+def test_acceleration_is_differentiated_when_not_logged():
+    t = np.arange(400) * 0.02
+    vel = np.column_stack([np.sin(t), 0.5 * t, np.zeros_like(t)])
+    cols = {"t_s": t, "vel_n_mps": vel[:, 0], "vel_e_mps": vel[:, 1], "vel_d_mps": vel[:, 2]}
+    acc = acceleration(FlightLog(cols))
+    inner = slice(20, -20)
+    np.testing.assert_allclose(acc[inner, 0], np.cos(t[inner]), atol=5e-3)
+    np.testing.assert_allclose(acc[inner, 1], 0.5, atol=1e-9)
+
+
+def test_rotor_drag_residual_is_linear_in_body_air_velocity():
+    data = synthetic()
+    k = np.array([0.4, 0.3, 0.1])
+    wind = np.array([2.0, -1.0, 0.0])
+    effects = {"rotor_drag": {"k_n_per_mps": k}, "wind": {"vel_ned_mps": wind}}
+    r = predicted_residual(effects, data, BATTERY)
+    for i in (0, 123, 599):
+        v_body = data.rot[i].T @ (data.vel_ned_mps[i] - wind)
+        np.testing.assert_allclose(r[i], data.rot[i] @ (-k * v_body), atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("name", "effects", "base"),
+    [
+        ("rotor_drag", {"rotor_drag": {"k_n_per_mps": (0.45, 0.3, 0.12)}}, {}),
+        ("body_drag", {"body_drag": {"c_n_per_mps2": (0.05, 0.03, 0.07)}}, {}),
+        ("payload", {"payload": {"mass_ratio": 1.3}}, {}),
+        ("battery_sag", {"battery_sag": {"max_thrust_loss": 0.3}}, {}),
+        (
+            "ground_effect",
+            {"ground_effect": {"max_gain": 0.3, "rotor_radius_m": 0.14}},
+            {},
+        ),
+        (
+            "wind",
+            {"rotor_drag": {"k_n_per_mps": (0.35, 0.35, 0.1)}, "wind": {"vel_ned_mps": (3, -2, 0)}},
+            {"rotor_drag": {"k_n_per_mps": (0.35, 0.35, 0.1)}},
+        ),
+    ],
+)
+def test_candidate_fit_recovers_known_parameters(name, effects, base):
+    data = with_residual(synthetic(), effects, noise_n=0.05)
+    fit = fit_jointly([make_candidate(name, base)], base, data, BATTERY)
+    for key, value in effects[name].items():
+        np.testing.assert_allclose(fit.effects[name][key], value, rtol=0.03, atol=0.02)
+
+
+def test_wind_without_drag_in_config_fits_drag_jointly():
+    effects = {"rotor_drag": {"k_n_per_mps": (0.5, 0.4, 0.1)}, "wind": {"vel_ned_mps": (2, 3, 0)}}
+    data = with_residual(synthetic(), effects)
+    fit = fit_jointly([make_candidate("wind", {})], {}, data, BATTERY)
+    np.testing.assert_allclose(fit.effects["wind"]["vel_ned_mps"], (2, 3, 0), atol=1e-3)
+    np.testing.assert_allclose(fit.effects["rotor_drag"]["k_n_per_mps"], (0.5, 0.4, 0.1), atol=1e-3)
+
+
+def test_flight_time_from_voltage_inverts_the_discharge_law():
+    data = synthetic(n=2000)
+    load = data.thrust_n / (MASS_KG * 9.80665)
+    integral = np.concatenate([[0.0], np.cumsum(0.5 * (load[1:] + load[:-1]) * 0.05)])
+    volts = 16.8 - (16.8 - 14.0) * integral / 420.0
+    data = ForceData(**{**data.__dict__, "battery_v": volts})
+    assert flight_time_from_voltage(data, BATTERY) == pytest.approx(420.0, rel=1e-9)

@@ -1,0 +1,52 @@
+"""fit-gp end to end on synthetic logs written to tmp_path."""
+
+import json
+
+import numpy as np
+import pytest
+from gp_synthetic_logs import record_log
+
+from gp.features import feature_definition
+from gp.model_io import load_model
+from scripts.fit_gp import main
+from vehicle_sim.flight_log import write_flight_log
+
+
+def test_fit_gp_writes_model_plots_and_reports_rmse(tmp_path, capsys):
+    logs = [write_flight_log(tmp_path / f"flight{i}.csv", record_log(400, seed=i, noise_mps=0.002))
+            for i in range(2)]  # fmt: skip
+    out = tmp_path / "models" / "residual"
+    code = main([*map(str, logs), "--out", str(out), "--m", "10", "--restarts", "1"])
+    assert code == 0
+    captured = capsys.readouterr()
+    assert "fitting 3 sparse GPs (low_speed, m=10)" in captured.err
+    for suffix in (".json", ".npz", "_residual_n.png", "_residual_e.png", "_residual_d.png"):
+        assert (tmp_path / "models" / f"residual{suffix}").stat().st_size > 0
+    doc = json.loads((tmp_path / "models" / "residual.json").read_text())
+    nominal = doc["training_data"]["nominal_rmse_mps"]
+    augmented = doc["training_data"]["augmented_rmse_mps"]
+    assert all(a < 0.5 * n for a, n in zip(augmented[:2], nominal[:2], strict=True))
+    assert "augmented_rmse_mps" in captured.out
+    expected = feature_definition("velocity", "kinematic_4dof", residual_dt_s=0.05)
+    model = load_model(out, expected=expected)
+    assert np.isfinite(model.predict(np.zeros((1, 3)))[0]).all()
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["missing.csv"], "no such flight log"),
+        (["LOG", "--m", "5000"], "inducing points requested but"),
+        (["LOG", "--inducing", "kmeans"], "invalid choice: 'kmeans'"),
+        (["LOG", "--holdout-fraction", "1.5"], "--holdout-fraction must be in (0, 1)"),
+        (["LOG", "--nominal-param", "tau_s"], "expected NAME=NUMBER"),
+    ],
+)
+def test_bad_input_exits_non_zero_with_one_line(tmp_path, capsys, args, message):
+    log = write_flight_log(tmp_path / "f.csv", record_log(60))
+    argv = [
+        str(log) if a == "LOG" else str(tmp_path / a) if a.endswith(".csv") else a for a in args
+    ]
+    assert main([*argv, "--out", str(tmp_path / "m"), "--no-plots"]) == 2
+    err_lines = [line for line in capsys.readouterr().err.splitlines() if "error" in line]
+    assert len(err_lines) == 1 and message in err_lines[0]

@@ -1,0 +1,68 @@
+"""Model files: round trip, versioning and feature-definition checks."""
+
+import json
+
+import numpy as np
+import pytest
+
+from gp.errors import ModelFileError
+from gp.features import feature_definition
+from gp.model_io import ResidualModel, load_model, model_paths, save_model
+
+
+def _model(small_model):
+    features = feature_definition("velocity", "kinematic_4dof", residual_dt_s=0.05)
+    return ResidualModel.from_estimator(
+        small_model, features, inducing={"strategy": "low_speed", "m": 12}, training={"n_rows": 600}
+    )
+
+
+def test_round_trip_keeps_predictions_and_description(small_model, tmp_path):
+    model = _model(small_model)
+    json_path = save_model(tmp_path / "residual", model)
+    assert json_path == tmp_path / "residual.json" and (tmp_path / "residual.npz").is_file()
+    loaded = load_model(json_path, expected=model.features)
+    X = np.random.default_rng(0).normal(size=(20, 3))
+    np.testing.assert_array_equal(loaded.predict(X)[0], small_model.predict(X)[0])
+    np.testing.assert_array_equal(loaded.predict(X)[1], small_model.predict(X)[1])
+    assert loaded.features == model.features and loaded.model_type == "sgpr"
+    doc = json.loads(json_path.read_text())
+    assert doc["format_version"] == 1
+    assert doc["feature_definition"]["nominal_model"] == {
+        "name": "kinematic_4dof", "params": {"residual_dt_s": 0.05}
+    }  # fmt: skip
+    assert len(doc["hyperparameters"]) == 3 and doc["training_data"] == {"n_rows": 600}
+    f = loaded.casadi_function()
+    np.testing.assert_allclose(np.array(f(X[0])[0]).ravel(), small_model.predict(X[:1])[0][0],
+                               atol=1e-9)  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("expected", "message"),
+    [
+        (feature_definition("history"), r"trained on features 'velocity' .* expects 'history'"),
+        (feature_definition("velocity", "kinematic_4dof", residual_dt_s=0.02),
+         r"residual_dt_s=0\.05\).* expects .*residual_dt_s=0\.02"),
+    ],
+)  # fmt: skip
+def test_loading_against_another_feature_definition_is_an_error(
+    small_model, tmp_path, expected, message
+):
+    path = save_model(tmp_path / "m.json", _model(small_model))
+    with pytest.raises(ModelFileError, match=message) as info:
+        load_model(path, expected=expected)
+    assert "\n" not in str(info.value) and "refit" in str(info.value)
+
+
+def test_missing_wrong_version_and_corrupt_files_are_one_line_errors(small_model, tmp_path):
+    with pytest.raises(ModelFileError, match="no such model file; train one with fit-gp"):
+        load_model(tmp_path / "absent.json")
+    path = save_model(tmp_path / "m.json", _model(small_model))
+    doc = json.loads(path.read_text())
+    path.write_text(json.dumps({**doc, "format_version": 99}))
+    with pytest.raises(ModelFileError, match="version 99, this reader understands"):
+        load_model(path)
+    path.write_text(json.dumps(doc))
+    model_paths(path)[1].unlink()
+    with pytest.raises(ModelFileError, match="incomplete or corrupt model"):
+        load_model(path)

@@ -1,0 +1,37 @@
+import shutil
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from planners.compiled_function import compiled
+
+
+def small_function() -> ca.Function:
+    x = ca.SX.sym("x", 3)
+    y = ca.SX.sym("y", 2)
+    return ca.Function("small_fn", [x, y], [ca.sin(x) * y[0], ca.sumsqr(x) + y[1]])
+
+
+@pytest.mark.skipif(shutil.which("cc") is None, reason="needs a C compiler")
+def test_compiled_matches_and_is_cached(tmp_path, monkeypatch):
+    monkeypatch.setenv("RESIDUAL_COMPANION_CACHE", str(tmp_path))
+    fn = small_function()
+    fast = compiled(fn)
+    assert fast.is_a("External")
+    x, y = np.array([0.1, -2.0, 3.0]), np.array([1.5, -0.5])
+    for a, b in zip(fn(x, y), fast(x, y), strict=True):
+        np.testing.assert_allclose(np.asarray(a), np.asarray(b), rtol=1e-14)
+    libs = list(tmp_path.glob("*.so"))
+    assert len(libs) == 1
+    stamp = libs[0].stat().st_mtime_ns
+    compiled(small_function())
+    assert libs[0].stat().st_mtime_ns == stamp  # reused, not rebuilt
+
+
+def test_without_compiler_returns_the_function(tmp_path, monkeypatch):
+    monkeypatch.setenv("RESIDUAL_COMPANION_CACHE", str(tmp_path))
+    monkeypatch.setenv("CC", str(tmp_path / "no-such-compiler"))
+    fn = small_function()
+    assert compiled(fn) is fn
+    assert not list(tmp_path.glob("*.so"))

@@ -1,0 +1,137 @@
+"""Commander behaviour on simulated time: takeoff, land, auto-disarm, offboard, failsafe."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from tests.vehicle_sim.sim_flying import fly, hovering
+from vehicle_sim import FlightMode, LandedState, Simulator, VelocitySetpoint, load_sim_config
+
+
+def new_sim(**params) -> Simulator:
+    sim = Simulator(load_sim_config("iris"))
+    for name, value in params.items():
+        sim.set_param(name, value)
+    return sim
+
+
+def run_until(sim: Simulator, predicate, limit_s: float, dt_s: float = 0.02) -> float:
+    """Step until ``predicate(state)``; returns the time it first held."""
+    for _ in range(round(limit_s / dt_s)):
+        state = sim.step(dt_s)
+        if predicate(state):
+            return state.t_s
+    raise AssertionError(f"condition not reached within {limit_s} s")
+
+
+def test_takeoff_climbs_at_tko_speed_to_takeoff_alt_then_holds():
+    sim = new_sim()
+    assert sim.takeoff().result == "denied"  # not armed
+    assert sim.arm().accepted and sim.takeoff(float("nan")).accepted
+    states = [sim.step(0.1) for _ in range(100)]
+    climb = [-s.vel_ned_mps[2] for s in states if s.mode is FlightMode.TAKEOFF]
+    assert max(climb) == pytest.approx(1.5, abs=0.15)
+    assert states[-1].mode is FlightMode.HOLD
+    assert -states[-1].pos_ned_m[2] == pytest.approx(2.5, abs=0.03)
+    assert states[-1].landed_state is LandedState.IN_AIR
+    assert (6, "Takeoff complete, holding") in sim.drain_events()
+
+
+def test_takeoff_to_a_given_altitude_and_bad_altitudes():
+    sim = new_sim()
+    sim.arm()
+    assert sim.takeoff(-3.0).result == "denied"
+    assert sim.takeoff(float("inf")).result == "denied"
+    assert sim.takeoff(5.0).accepted
+    sim.step(15.0)
+    assert -sim.state.pos_ned_m[2] == pytest.approx(5.0, abs=0.05)
+
+
+def test_land_descends_at_land_speed_and_disarms_2_s_after_touchdown():
+    sim = hovering(settle_s=1.0)
+    assert sim.land().accepted
+    sink = []
+    t_touch = None
+    for _ in range(600):
+        s = sim.step(0.02)
+        if s.landed_state is LandedState.LANDING:
+            sink.append(s.vel_ned_mps[2])
+        if t_touch is None and s.landed_state is LandedState.ON_GROUND:
+            t_touch = s.t_s
+        if not s.armed:
+            break
+    assert float(np.median(sink)) == pytest.approx(0.7, abs=0.02)
+    assert max(sink) < 0.7 * 1.15
+    assert t_touch is not None and s.t_s - t_touch == pytest.approx(2.0, abs=0.03)
+    assert s.pos_ned_m[2] == 0.0 and s.mode is FlightMode.HOLD
+    events = [text for _, text in sim.drain_events()]
+    assert events.count("Landing detected") == 1 and "Disarmed after landing" in events
+
+
+def test_auto_disarm_10_s_after_arming_without_takeoff():
+    sim = new_sim()
+    assert sim.arm().accepted
+    t = run_until(sim, lambda s: not s.armed, 12.0, dt_s=0.1)
+    assert t == pytest.approx(10.0, abs=1e-9)
+    assert any("no takeoff" in text for _, text in sim.drain_events())
+    assert sim.state.pos_ned_m[2] == 0.0  # idle on the ground, never lifted
+
+
+def test_offboard_needs_a_fresh_setpoint():
+    sim = new_sim()
+    sim.arm()
+    result = sim.set_mode(FlightMode.OFFBOARD)
+    assert (result.accepted, result.result) == (False, "temporarily_rejected")
+    assert any("Offboard" in text for _, text in sim.drain_events())
+    sim.set_velocity_setpoint(VelocitySetpoint((0.0, 0.0, 0.0)))
+    sim.step(1.0)  # now stale (COM_OF_LOSS_T = 1 s)
+    assert sim.set_mode(FlightMode.OFFBOARD).result == "temporarily_rejected"
+    sim.set_velocity_setpoint(VelocitySetpoint((0.0, 0.0, 0.0)))
+    sim.step(0.5)
+    assert sim.set_mode(FlightMode.OFFBOARD).accepted
+    assert sim.state.mode is FlightMode.OFFBOARD
+
+
+def test_offboard_climb_from_the_ground_takes_off():
+    sim = new_sim()
+    sim.set_velocity_setpoint(VelocitySetpoint((0.0, 0.0, 0.0)))
+    assert sim.set_mode(FlightMode.OFFBOARD).accepted and sim.arm().accepted
+    fly(sim, (0.0, 0.0, 0.0), 1.0)
+    assert sim.state.pos_ned_m[2] == 0.0  # zero velocity on the ground: stays landed
+    fly(sim, (0.0, 0.0, -1.0), 3.0)
+    assert -sim.state.pos_ned_m[2] > 2.0 and sim.state.landed_state is LandedState.IN_AIR
+
+
+@pytest.mark.parametrize(("action", "mode"), [(0.0, FlightMode.HOLD), (4.0, FlightMode.LAND)])
+def test_failsafe_after_com_of_loss_t_without_setpoints(action, mode):
+    sim = hovering(settle_s=1.0)
+    sim.set_param("COM_OBL_RC_ACT", action)
+    sim.set_param("COM_OF_LOSS_T", 0.5)
+    fly(sim, (1.0, 0.0, 0.0), 2.0)
+    t_last = sim.state.t_s - 0.05
+    t = run_until(sim, lambda s: s.mode is not FlightMode.OFFBOARD, 2.0, dt_s=0.002)
+    assert t - t_last == pytest.approx(0.5, abs=0.0021)
+    assert sim.state.mode is mode
+    severities = [sev for sev, text in sim.drain_events() if text.startswith("Failsafe")]
+    assert severities == [2]
+    if mode is FlightMode.HOLD:
+        sim.step(6.0)
+        assert abs(sim.state.vel_ned_mps[0]) < 0.05 and sim.state.armed
+
+
+def test_disarm_in_air_refused_without_force():
+    sim = hovering(settle_s=1.0)
+    result = sim.disarm()
+    assert (result.accepted, result.result) == (False, "denied") and sim.state.armed
+    assert sim.disarm(force=True).accepted and not sim.state.armed
+    sim.step(0.5)
+    assert sim.state.vel_ned_mps[2] > 4.0  # motors off: falling
+
+
+def test_unsupported_modes_are_denied_and_hold_is_accepted():
+    sim = new_sim()
+    assert sim.set_mode(FlightMode.RTL).result == "denied"
+    assert sim.set_mode(FlightMode.POSCTL).accepted
+    with pytest.raises(ValueError, match="FlightMode"):
+        sim.set_mode("HOLD")  # type: ignore[arg-type]

@@ -1,0 +1,101 @@
+"""Command table against the real simulator (no sockets): results, modes, takeoff altitude."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from vehicle_sim import FlightMode, Simulator, load_sim_config
+from vehicle_sim.mavlink.commands import (
+    MAV_RESULT_ACCEPTED,
+    MAV_RESULT_DENIED,
+    MAV_RESULT_TEMPORARILY_REJECTED,
+    MAV_RESULT_UNSUPPORTED,
+    CommandContext,
+    handle_command,
+)
+from vehicle_sim.mavlink.scheduler import RateScheduler
+from vehicle_sim.mavlink.telemetry import DEFAULT_RATES_HZ, TelemetryContext
+
+NAN7 = (math.nan,) * 7
+
+
+def params(*values: float) -> tuple[float, ...]:
+    return tuple(values) + (0.0,) * (7 - len(values))
+
+
+@pytest.fixture
+def ctx() -> CommandContext:
+    sim = Simulator(load_sim_config("iris"), seed=0)
+    return CommandContext(sim, TelemetryContext(), RateScheduler(DEFAULT_RATES_HZ))
+
+
+def test_arm_then_takeoff_with_nan_params_climbs_to_mis_takeoff_alt(ctx):
+    assert handle_command(400, params(1), ctx).result == MAV_RESULT_ACCEPTED
+    assert handle_command(22, NAN7, ctx).result == MAV_RESULT_ACCEPTED
+    ctx.sim.step(6.0)
+    assert -ctx.sim.state.pos_ned_m[2] == pytest.approx(2.5, abs=0.15)
+
+
+def test_takeoff_altitude_is_amsl_and_at_least_the_minimum(ctx):
+    handle_command(400, params(1), ctx)
+    low = handle_command(22, params(0, 0, 0, 0, 0, 0, 2.5), ctx)  # 2.5 m AMSL: below home
+    assert low.result == MAV_RESULT_ACCEPTED
+    assert any("minimum takeoff altitude" in text for _, text in low.notices)
+    high = handle_command(22, params(0, 0, 0, 0, 0, 0, ctx.telemetry.origin.alt_amsl_m + 4.0), ctx)
+    assert high.result == MAV_RESULT_ACCEPTED and high.notices == ()
+    ctx.sim.step(8.0)
+    assert -ctx.sim.state.pos_ned_m[2] == pytest.approx(4.0, abs=0.15)
+
+
+@pytest.mark.parametrize(
+    ("main", "sub", "mode"),
+    [(3, 0, FlightMode.POSCTL), (4, 3, FlightMode.HOLD), (4, 6, FlightMode.LAND)],
+)
+def test_set_mode_maps_main_and_sub_mode(ctx, main, sub, mode):
+    handle_command(400, params(1), ctx)
+    assert handle_command(176, params(129, main, sub), ctx).result == MAV_RESULT_ACCEPTED
+    assert ctx.sim.state.mode == mode
+
+
+def test_offboard_without_setpoints_is_temporarily_rejected(ctx):
+    assert handle_command(176, params(1, 6, 0), ctx).result == MAV_RESULT_TEMPORARILY_REJECTED
+
+
+@pytest.mark.parametrize(
+    ("command", "p", "result"),
+    [
+        (176, params(0, 6, 0), MAV_RESULT_DENIED),  # custom-mode flag missing
+        (176, params(1, 9, 9), MAV_RESULT_DENIED),  # no such PX4 mode
+        (176, params(1, math.nan, 0), MAV_RESULT_DENIED),
+        (400, params(0.5), MAV_RESULT_DENIED),
+        (400, params(math.nan), MAV_RESULT_DENIED),
+        (512, params(-1), MAV_RESULT_DENIED),
+        (511, params(30, math.nan), MAV_RESULT_DENIED),
+        (42424, NAN7, MAV_RESULT_UNSUPPORTED),
+    ],
+)
+def test_bad_parameters_are_denied_never_raised(ctx, command, p, result):
+    assert handle_command(command, p, ctx).result == result
+    assert not ctx.sim.state.armed
+
+
+def test_disarm_in_air_needs_force(ctx):
+    handle_command(400, params(1), ctx)
+    handle_command(22, NAN7, ctx)
+    ctx.sim.step(4.0)
+    assert handle_command(400, params(0), ctx).result == MAV_RESULT_DENIED
+    assert handle_command(400, params(0, 21196), ctx).result == MAV_RESULT_ACCEPTED
+    assert not ctx.sim.state.armed
+
+
+def test_request_message_and_message_interval(ctx):
+    outcome = handle_command(512, params(148), ctx)
+    assert outcome.result == MAV_RESULT_ACCEPTED
+    assert outcome.replies[0].get_type() == "AUTOPILOT_VERSION"
+    assert handle_command(520, params(1), ctx).replies[0].get_type() == "AUTOPILOT_VERSION"
+    assert handle_command(410, NAN7, ctx).replies[0].get_type() == "HOME_POSITION"
+    assert handle_command(511, params(32, 100_000), ctx).result == MAV_RESULT_ACCEPTED
+    interval = handle_command(510, params(32), ctx).replies[0]
+    assert (interval.message_id, interval.interval_us) == (32, 100_000)

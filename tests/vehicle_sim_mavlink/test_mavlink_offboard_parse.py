@@ -1,0 +1,52 @@
+"""parse_setpoint: PX4's frames and type_mask rules, and rejection of unusable values."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from vehicle_sim.mavlink.offboard import parse_setpoint
+from vehicle_sim.vehicle_types import VelocitySetpoint
+
+MASK_MAVSDK_VELOCITY_NED = 2503  # velocity + yaw
+MASK_MAVSDK_VELOCITY_BODY = 1479  # velocity + yaw rate
+
+
+def test_mavsdk_velocity_ned_uses_yaw_not_yaw_rate():
+    result = parse_setpoint(1, MASK_MAVSDK_VELOCITY_NED, (1.0, -2.0, 0.5), 0.3, 9.0)
+    assert result.setpoint == VelocitySetpoint((1.0, -2.0, 0.5), 0.0, 0.3, "ned")
+    assert result.reason == ""
+
+
+def test_mavsdk_velocity_body_uses_yaw_rate():
+    result = parse_setpoint(8, MASK_MAVSDK_VELOCITY_BODY, (0.0, 1.0, 0.0), 123.0, 0.5)
+    assert result.setpoint == VelocitySetpoint((0.0, 1.0, 0.0), 0.5, None, "body")
+
+
+def test_velocity_only_mask_holds_yaw_rate_zero():
+    result = parse_setpoint(1, 0b110111000111, (0.0, 0.0, -1.0), math.nan, math.nan)
+    assert result.setpoint == VelocitySetpoint((0.0, 0.0, -1.0), 0.0, None, "ned")
+
+
+@pytest.mark.parametrize(
+    ("frame", "mask", "vel", "yaw", "yaw_rate", "reason"),
+    [
+        (0, 2503, (1, 0, 0), 0, 0, "frame 0 unsupported"),
+        (9, 2503, (1, 0, 0), 0, 0, "frame 9 unsupported"),
+        (1, 0b110111111000, (1, 0, 0), 0, 0, "only velocity"),
+        (1, 0b110111000000, (1, 0, 0), 0, 0, "position/accel"),
+        (1, 0b110000000111, (1, 0, 0), 0, 0, "position/accel"),
+        (1, 2503, (math.nan, 0, 0), 0, 0, "invalid velocity"),
+        (1, 2503, (1e9, 0, 0), 0, 0, "invalid velocity"),
+        (1, 2503, (0, 0, -math.inf), 0, 0, "invalid velocity"),
+        (1, 2503, (0, 0, 0), math.nan, 0, "invalid yaw setpoint"),
+        (1, 2503, (0, 0, 0), 1e9, 0, "invalid yaw setpoint"),
+        (8, 1479, (0, 0, 0), 0, 1e9, "invalid yaw rate"),
+    ],
+)
+def test_unusable_setpoints_are_rejected_with_a_reason(frame, mask, vel, yaw, yaw_rate, reason):
+    result = parse_setpoint(frame, mask, vel, yaw, yaw_rate)
+    assert result.setpoint is None
+    assert reason in result.reason
+    assert len(result.reason) <= 50

@@ -1,0 +1,95 @@
+"""`vehicle-sim`: bad input gives one line and a non-zero exit; a run serves MAVLink and stops
+cleanly on SIGINT/SIGTERM."""
+
+from __future__ import annotations
+
+import queue
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import pytest
+from mavlink_test_client import Client, free_udp_port
+
+from scripts.vehicle_sim_cli import main, parse_args
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--speed", "0"], "--speed 0.0: must be within"),
+        (["--vehicle", "no_such_quad"], "no such config file or preset"),
+        (["--effect", "lasers"], "unknown effect 'lasers'"),
+        (["--effect", "rotor_drag.k_n_per_mps=[0.3,"], "not a TOML value"),
+        (["--signing-key", "missing.key"], "cannot read signing key file"),
+        (["--frobnicate"], "unrecognized arguments"),
+    ],
+)
+def test_bad_input_is_one_line_and_exit_2(capsys, argv, message):
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert message in err
+    assert err.count("\n") == 1 and err.startswith("vehicle-sim: error:")
+
+
+def test_taken_port_is_reported(capsys):
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as taken:
+        taken.bind(("127.0.0.1", 0))
+        port = taken.getsockname()[1]
+        assert main(["--offboard-bind-port", str(port), "--gcs-bind-port", "0"]) == 2
+    assert f"cannot bind link offboard to 127.0.0.1:{port}" in capsys.readouterr().err
+
+
+def test_effect_flags_become_overrides():
+    config = parse_args(["--effect", "rotor_drag", "--effect", "wind.vel_ned_mps=[3, 0, 0]",
+                         "--effect", "rotor_drag.k_n_per_mps=[0.3, 0.3, 0.1]"])  # fmt: skip
+    assert dict(config.effects) == {
+        "rotor_drag": (("k_n_per_mps", [0.3, 0.3, 0.1]),),
+        "wind": (("vel_ned_mps", [3, 0, 0]),),
+    }
+
+
+def read_lines(stream, lines: queue.Queue) -> None:
+    for line in stream:
+        lines.put(line.rstrip())
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_serves_mavlink_and_stops_cleanly_on_signal(sig):
+    offboard_port, gcs_port = free_udp_port(), free_udp_port()
+    gcs = Client(url=f"udpin:127.0.0.1:{gcs_port}")
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "scripts.vehicle_sim_cli", "--speed", "2",
+         "--offboard-port", str(offboard_port), "--gcs-port", str(gcs_port),
+         "--offboard-bind-port", "0", "--gcs-bind-port", "0"],
+        cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    lines: queue.Queue = queue.Queue()
+    reader = threading.Thread(target=read_lines, args=(proc.stdout, lines), daemon=True)
+    reader.start()
+    try:
+        seen = []
+        deadline = time.monotonic() + 30.0
+        while f"MAVSDK: udpin://127.0.0.1:{offboard_port}" not in seen:
+            seen.append(lines.get(timeout=max(0.1, deadline - time.monotonic())))
+        assert gcs.hello(10.0).autopilot == 12
+        assert gcs.command(400, 1).result == 0
+        proc.send_signal(sig)
+        assert proc.wait(10.0) == 0, proc.stderr.read()
+        reader.join(5.0)  # the last lines are read once the pipe closes
+        rest = []
+        while not lines.empty():
+            rest.append(lines.get())
+        assert any("vehicle-sim: stopped at" in line for line in rest)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(5.0)
+        gcs.close()

@@ -1,0 +1,38 @@
+"""vehicle_sim: the simulated PX4-style multirotor that stands in for the flight controller.
+
+In-process API::
+
+    from vehicle_sim import Simulator, load_sim_config
+    sim = Simulator(load_sim_config("iris", effects={"rotor_drag": {}}), seed=0)
+    sim.arm(); sim.takeoff(); sim.step(5.0)
+    sim.set_velocity_setpoint(VelocitySetpoint((2.0, 0.0, 0.0)))
+    sim.set_mode(FlightMode.OFFBOARD); sim.step(0.05); row = sim.log_row(None)
+    sim.anchor(AnchorState(pos_ned_m=..., vel_ned_mps=..., q_wxyz=...))  # replay from a log
+"""
+
+from vehicle_sim.anchor import AnchorState
+from vehicle_sim.commander import CommandResult
+from vehicle_sim.config import SimConfig, VehicleSpec, load_sim_config
+from vehicle_sim.effects import EFFECT_NAMES, SimConfigError
+from vehicle_sim.simulator import Simulator
+from vehicle_sim.vehicle_types import (
+    FlightMode,
+    LandedState,
+    VehicleState,
+    VelocitySetpoint,
+)
+
+__all__ = [
+    "EFFECT_NAMES",
+    "AnchorState",
+    "CommandResult",
+    "FlightMode",
+    "LandedState",
+    "SimConfig",
+    "SimConfigError",
+    "Simulator",
+    "VehicleSpec",
+    "VehicleState",
+    "VelocitySetpoint",
+    "load_sim_config",
+]

@@ -1,0 +1,93 @@
+"""The built-in physics backend and how a backend plugs into the flight control.
+
+A backend owns the vehicle's true state in the layout of :mod:`vehicle_sim.physics` (``x``,
+``aux``) and advances it under the flight control of :mod:`vehicle_sim.flight_control`.
+The built-in backend fuses both into one jitted loop (:func:`run_closed_loop`), so a whole
+segment of flight is one call from Python. Another plant (e.g. JSBSim) implements
+:class:`PlantBackend` by calling the jitted ``flight_control.control_step`` once per step,
+feeding the motor commands to its own model and writing its state back into ``x``/``aux``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Protocol
+
+import numpy as np
+from numba import njit
+
+from vehicle_sim import physics as ph
+from vehicle_sim.config import GRAVITY_MPS2, SimConfig
+from vehicle_sim.effects import pack_effects
+from vehicle_sim.flight_control import control_step
+
+
+class PlantBackend(Protocol):
+    """A physics backend the simulator's flight control can fly.
+
+    Attributes:
+        x: (physics.N_STATE,) true state, physics layout, updated in place.
+        aux: (physics.N_AUX,) acceleration NED, contact flag, nominal/true thrust, commands.
+    """
+
+    x: np.ndarray
+    aux: np.ndarray
+
+    def advance(
+        self, n_steps: int, dt_s: float, sp: np.ndarray, cs: np.ndarray, cp: np.ndarray,
+        mix: np.ndarray, noise: np.ndarray,
+    ) -> int:  # fmt: skip
+        """Run up to ``n_steps`` steps of control + physics; stop early right after a step in
+        which ground contact changed. ``noise`` (>= n_steps, 3): white noise for gusts.
+        Returns the number of steps done."""
+
+
+# Deliberately not cached: numba's cache cannot see changes in functions called from other
+# files, so a cached fused loop would keep running stale control or physics code after an edit.
+# Its callees are cached in their own modules; compiling this loop costs about half a second.
+@njit
+def run_closed_loop(n_steps, dt, x, cs, sp, cp, mix, pp, rp, spin, ep, noise, aux):
+    """Flight control + physics for up to ``n_steps``; returns the steps done (see above)."""
+    scratch = np.zeros((6, ph.N_DYN))
+    u = np.zeros(4)
+    n_cmd = np.zeros(4)
+    contact0 = aux[ph.AUX_CONTACT]
+    for k in range(n_steps):
+        control_step(x, aux[ph.AUX_ACC : ph.AUX_ACC + 3], sp, cs, cp, mix, dt, u)
+        for i in range(4):
+            n_cmd[i] = math.sqrt(u[i])
+            aux[ph.AUX_CMD + i] = u[i]
+        ph.plant_step(x, n_cmd, pp, rp, spin, ep, noise, k, dt, scratch, aux)
+        if aux[ph.AUX_CONTACT] != contact0:
+            return k + 1
+    return n_steps
+
+
+class BuiltinPlant:
+    """The built-in rigid-body quadrotor (see :mod:`vehicle_sim.physics`)."""
+
+    def __init__(self, config: SimConfig) -> None:
+        v = config.vehicle
+        self.pp = np.zeros(ph.N_PLANT)
+        self.pp[ph.P_MASS] = v.mass_kg
+        self.pp[ph.P_JX : ph.P_JZ + 1] = v.inertia_kgm2
+        self.pp[ph.P_TMAX] = v.max_rotor_thrust_n
+        self.pp[ph.P_KM] = v.torque_coeff_nm_per_radps2 / v.thrust_coeff_n_per_radps2
+        self.pp[ph.P_TAU] = v.motor_time_constant_s
+        self.pp[ph.P_G] = GRAVITY_MPS2
+        self.rp = np.ascontiguousarray(v.rotor_positions_frd_m, dtype=np.float64)
+        self.spin = np.asarray(v.rotor_spin, dtype=np.float64)
+        self.ep = pack_effects(config.effects)
+        self.x = np.zeros(ph.N_STATE)
+        self.x[ph.QUAT] = 1.0
+        self.aux = np.zeros(ph.N_AUX)
+        self.aux[ph.AUX_CONTACT] = 1.0
+
+    def advance(
+        self, n_steps: int, dt_s: float, sp: np.ndarray, cs: np.ndarray, cp: np.ndarray,
+        mix: np.ndarray, noise: np.ndarray,
+    ) -> int:  # fmt: skip
+        return run_closed_loop(
+            n_steps, dt_s, self.x, cs, sp, cp, mix, self.pp, self.rp, self.spin, self.ep,
+            noise, self.aux,
+        )  # fmt: skip

@@ -1,0 +1,259 @@
+"""PX4-like commander: arming, modes, takeoff/land sequencing, auto-disarm, offboard failsafe.
+
+A pure state machine on simulated time: the simulator calls the command methods, calls
+:meth:`Commander.update` after each stretch of physics, asks :meth:`Commander.next_deadline`
+how far physics may run before the commander must look again, and lets
+:meth:`Commander.fill_setpoint` translate the mode into the flight-control setpoint vector.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from vehicle_sim import flight_control as fc
+from vehicle_sim.params import Px4Params
+from vehicle_sim.vehicle_types import FlightMode, LandedState
+
+SEVERITY_CRITICAL, SEVERITY_NOTICE, SEVERITY_INFO = 2, 5, 6  # MAV_SEVERITY
+TAKEOFF_ACCEPT_M = 0.1  # takeoff is complete this close to the target altitude
+TAKEOFF_POLL_S = 0.02  # how often takeoff progress is checked
+CLIMB_INTENT_MPS = 0.3  # on the ground, an offboard climb faster than this lifts off
+MAX_TAKEOFF_ALT_M = 500.0
+
+
+@dataclass(frozen=True)
+class CommandResult:
+    """Outcome of a command, as a COMMAND_ACK would carry it."""
+
+    accepted: bool
+    result: Literal["accepted", "denied", "temporarily_rejected", "failed"]
+    reason: str
+
+
+@dataclass(frozen=True)
+class ActiveSetpoint:
+    """The offboard setpoint the flight control is acting on (NED, after any delay)."""
+
+    vel_ned_mps: tuple[float, float, float]
+    yaw_rate_radps: float
+    yaw_rad: float | None
+
+
+def _ok(reason: str = "") -> CommandResult:
+    return CommandResult(True, "accepted", reason)
+
+
+class Commander:
+    """Modes and arming of one simulated vehicle. Times are simulated seconds."""
+
+    def __init__(self, params: Px4Params) -> None:
+        self.params = params
+        self.armed = False
+        self.mode = FlightMode.HOLD
+        self.events: list[tuple[int, str]] = []
+        self._t_armed = 0.0
+        self._took_off = False
+        self._touchdown_t: float | None = None
+        self._last_sp_t: float | None = None
+        self._hold_pos = np.zeros(3)
+        self._hold_yaw = 0.0
+        self._landed = True
+        self.mode_epoch = 0  # increments on every mode change (the simulator resets yaw then)
+
+    # --- commands -------------------------------------------------------------------------
+    def arm(self, t: float, force: bool = False) -> CommandResult:
+        if self.armed:
+            return _ok("already armed")
+        if not self._landed and not force:
+            return self._deny("Arming denied: vehicle is not on the ground")
+        if self.mode is FlightMode.OFFBOARD and not self._setpoint_fresh(t):
+            return self._reject("Arming denied: no offboard setpoint stream")
+        self.armed = True
+        self._t_armed = t
+        self._took_off = False
+        self._touchdown_t = None
+        self.events.append((SEVERITY_INFO, "Armed"))
+        return _ok()
+
+    def disarm(self, t: float, force: bool = False) -> CommandResult:
+        if not self.armed:
+            return _ok("already disarmed")
+        if not self._landed and not force:
+            return self._deny("Disarming denied: vehicle is in the air (use force)")
+        self._disarm("Disarmed" + (" (forced)" if force else ""), SEVERITY_INFO)
+        return _ok()
+
+    def takeoff(
+        self, t: float, pos_ned_m: np.ndarray, yaw_rad: float, alt_m: float | None
+    ) -> CommandResult:
+        if alt_m is None or math.isnan(alt_m):
+            alt_m = self.params.get("MIS_TAKEOFF_ALT")
+        if not (math.isfinite(alt_m) and 0.0 < alt_m <= MAX_TAKEOFF_ALT_M):
+            return self._deny(f"Takeoff denied: altitude {alt_m} m not in (0, {MAX_TAKEOFF_ALT_M}]")
+        if not self.armed:
+            return self._deny("Takeoff denied: arm first")
+        self._hold_pos = np.array([pos_ned_m[0], pos_ned_m[1], -alt_m])
+        self._hold_yaw = yaw_rad
+        self._set_mode(FlightMode.TAKEOFF)
+        return _ok()
+
+    def land(self, t: float, pos_ned_m: np.ndarray, yaw_rad: float) -> CommandResult:
+        if not self.armed:
+            return self._deny("Land denied: not armed")
+        self._hold_pos = np.array([pos_ned_m[0], pos_ned_m[1], math.nan])
+        self._hold_yaw = yaw_rad
+        self._set_mode(FlightMode.LAND)
+        return _ok()
+
+    def set_mode(
+        self, mode: FlightMode, t: float, pos_ned_m: np.ndarray, yaw_rad: float
+    ) -> CommandResult:
+        if mode is FlightMode.TAKEOFF:
+            return self.takeoff(t, pos_ned_m, yaw_rad, None)
+        if mode is FlightMode.LAND:
+            return self.land(t, pos_ned_m, yaw_rad)
+        if mode in (FlightMode.RTL, FlightMode.MISSION):
+            return self._deny(f"Mode {mode.name} is not supported by this simulator")
+        if mode is FlightMode.OFFBOARD and not self._setpoint_fresh(t):
+            return self._reject("Offboard denied: no setpoint stream")
+        if mode is not self.mode:
+            self._hold(pos_ned_m, yaw_rad)
+            self._set_mode(mode)
+        return _ok()
+
+    def on_setpoint(self, t: float) -> None:
+        """A setpoint arrived (proof of life for offboard)."""
+        self._last_sp_t = t
+
+    # --- time -------------------------------------------------------------------------------
+    def update(self, t: float, pos_ned_m: np.ndarray, yaw_rad: float, contact: bool) -> None:
+        """Advance the state machine to time ``t`` given the vehicle's state."""
+        self._landed = contact
+        if not self.armed:
+            return
+        if not contact:
+            self._took_off = True
+            self._touchdown_t = None
+        elif self._took_off and self._touchdown_t is None:
+            self._touchdown_t = t
+            self.events.append((SEVERITY_INFO, "Landing detected"))
+        eps = 1e-9
+        prflt = self.params.get("COM_DISARM_PRFLT")
+        if not self._took_off and prflt > 0 and t - self._t_armed >= prflt - eps:
+            self._disarm(f"Disarmed: no takeoff within {prflt:g} s of arming", SEVERITY_NOTICE)
+            return
+        land_t = self.params.get("COM_DISARM_LAND")
+        if self._touchdown_t is not None and land_t > 0 and t - self._touchdown_t >= land_t - eps:
+            self._disarm("Disarmed after landing", SEVERITY_INFO)
+            return
+        target_alt_m = -self._hold_pos[2]
+        accept_m = min(TAKEOFF_ACCEPT_M, 0.5 * target_alt_m)
+        climbed = not contact and -pos_ned_m[2] >= target_alt_m - accept_m
+        if self.mode is FlightMode.TAKEOFF and climbed:
+            self._set_mode(FlightMode.HOLD)
+            self.events.append((SEVERITY_INFO, "Takeoff complete, holding"))
+        if self.mode is FlightMode.OFFBOARD and not self._setpoint_fresh(t):
+            action = int(self.params.get("COM_OBL_RC_ACT"))
+            if action == 4:
+                self._hold_pos = np.array([pos_ned_m[0], pos_ned_m[1], math.nan])
+                self._hold_yaw = yaw_rad
+                self._set_mode(FlightMode.LAND)
+                what = "landing"
+            else:
+                self._hold(pos_ned_m, yaw_rad)
+                self._set_mode(FlightMode.HOLD)
+                what = "holding position"
+            self.events.append(
+                (SEVERITY_CRITICAL, f"Failsafe: offboard setpoints lost, {what}")
+            )
+
+    def next_deadline(self, t: float) -> float:
+        """Latest simulated time to which physics may run before :meth:`update` is due."""
+        deadlines = [math.inf]
+        if self.armed:
+            prflt = self.params.get("COM_DISARM_PRFLT")
+            if not self._took_off and prflt > 0:
+                deadlines.append(self._t_armed + prflt)
+            land_t = self.params.get("COM_DISARM_LAND")
+            if self._touchdown_t is not None and land_t > 0:
+                deadlines.append(self._touchdown_t + land_t)
+            if self.mode is FlightMode.TAKEOFF:
+                deadlines.append(t + TAKEOFF_POLL_S)
+            if self.mode is FlightMode.OFFBOARD and self._last_sp_t is not None:
+                deadlines.append(self._last_sp_t + self.params.get("COM_OF_LOSS_T"))
+        return min(deadlines)
+
+    def landed_state(self, contact: bool, climbing: bool) -> LandedState:
+        if self.armed and self.mode is FlightMode.TAKEOFF and (contact or climbing):
+            return LandedState.TAKEOFF
+        if contact:
+            return LandedState.ON_GROUND
+        if self.armed and self.mode is FlightMode.LAND:
+            return LandedState.LANDING
+        return LandedState.IN_AIR
+
+    def fill_setpoint(self, sp: np.ndarray, contact: bool, active: ActiveSetpoint | None) -> None:
+        """Write the flight-control setpoint vector for the current mode into ``sp``."""
+        p = self.params.get
+        sp[fc.SP_ARMED] = 1.0 if self.armed else 0.0
+        sp[fc.SP_TILT] = math.radians(p("MPC_TILTMAX_AIR"))
+        sp[fc.SP_VMAX_XY] = p("MPC_XY_CRUISE")
+        sp[fc.SP_VMAX_UP] = p("MPC_Z_V_AUTO_UP")
+        sp[fc.SP_VMAX_DN] = p("MPC_Z_V_AUTO_DN")
+        sp[fc.SP_POS : fc.SP_POS + 3] = self._hold_pos
+        sp[fc.SP_VEL : fc.SP_VEL + 3] = math.nan
+        sp[fc.SP_YAW] = self._hold_yaw
+        sp[fc.SP_YAW_RATE] = 0.0
+        sp[fc.SP_ACC_MAX] = p("MPC_ACC_HOR")
+        idle = contact
+        if self.mode is FlightMode.TAKEOFF:
+            sp[fc.SP_VMAX_UP] = p("MPC_TKO_SPEED")
+            idle = False
+        elif self.mode is FlightMode.LAND:
+            sp[fc.SP_VEL + 2] = p("MPC_LAND_SPEED")
+            sp[fc.SP_VMAX_DN] = p("MPC_LAND_SPEED")
+        elif self.mode is FlightMode.OFFBOARD and active is not None:
+            sp[fc.SP_POS : fc.SP_POS + 3] = math.nan
+            sp[fc.SP_VEL : fc.SP_VEL + 3] = active.vel_ned_mps
+            sp[fc.SP_YAW] = math.nan if active.yaw_rad is None else active.yaw_rad
+            sp[fc.SP_YAW_RATE] = 0.0 if active.yaw_rad is not None else active.yaw_rate_radps
+            sp[fc.SP_VMAX_XY] = p("MPC_XY_VEL_MAX")
+            sp[fc.SP_VMAX_UP] = p("MPC_Z_VEL_MAX_UP")
+            sp[fc.SP_VMAX_DN] = p("MPC_Z_VEL_MAX_DN")
+            sp[fc.SP_ACC_MAX] = 0.0
+            idle = contact and active.vel_ned_mps[2] > -CLIMB_INTENT_MPS
+        sp[fc.SP_IDLE] = 1.0 if idle else 0.0
+
+    # --- helpers ------------------------------------------------------------------------------
+    def _setpoint_fresh(self, t: float) -> bool:
+        return self._last_sp_t is not None and t - self._last_sp_t < self.params.get(
+            "COM_OF_LOSS_T"
+        )
+
+    def _hold(self, pos_ned_m: np.ndarray, yaw_rad: float) -> None:
+        self._hold_pos = np.array(pos_ned_m, dtype=float)
+        self._hold_yaw = yaw_rad
+
+    def _set_mode(self, mode: FlightMode) -> None:
+        if mode is not self.mode:
+            self.mode = mode
+            self.mode_epoch += 1
+
+    def _disarm(self, text: str, severity: int) -> None:
+        self.armed = False
+        self._touchdown_t = None
+        if self.mode in (FlightMode.TAKEOFF, FlightMode.LAND):
+            self._set_mode(FlightMode.HOLD)
+        self.events.append((severity, text))
+
+    def _deny(self, text: str) -> CommandResult:
+        self.events.append((SEVERITY_CRITICAL, text))
+        return CommandResult(False, "denied", text)
+
+    def _reject(self, text: str) -> CommandResult:
+        self.events.append((SEVERITY_CRITICAL, text))
+        return CommandResult(False, "temporarily_rejected", text)

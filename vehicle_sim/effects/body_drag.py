@@ -1,0 +1,35 @@
+"""body_drag: quadratic parasitic drag of the airframe.
+
+    F_body = -c * v_air_body * |v_air_body|        [N], per FRD axis
+
+c = 0.5 * rho * C_d * A: with rho = 1.225 kg/m^3, C_d about 1 and a frontal area of about
+0.03 m^2 (top area 0.06 m^2) an Iris-class quad has c of about 0.02 N/(m/s)^2 sideways and
+0.04 N/(m/s)^2 vertically.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+
+from vehicle_sim.effects import layout
+from vehicle_sim.effects.base import ParamSpec, validate_effect
+
+
+@dataclass(frozen=True)
+class BodyDrag:
+    """Quadratic body drag; ``c_n_per_mps2`` per body axis in N/(m/s)^2."""
+
+    name: ClassVar[str] = "body_drag"
+    PARAMS: ClassVar[tuple[ParamSpec, ...]] = (
+        ParamSpec("c_n_per_mps2", "N/(m/s)^2", 3, 0.0, 10.0, "quadratic drag per body axis"),
+    )
+    c_n_per_mps2: tuple[float, float, float] = (0.02, 0.02, 0.04)
+
+    def __post_init__(self) -> None:
+        validate_effect(self)
+
+    def pack(self, ep: np.ndarray) -> None:
+        ep[layout.BODY_DRAG_C : layout.BODY_DRAG_C + 3] = self.c_n_per_mps2

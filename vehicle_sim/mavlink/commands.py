@@ -1,0 +1,212 @@
+"""COMMAND_LONG / COMMAND_INT handling: a table from MAV_CMD to handler, always an ACK result.
+
+Handlers call the simulator's command API and the link's rate scheduler; they do no I/O. Each
+returns a ``CommandOutcome``: the MAV_RESULT for the COMMAND_ACK, messages to send to the
+requester (e.g. a requested AUTOPILOT_VERSION) and notices (STATUSTEXT) for everyone.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+from pymavlink.dialects.v20 import common as mavlink2
+
+from vehicle_sim.mavlink.scheduler import RateScheduler
+from vehicle_sim.mavlink.telemetry import TELEMETRY_BUILDERS, TelemetryContext
+from vehicle_sim.vehicle_types import FlightMode
+
+if TYPE_CHECKING:
+    from vehicle_sim import CommandResult, Simulator
+
+_FACTORY = mavlink2.MAVLink(None)
+
+MAV_RESULT_ACCEPTED = 0
+MAV_RESULT_TEMPORARILY_REJECTED = 1
+MAV_RESULT_DENIED = 2
+MAV_RESULT_UNSUPPORTED = 3
+MAV_RESULT_FAILED = 4
+
+MAV_SEVERITY_CRITICAL = 2
+MAV_SEVERITY_WARNING = 4
+MAV_SEVERITY_INFO = 6
+
+CMD_NAV_RETURN_TO_LAUNCH = 20
+CMD_NAV_LAND = 21
+CMD_NAV_TAKEOFF = 22
+CMD_DO_SET_MODE = 176
+CMD_COMPONENT_ARM_DISARM = 400
+CMD_GET_HOME_POSITION = 410
+CMD_GET_MESSAGE_INTERVAL = 510
+CMD_SET_MESSAGE_INTERVAL = 511
+CMD_REQUEST_MESSAGE = 512
+CMD_REQUEST_AUTOPILOT_CAPABILITIES = 520
+
+ARM_FORCE_MAGIC = 21196
+MODE_FLAG_CUSTOM_MODE_ENABLED = 1
+
+_RESULT_CODES: dict[str, int] = {
+    "accepted": MAV_RESULT_ACCEPTED,
+    "temporarily_rejected": MAV_RESULT_TEMPORARILY_REJECTED,
+    "denied": MAV_RESULT_DENIED,
+    "failed": MAV_RESULT_FAILED,
+}
+
+Notice = tuple[int, str]
+"""(MAV_SEVERITY, text) for a STATUSTEXT."""
+
+
+@dataclass(frozen=True)
+class CommandOutcome:
+    """What a command produced.
+
+    Attributes:
+        result: MAV_RESULT for the COMMAND_ACK.
+        replies: messages for the requester, sent after the ACK.
+        notices: STATUSTEXTs for all peers.
+    """
+
+    result: int
+    replies: tuple[mavlink2.MAVLink_message, ...] = ()
+    notices: tuple[Notice, ...] = ()
+
+
+@dataclass(frozen=True)
+class CommandContext:
+    """Everything a handler may use: the simulator, telemetry context, the link's scheduler."""
+
+    sim: Simulator
+    telemetry: TelemetryContext
+    scheduler: RateScheduler
+
+
+Params = tuple[float, float, float, float, float, float, float]
+Handler = Callable[[Params, CommandContext], CommandOutcome]
+
+
+def _from_sim(result: CommandResult) -> CommandOutcome:
+    """The simulator's verdict as a MAV_RESULT (it announces its own reasons as events)."""
+    return CommandOutcome(_RESULT_CODES.get(result.result, MAV_RESULT_FAILED))
+
+
+def _denied(reason: str) -> CommandOutcome:
+    return CommandOutcome(MAV_RESULT_DENIED, notices=((MAV_SEVERITY_CRITICAL, reason),))
+
+
+def arm_disarm(p: Params, ctx: CommandContext) -> CommandOutcome:
+    force = p[1] == ARM_FORCE_MAGIC
+    if p[0] == 1.0:
+        return _from_sim(ctx.sim.arm(force=force))
+    if p[0] == 0.0:
+        return _from_sim(ctx.sim.disarm(force=force))
+    return _denied(f"Arm/disarm: param1 must be 0 or 1, got {p[0]}")
+
+
+def set_mode(p: Params, ctx: CommandContext) -> CommandOutcome:
+    """DO_SET_MODE: only bit 0 of param1 (custom mode) matters; param2/3 main/sub mode."""
+    if not all(math.isfinite(v) and 0 <= v < 256 for v in p[:3]):
+        return _denied("Set mode: invalid parameters")
+    if not int(p[0]) & MODE_FLAG_CUSTOM_MODE_ENABLED:
+        return _denied("Set mode: custom mode flag required")
+    custom_mode = (int(p[1]) << 16) | (int(p[2]) << 24)
+    try:
+        mode = FlightMode(custom_mode)
+    except ValueError:
+        return _denied(f"Set mode: mode {int(p[1])}/{int(p[2])} unsupported")
+    return _from_sim(ctx.sim.set_mode(mode))
+
+
+def takeoff(p: Params, ctx: CommandContext) -> CommandOutcome:
+    """NAV_TAKEOFF: param7 is AMSL altitude [m]; NaN or below the minimum -> MIS_TAKEOFF_ALT."""
+    default_alt_m = ctx.sim.get_param("MIS_TAKEOFF_ALT")
+    alt_m = None
+    notices: tuple[Notice, ...] = ()
+    if math.isfinite(p[6]):
+        requested_m = p[6] - ctx.telemetry.origin.alt_amsl_m
+        if requested_m > default_alt_m:
+            alt_m = requested_m
+        else:
+            text = f"Using minimum takeoff altitude: {default_alt_m:.2f} m"
+            notices = ((MAV_SEVERITY_INFO, text),)
+    outcome = _from_sim(ctx.sim.takeoff(alt_m=alt_m))
+    return CommandOutcome(outcome.result, outcome.replies, notices + outcome.notices)
+
+
+def land(_p: Params, ctx: CommandContext) -> CommandOutcome:
+    return _from_sim(ctx.sim.land())
+
+
+def return_to_launch(_p: Params, ctx: CommandContext) -> CommandOutcome:
+    return _from_sim(ctx.sim.set_mode(FlightMode.RTL))
+
+
+def _message_id(value: float) -> int | None:
+    if math.isfinite(value) and value >= 0 and value == int(value):
+        return int(value)
+    return None
+
+
+def request_message(p: Params, ctx: CommandContext) -> CommandOutcome:
+    msg_id = _message_id(p[0])
+    builder = TELEMETRY_BUILDERS.get(msg_id) if msg_id is not None else None
+    if builder is None:
+        return CommandOutcome(MAV_RESULT_DENIED)
+    return CommandOutcome(MAV_RESULT_ACCEPTED, (builder(ctx.sim.state, ctx.telemetry),))
+
+
+def request_capabilities(_p: Params, ctx: CommandContext) -> CommandOutcome:
+    return request_message((float(mavlink2.MAVLINK_MSG_ID_AUTOPILOT_VERSION),) + (0.0,) * 6, ctx)
+
+
+def get_home_position(_p: Params, ctx: CommandContext) -> CommandOutcome:
+    return request_message((float(mavlink2.MAVLINK_MSG_ID_HOME_POSITION),) + (0.0,) * 6, ctx)
+
+
+def set_message_interval(p: Params, ctx: CommandContext) -> CommandOutcome:
+    msg_id = _message_id(p[0])
+    if msg_id is None or msg_id not in TELEMETRY_BUILDERS:
+        return CommandOutcome(MAV_RESULT_DENIED)
+    try:
+        ctx.scheduler.set_interval_us(msg_id, p[1])
+    except ValueError:
+        return CommandOutcome(MAV_RESULT_DENIED)
+    return CommandOutcome(MAV_RESULT_ACCEPTED)
+
+
+def get_message_interval(p: Params, ctx: CommandContext) -> CommandOutcome:
+    msg_id = _message_id(p[0])
+    if msg_id is None or msg_id > 0xFFFF:
+        return CommandOutcome(MAV_RESULT_DENIED)
+    interval_s = ctx.scheduler.interval_s(msg_id)
+    interval_us = -1 if interval_s is None else int(round(interval_s * 1e6))
+    return CommandOutcome(
+        MAV_RESULT_ACCEPTED, (_FACTORY.message_interval_encode(msg_id, interval_us),)
+    )
+
+
+COMMAND_HANDLERS: dict[int, Handler] = {
+    CMD_NAV_RETURN_TO_LAUNCH: return_to_launch,
+    CMD_NAV_LAND: land,
+    CMD_NAV_TAKEOFF: takeoff,
+    CMD_DO_SET_MODE: set_mode,
+    CMD_COMPONENT_ARM_DISARM: arm_disarm,
+    CMD_GET_HOME_POSITION: get_home_position,
+    CMD_GET_MESSAGE_INTERVAL: get_message_interval,
+    CMD_SET_MESSAGE_INTERVAL: set_message_interval,
+    CMD_REQUEST_MESSAGE: request_message,
+    CMD_REQUEST_AUTOPILOT_CAPABILITIES: request_capabilities,
+}
+"""MAV_CMD -> handler; any other command is answered UNSUPPORTED."""
+
+
+def handle_command(command: int, params: Params, ctx: CommandContext) -> CommandOutcome:
+    """Run a command; unknown commands -> UNSUPPORTED, a handler's ValueError -> DENIED."""
+    handler = COMMAND_HANDLERS.get(command)
+    if handler is None:
+        return CommandOutcome(MAV_RESULT_UNSUPPORTED)
+    try:
+        return handler(params, ctx)
+    except ValueError as exc:
+        return _denied(f"Command {command}: {exc}")

@@ -1,0 +1,238 @@
+"""Vehicle-side handling of one received MAVLink message: what PX4's mavlink receiver does.
+
+Checks the target, routes to commands / offboard / params / services, and returns the messages
+to send. Touches only the simulator's public API and the link's scheduler; no sockets, no clock
+(time comes in as arguments).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+from pymavlink.dialects.v20 import common as mavlink2
+
+from vehicle_sim.mavlink import params, services
+from vehicle_sim.mavlink.codec import COMPONENT_ID, SYSTEM_ID
+from vehicle_sim.mavlink.commands import (
+    MAV_RESULT_FAILED,
+    MAV_RESULT_UNSUPPORTED,
+    MAV_SEVERITY_CRITICAL,
+    MAV_SEVERITY_WARNING,
+    CommandContext,
+    CommandOutcome,
+    Notice,
+    handle_command,
+)
+from vehicle_sim.mavlink.offboard import SetpointResult, parse_setpoint
+from vehicle_sim.mavlink.scheduler import RateScheduler
+from vehicle_sim.mavlink.stats import StatsCounter
+from vehicle_sim.mavlink.telemetry import TelemetryContext
+from vehicle_sim.vehicle_types import FlightMode
+
+if TYPE_CHECKING:
+    from vehicle_sim import Simulator
+
+_FACTORY = mavlink2.MAVLink(None)
+
+
+@dataclass(frozen=True)
+class Outgoing:
+    """A message to send: to the sender of the request only, or to every peer of every link."""
+
+    msg: mavlink2.MAVLink_message
+    broadcast: bool = False
+
+
+def _for_us(target_system: int, target_component: int | None = None) -> bool:
+    system_ok = target_system in (0, SYSTEM_ID)
+    return system_ok and (target_component is None or target_component in (0, COMPONENT_ID))
+
+
+def statustext(severity: int, text: str) -> mavlink2.MAVLink_message:
+    """A STATUSTEXT (text cut to the 50 characters MAVLink allows)."""
+    return _FACTORY.statustext_encode(severity=severity, text=text[:50].encode("ascii", "replace"))
+
+
+class Dispatcher:
+    """Handles received messages for one simulator.
+
+    Args:
+        sim: the simulator (only its public API is used).
+        telemetry: telemetry context (origin, battery cells) for on-request messages.
+        stats: counters to update.
+        on_setpoint: called with the setpoint's ``time_boot_ms`` each time a setpoint reaches
+            the simulator while it is in OFFBOARD (used to trace setpoint-to-actuation latency).
+    """
+
+    def __init__(
+        self,
+        sim: Simulator,
+        telemetry: TelemetryContext,
+        stats: StatsCounter,
+        on_setpoint: Callable[[int], None] | None = None,
+    ) -> None:
+        self._sim = sim
+        self._telemetry = telemetry
+        self._stats = stats
+        self._on_setpoint = on_setpoint
+        self._handlers: dict[str, Callable[..., list[Outgoing]]] = {
+            "COMMAND_LONG": self._command_long,
+            "COMMAND_INT": self._command_int,
+            "SET_POSITION_TARGET_LOCAL_NED": self._setpoint,
+            "PARAM_REQUEST_LIST": self._param_request_list,
+            "PARAM_REQUEST_READ": self._param_request_read,
+            "PARAM_SET": self._param_set,
+            "PING": self._ping,
+            "TIMESYNC": self._timesync,
+            "MISSION_REQUEST_LIST": self._mission_request_list,
+            "FILE_TRANSFER_PROTOCOL": self._ftp,
+            "SET_MODE": self._set_mode_message,
+        }
+
+    def handle(
+        self, msg: mavlink2.MAVLink_message, scheduler: RateScheduler, now_ns: int
+    ) -> list[Outgoing]:
+        """Handle one message from a link; returns what to send. Never raises."""
+        handler = self._handlers.get(msg.get_type())
+        if handler is None:
+            return []
+        try:
+            return handler(msg, scheduler, now_ns)
+        except Exception:  # a hostile message must never stop the endpoint
+            self._stats.add("handler_errors")
+            return []
+
+    # -- commands -----------------------------------------------------------------------------
+
+    def _command_long(self, msg, scheduler, _now_ns) -> list[Outgoing]:
+        p = (msg.param1, msg.param2, msg.param3, msg.param4, msg.param5, msg.param6, msg.param7)
+        return self._command(msg, msg.command, p, scheduler)
+
+    def _command_int(self, msg, scheduler, _now_ns) -> list[Outgoing]:
+        p = (msg.param1, msg.param2, msg.param3, msg.param4, float(msg.x), float(msg.y), msg.z)
+        return self._command(msg, msg.command, p, scheduler)
+
+    def _command(self, msg, command: int, p, scheduler: RateScheduler) -> list[Outgoing]:
+        if not _for_us(msg.target_system, msg.target_component):
+            self._stats.add("wrong_target")
+            return []
+        self._stats.add("commands_received")
+        ctx = CommandContext(self._sim, self._telemetry, scheduler)
+        try:
+            outcome = handle_command(command, p, ctx)
+        except Exception:  # a bug must still be answered: a command always gets its ACK
+            self._stats.add("handler_errors")
+            outcome = CommandOutcome(MAV_RESULT_FAILED)
+        if outcome.result == MAV_RESULT_UNSUPPORTED:
+            self._stats.add("commands_unsupported")
+        ack = _FACTORY.command_ack_encode(
+            command=command,
+            result=outcome.result,
+            progress=0,
+            result_param2=0,
+            target_system=msg.get_srcSystem(),
+            target_component=msg.get_srcComponent(),
+        )
+        out = [Outgoing(ack)] + [Outgoing(reply) for reply in outcome.replies]
+        return out + self._notices(outcome.notices)
+
+    def _set_mode_message(self, msg, scheduler, _now_ns) -> list[Outgoing]:
+        """Legacy SET_MODE message: handled like DO_SET_MODE, answered with a COMMAND_ACK."""
+        if not _for_us(msg.target_system):
+            self._stats.add("wrong_target")
+            return []
+        custom = int(msg.custom_mode)
+        p = (
+            float(msg.base_mode),
+            float((custom >> 16) & 0xFF),
+            float((custom >> 24) & 0xFF),
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+        )
+        outcome = handle_command(176, p, CommandContext(self._sim, self._telemetry, scheduler))
+        ack = _FACTORY.command_ack_encode(
+            command=176, result=outcome.result, target_system=msg.get_srcSystem(),
+            target_component=msg.get_srcComponent(),
+        )  # fmt: skip
+        return [Outgoing(ack)] + self._notices(outcome.notices)
+
+    # -- offboard -----------------------------------------------------------------------------
+
+    def _setpoint(self, msg, _scheduler, _now_ns) -> list[Outgoing]:
+        if not _for_us(msg.target_system, msg.target_component):
+            self._stats.add("wrong_target")
+            return []
+        result = parse_setpoint(
+            msg.coordinate_frame, msg.type_mask, (msg.vx, msg.vy, msg.vz), msg.yaw, msg.yaw_rate
+        )
+        if result.setpoint is not None:
+            try:
+                self._sim.set_velocity_setpoint(result.setpoint)
+            except ValueError as exc:
+                result = SetpointResult(None, f"Offboard: setpoint rejected: {exc}")
+        if result.setpoint is None:
+            self._stats.add("setpoints_rejected")
+            return self._notices(((MAV_SEVERITY_WARNING, result.reason),))
+        self._stats.add("setpoints_accepted")
+        if self._on_setpoint is not None and self._sim.state.mode == FlightMode.OFFBOARD:
+            self._on_setpoint(int(msg.time_boot_ms))
+        return []
+
+    # -- parameters ---------------------------------------------------------------------------
+
+    def _param_reply(self, reply: params.ParamReply, broadcast: bool) -> list[Outgoing]:
+        if not reply.values:
+            self._stats.add("params_unknown")
+        out = [Outgoing(m, broadcast) for m in reply.values]
+        if reply.problem and reply.values:
+            out += self._notices(((MAV_SEVERITY_CRITICAL, reply.problem),))
+        return out
+
+    def _param_request_list(self, msg, _scheduler, _now_ns) -> list[Outgoing]:
+        if not _for_us(msg.target_system, msg.target_component):
+            self._stats.add("wrong_target")
+            return []
+        return self._param_reply(params.request_list(self._sim), broadcast=False)
+
+    def _param_request_read(self, msg, _scheduler, _now_ns) -> list[Outgoing]:
+        if not _for_us(msg.target_system, msg.target_component):
+            self._stats.add("wrong_target")
+            return []
+        reply = params.request_read(self._sim, msg.param_id, msg.param_index)
+        return self._param_reply(reply, broadcast=False)
+
+    def _param_set(self, msg, _scheduler, _now_ns) -> list[Outgoing]:
+        if not _for_us(msg.target_system, msg.target_component):
+            self._stats.add("wrong_target")
+            return []
+        reply = params.param_set(self._sim, msg.param_id, msg.param_value, msg.param_type)
+        return self._param_reply(reply, broadcast=True)
+
+    # -- small services -----------------------------------------------------------------------
+
+    def _ping(self, msg, _scheduler, _now_ns) -> list[Outgoing]:
+        reply = services.ping_reply(msg)
+        return [] if reply is None else [Outgoing(reply)]
+
+    def _timesync(self, msg, _scheduler, now_ns: int) -> list[Outgoing]:
+        reply = services.timesync_reply(msg, now_ns)
+        return [] if reply is None else [Outgoing(reply)]
+
+    def _mission_request_list(self, msg, _scheduler, _now_ns) -> list[Outgoing]:
+        if not _for_us(msg.target_system, msg.target_component):
+            self._stats.add("wrong_target")
+            return []
+        return [Outgoing(services.mission_count_reply(msg))]
+
+    def _ftp(self, msg, _scheduler, _now_ns) -> list[Outgoing]:
+        if not _for_us(msg.target_system, msg.target_component):
+            self._stats.add("wrong_target")
+            return []
+        return [Outgoing(services.ftp_nak_reply(msg))]
+
+    def _notices(self, notices: tuple[Notice, ...]) -> list[Outgoing]:
+        return [Outgoing(statustext(sev, text), broadcast=True) for sev, text in notices]

@@ -1,0 +1,80 @@
+"""SET_POSITION_TARGET_LOCAL_NED -> VelocitySetpoint, with PX4's frame and type_mask rules.
+
+type_mask bits (1 = ignore): 0-2 position, 3-5 velocity, 6-8 acceleration, 9 force, 10 yaw,
+11 yaw rate. Frames: 1 LOCAL_NED (as given), 8 BODY_NED (velocity in body axes, rotated by yaw).
+Only velocity setpoints (optionally with yaw or yaw rate) are flown; anything else is rejected
+with a reason a STATUSTEXT can carry. Pure: no I/O.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from vehicle_sim.vehicle_types import VelocitySetpoint
+
+FRAME_LOCAL_NED = 1
+FRAME_BODY_NED = 8
+SUPPORTED_FRAMES: dict[int, str] = {FRAME_LOCAL_NED: "ned", FRAME_BODY_NED: "body"}
+
+IGNORE_POSITION = 0b111
+IGNORE_VELOCITY = 0b111 << 3
+IGNORE_ACCELERATION = 0b111 << 6
+IGNORE_YAW = 1 << 10
+IGNORE_YAW_RATE = 1 << 11
+
+MAX_SPEED_MPS = 100.0
+"""Velocity components beyond this are absurd (PX4 limits flight to MPC_XY_VEL_MAX anyway)."""
+MAX_YAW_RATE_RADPS = 20.0
+"""Yaw rates beyond this are absurd for a multirotor."""
+MAX_ABS_YAW_RAD = 4.0 * math.pi
+"""Yaw angles beyond two turns either way are not headings."""
+
+
+@dataclass(frozen=True)
+class SetpointResult:
+    """Outcome of parsing one setpoint message.
+
+    Attributes:
+        setpoint: the velocity setpoint to fly, or None when rejected.
+        reason: why it was rejected ("" when accepted), short enough for a STATUSTEXT.
+    """
+
+    setpoint: VelocitySetpoint | None
+    reason: str = ""
+
+
+def parse_setpoint(
+    coordinate_frame: int,
+    type_mask: int,
+    vel_mps: tuple[float, float, float],
+    yaw_rad: float,
+    yaw_rate_radps: float,
+) -> SetpointResult:
+    """Validate a SET_POSITION_TARGET_LOCAL_NED's fields (SI units) and build the setpoint."""
+    if coordinate_frame not in SUPPORTED_FRAMES:
+        return SetpointResult(None, f"Offboard: frame {coordinate_frame} unsupported, use 1 or 8")
+    if type_mask & IGNORE_VELOCITY:
+        return SetpointResult(None, "Offboard: only velocity setpoints supported")
+    if (type_mask & IGNORE_POSITION) != IGNORE_POSITION or (
+        type_mask & IGNORE_ACCELERATION
+    ) != IGNORE_ACCELERATION:
+        return SetpointResult(None, "Offboard: position/accel setpoints unsupported")
+    if not all(math.isfinite(v) and abs(v) <= MAX_SPEED_MPS for v in vel_mps):
+        return SetpointResult(None, "Offboard: invalid velocity setpoint rejected")
+    use_yaw = not type_mask & IGNORE_YAW
+    use_yaw_rate = not type_mask & IGNORE_YAW_RATE
+    if use_yaw and not (math.isfinite(yaw_rad) and abs(yaw_rad) <= MAX_ABS_YAW_RAD):
+        return SetpointResult(None, "Offboard: invalid yaw setpoint rejected")
+    if use_yaw_rate and not (
+        math.isfinite(yaw_rate_radps) and abs(yaw_rate_radps) <= MAX_YAW_RATE_RADPS
+    ):
+        return SetpointResult(None, "Offboard: invalid yaw rate setpoint rejected")
+    return SetpointResult(
+        VelocitySetpoint(
+            vel_mps=(float(vel_mps[0]), float(vel_mps[1]), float(vel_mps[2])),
+            yaw_rate_radps=float(yaw_rate_radps) if use_yaw_rate else 0.0,
+            yaw_rad=float(yaw_rad) if use_yaw else None,
+            frame=SUPPORTED_FRAMES[coordinate_frame],  # type: ignore[arg-type]
+        )
+    )

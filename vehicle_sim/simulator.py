@@ -1,0 +1,356 @@
+"""The in-process simulated vehicle: physics + PX4-like flight control + commander.
+
+Stepped deterministically on simulated time; the same config, seed and call sequence give the
+same numbers. See the package docstring for the contract.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from collections.abc import Callable
+
+import numpy as np
+
+from vehicle_sim import flight_control as fc
+from vehicle_sim import physics as ph
+from vehicle_sim.anchor import (
+    AnchorState,
+    IntegralMode,
+    body_z_ned,
+    check_integral_mode,
+    velocity_integral_for_thrust,
+)
+from vehicle_sim.backends import backend_name, make_backend
+from vehicle_sim.builtin_plant import BuiltinPlant, PlantBackend
+from vehicle_sim.commander import ActiveSetpoint, Commander, CommandResult
+from vehicle_sim.config import GRAVITY_MPS2, SimConfig
+from vehicle_sim.params import Px4Params
+from vehicle_sim.truth_log import truth_row
+from vehicle_sim.vehicle_types import FlightMode, VehicleState, VelocitySetpoint
+
+MAX_SETPOINT_SPEED_MPS = 100.0
+MAX_SETPOINT_YAW_RATE_RADPS = 50.0
+NOISE_BLOCK_ROWS = 4096
+
+
+class Simulator:
+    """A simulated PX4 multicopter, stepped in-process.
+
+    Args:
+        config: vehicle preset and effects (:func:`vehicle_sim.load_sim_config`).
+        seed: seed of the vehicle's own random generator (gusts).
+        backend: physics backend, or its name: "builtin" (the rigid body) or "jsbsim" (JSBSim's
+            F450; use preset "f450"), see :mod:`vehicle_sim.backends`; None: the config's
+            ``[sim] backend`` (by default "builtin").
+
+    ``backend_name`` is the backend flown (its class name for a backend object). The vehicle
+    starts disarmed, on the ground at the NED origin, in HOLD.
+    """
+
+    def __init__(
+        self, config: SimConfig, seed: int = 0, backend: PlantBackend | str | None = None
+    ) -> None:
+        self.config = config
+        self.seed = seed
+        self.physics_dt_s = config.physics_dt_s
+        self.backend_name = backend_name(backend, config)
+        self._plant = make_backend(backend, config)
+        self._params = Px4Params({"MPC_THR_HOVER": config.vehicle.hover_thrust_norm})
+        self._cp = self._params.control_vector(GRAVITY_MPS2)
+        self._cp_version = self._params.version
+        v = config.vehicle
+        self._mix = fc.mixer_matrix(
+            np.array(v.rotor_positions_frd_m),
+            np.array(v.rotor_spin),
+            v.torque_coeff_nm_per_radps2 / v.thrust_coeff_n_per_radps2,
+        )
+        self._max_total_thrust_n = len(v.rotor_spin) * v.max_rotor_thrust_n
+        self._cs = np.zeros(fc.N_CTRL)
+        self._sp = np.zeros(fc.N_SP)
+        self._commander = Commander(self._params)
+        self._epoch = self._commander.mode_epoch
+        self._k = 0
+        self._rng = np.random.default_rng(seed)
+        gusts = config.effect("gusts")
+        self._gust_on = gusts is not None and gusts.intensity_mps > 0.0
+        self._noise = np.zeros((0, 3))
+        self._noise_pos = 0
+        if self._gust_on:
+            start = gusts.intensity_mps * self._rng.standard_normal(3)
+            self._plant.x[ph.GUST : ph.GUST + 3] = start
+        delay = config.effect("command_delay")
+        self._delay_steps = 0 if delay is None else round(delay.delay_s / self.physics_dt_s)
+        self._pending: deque[tuple[int, VelocitySetpoint]] = deque()
+        self._active: ActiveSetpoint | None = None
+        fc.reset_controller(self._plant.x, self._cs)
+
+    # --- time ---------------------------------------------------------------------------------
+    @property
+    def t_s(self) -> float:
+        """Simulated time [s]."""
+        return self._k * self.physics_dt_s
+
+    def step(self, duration_s: float) -> VehicleState:
+        """Advance by ``duration_s`` (rounded to whole physics steps); returns the new state."""
+        if not (math.isfinite(duration_s) and duration_s >= 0.0):
+            raise ValueError(f"step duration {duration_s!r} s must be finite and >= 0")
+        remaining = round(duration_s / self.physics_dt_s)
+        dt = self.physics_dt_s
+        plant = self._plant
+        self._refresh_control_params()
+        while remaining > 0:
+            self._release_setpoints()
+            contact = plant.aux[ph.AUX_CONTACT] > 0.5
+            self._commander.fill_setpoint(self._sp, contact, self._active)
+            n = remaining
+            deadline = self._commander.next_deadline(self.t_s)
+            if deadline < math.inf:
+                n = min(n, max(1, math.ceil(round((deadline - self.t_s) / dt, 6))))
+            if self._pending:
+                n = min(n, max(1, self._pending[0][0] - self._k))
+            noise = self._noise_rows(n)
+            done = plant.advance(n, dt, self._sp, self._cs, self._cp, self._mix, noise)
+            if not 0 < done <= n:
+                raise RuntimeError(f"physics backend did {done} of {n} steps; it must do 1..{n}")
+            self._noise_pos += done if self._gust_on else 0
+            self._k += done
+            remaining -= done
+            self._update_commander()
+        return self.state
+
+    # --- commands -----------------------------------------------------------------------------
+    def arm(self, force: bool = False) -> CommandResult:
+        """Arm (on the ground; in OFFBOARD only with a fresh setpoint stream)."""
+        return self._command(lambda c, t, p, y: c.arm(t, force))
+
+    def disarm(self, force: bool = False) -> CommandResult:
+        """Disarm; refused in the air unless ``force`` (then the vehicle falls)."""
+        return self._command(lambda c, t, p, y: c.disarm(t, force))
+
+    def takeoff(self, alt_m: float | None = None) -> CommandResult:
+        """TAKEOFF to ``alt_m`` above home (None/NaN: MIS_TAKEOFF_ALT) at MPC_TKO_SPEED, then
+        HOLD. Needs the vehicle armed."""
+        return self._command(lambda c, t, p, y: c.takeoff(t, p, y, alt_m))
+
+    def land(self) -> CommandResult:
+        """LAND here at MPC_LAND_SPEED; disarms COM_DISARM_LAND after touchdown."""
+        return self._command(lambda c, t, p, y: c.land(t, p, y))
+
+    def set_mode(self, mode: FlightMode) -> CommandResult:
+        """Switch mode. OFFBOARD needs a setpoint younger than COM_OF_LOSS_T; HOLD and POSCTL
+        hold the current position; RTL and MISSION are not supported (denied)."""
+        if not isinstance(mode, FlightMode):
+            raise ValueError(f"mode must be a FlightMode, got {mode!r}; use FlightMode.parse(name)")
+        return self._command(lambda c, t, p, y: c.set_mode(mode, t, p, y))
+
+    def set_velocity_setpoint(self, sp: VelocitySetpoint) -> None:
+        """Take a velocity setpoint (acted on in OFFBOARD, after any command delay).
+
+        Raises:
+            ValueError: non-finite or absurd values, or an unknown frame; nothing changes then.
+        """
+        _check_setpoint(sp)
+        self._commander.on_setpoint(self.t_s)
+        if self._delay_steps == 0:
+            self._active = self._to_ned(sp)
+        else:
+            self._pending.append((self._k + self._delay_steps, sp))
+
+    def drain_events(self) -> list[tuple[int, str]]:
+        """(MAV_SEVERITY, text) events since the last drain."""
+        events = list(self._commander.events)
+        self._commander.events.clear()
+        return events
+
+    # --- parameters -----------------------------------------------------------------------------
+    @property
+    def params(self) -> Px4Params:
+        """The PX4-named parameters (changes through it also take effect at the next step)."""
+        return self._params
+
+    def get_param(self, name: str) -> float:
+        """A PX4 parameter's value; unknown names raise ValueError listing the known ones."""
+        return self._params.get(name)
+
+    def set_param(self, name: str, value: float) -> None:
+        """Set a PX4 parameter (takes effect at the next step)."""
+        self._params.set(name, value)
+
+    def param_names(self) -> tuple[str, ...]:
+        """All parameter names in a stable order (the PARAM_VALUE index)."""
+        return self._params.names()
+
+    # --- anchoring (replay from measured states) ---------------------------------------------
+    def anchor(self, state: AnchorState, integral: IntegralMode = "keep") -> None:
+        """Put the vehicle into the measured ``state``, to replay logged setpoints from it.
+
+        Writes position, velocity, attitude and body rates; scales the rotor speeds to
+        ``state.thrust_n`` and takes ``state.acc_ned_mps2`` as the acceleration the velocity
+        loop sees next, when given. Time, mode, setpoints (also those delayed in flight), gust
+        and battery state are kept. ``integral`` says what happens to the flight control state:
+        "keep" leaves it; "reset" clears the integrators and aligns the yaw setpoint with the
+        new yaw; "match_thrust" clears the rate integral and sets the velocity integral so that,
+        with the velocity setpoint in force now (give the setpoint first), the flight control
+        commands the measured thrust vector (``thrust_n`` along the new body -z): the integral
+        the measured vehicle had built up, e.g. for a payload. Needs thrust_n and acc_ned_mps2.
+
+        Raises:
+            ValueError: an unknown ``integral`` mode, or "match_thrust" without thrust or
+                acceleration (the state itself is validated by :class:`AnchorState`).
+            NotImplementedError: a backend other than the built-in one (JSBSim owns its state).
+        """
+        check_integral_mode(integral, state)
+        if not isinstance(self._plant, BuiltinPlant):
+            raise NotImplementedError(
+                f"anchor() needs the builtin backend; {type(self._plant).__name__} owns its state"
+            )
+        x, aux = self._plant.x, self._plant.aux
+        x[ph.POS : ph.POS + 3] = state.pos_ned_m
+        x[ph.VEL : ph.VEL + 3] = state.vel_ned_mps
+        x[ph.QUAT : ph.QUAT + 4] = state.q_wxyz
+        x[ph.RATES : ph.RATES + 3] = state.rates_frd_radps
+        v = self.config.vehicle
+        rotors = x[ph.MOTORS : ph.MOTORS + 4]
+        sim_thrust_n = v.max_rotor_thrust_n * float(np.sum(rotors * rotors))
+        if state.thrust_n and sim_thrust_n > 0.0:
+            rotors *= math.sqrt(state.thrust_n / sim_thrust_n)
+            np.clip(rotors, 0.0, 1.0, out=rotors)
+            aux[ph.AUX_THRUST_NOM] = v.max_rotor_thrust_n * float(np.sum(rotors * rotors))
+        if state.acc_ned_mps2 is not None:
+            aux[ph.AUX_ACC : ph.AUX_ACC + 3] = state.acc_ned_mps2
+        if integral == "reset":
+            fc.reset_controller(x, self._cs)
+        elif integral == "match_thrust":
+            self._refresh_control_params()
+            self._cs[fc.CS_RATE_INT : fc.CS_RATE_INT + 3] = 0.0
+            vsp = np.zeros(3) if self._active is None else np.array(self._active.vel_ned_mps)
+            thr = -body_z_ned(state.q_wxyz) * (state.thrust_n / self._max_total_thrust_n)
+            vel_int = velocity_integral_for_thrust(state, vsp, thr, self._cp)
+            if vel_int is not None:
+                self._cs[fc.CS_VEL_INT : fc.CS_VEL_INT + 3] = vel_int
+
+    @property
+    def velocity_integral_mps2(self) -> np.ndarray:
+        """(3,) the velocity loop's integral term, NED [m/s^2] (a copy)."""
+        return self._cs[fc.CS_VEL_INT : fc.CS_VEL_INT + 3].copy()
+
+    # --- state and logging ----------------------------------------------------------------------
+    @property
+    def state(self) -> VehicleState:
+        """The true state now. ``thrust_n`` is the total rotor thrust [N]: on the built-in
+        backend what the nominal rotor model gives for the current rotor speeds (what a vehicle
+        with RPM telemetry would report), on "jsbsim" JSBSim's propeller thrust."""
+        x, aux = self._plant.x, self._plant.aux
+        contact = aux[ph.AUX_CONTACT] > 0.5
+        v = self.config.vehicle
+        discharge = x[ph.DISCHARGE]
+        return VehicleState(
+            t_s=self.t_s,
+            pos_ned_m=x[ph.POS : ph.POS + 3].copy(),
+            vel_ned_mps=x[ph.VEL : ph.VEL + 3].copy(),
+            acc_ned_mps2=aux[ph.AUX_ACC : ph.AUX_ACC + 3].copy(),
+            q_wxyz=x[ph.QUAT : ph.QUAT + 4].copy(),
+            rates_frd_radps=x[ph.RATES : ph.RATES + 3].copy(),
+            thrust_n=float(aux[ph.AUX_THRUST_NOM]),
+            motor_speeds_norm=x[ph.MOTORS : ph.MOTORS + 4].copy(),
+            battery_v=v.battery_full_v - (v.battery_full_v - v.battery_empty_v) * discharge,
+            armed=self._commander.armed,
+            mode=self._commander.mode,
+            landed_state=self._commander.landed_state(contact, x[ph.VEL + 2] < -0.1),
+        )
+
+    def log_row(self, cmd: VelocitySetpoint | None = None) -> dict[str, float | str]:
+        """One schema-v1 row of the true state with the command ``cmd`` (body converted to NED);
+        with None, the velocity setpoint the flight control is tracking now."""
+        if cmd is None:
+            vel = tuple(float(v) for v in self._cs[fc.CS_VEL_SP : fc.CS_VEL_SP + 3])
+            yaw_rate = float(self._sp[fc.SP_YAW_RATE])
+        else:
+            _check_setpoint(cmd)
+            active = self._to_ned(cmd)
+            vel, yaw_rate = active.vel_ned_mps, active.yaw_rate_radps
+        return truth_row(self.state, vel, yaw_rate)
+
+    def log_metadata(self) -> dict[str, object]:
+        """Sidecar metadata for a truth log of this vehicle (no effect ground truth)."""
+        return {
+            "source": "vehicle_sim",
+            "vehicle": self.config.preset_name,
+            "backend": self.backend_name,
+            "mass_kg": self.config.mass_kg,
+            "physics_dt_s": self.physics_dt_s,
+        }
+
+    # --- internals ------------------------------------------------------------------------------
+    def _command(
+        self, fn: Callable[[Commander, float, np.ndarray, float], CommandResult]
+    ) -> CommandResult:
+        x = self._plant.x
+        result = fn(self._commander, self.t_s, x[ph.POS : ph.POS + 3].copy(), fc.yaw_of(x))
+        self._sync_mode()
+        return result
+
+    def _refresh_control_params(self) -> None:
+        if self._cp_version != self._params.version:
+            self._cp = self._params.control_vector(GRAVITY_MPS2)
+            self._cp_version = self._params.version
+
+    def _update_commander(self) -> None:
+        x = self._plant.x
+        contact = self._plant.aux[ph.AUX_CONTACT] > 0.5
+        self._commander.update(self.t_s, x[ph.POS : ph.POS + 3], fc.yaw_of(x), contact)
+        self._sync_mode()
+
+    def _sync_mode(self) -> None:
+        if self._commander.mode_epoch != self._epoch:
+            self._epoch = self._commander.mode_epoch
+            self._cs[fc.CS_YAW_SP] = fc.yaw_of(self._plant.x)
+
+    def _release_setpoints(self) -> None:
+        while self._pending and self._pending[0][0] <= self._k:
+            self._active = self._to_ned(self._pending.popleft()[1])
+
+    def _to_ned(self, sp: VelocitySetpoint) -> ActiveSetpoint:
+        vx, vy, vz = (float(v) for v in sp.vel_mps)
+        if sp.frame == "body":
+            yaw = fc.yaw_of(self._plant.x)
+            c, s = math.cos(yaw), math.sin(yaw)
+            vx, vy = c * vx - s * vy, s * vx + c * vy
+        yaw_rad = None if sp.yaw_rad is None else float(sp.yaw_rad)
+        return ActiveSetpoint((vx, vy, vz), float(sp.yaw_rate_radps), yaw_rad)
+
+    def _noise_rows(self, n: int) -> np.ndarray:
+        if not self._gust_on:
+            return self._noise
+        if self._noise_pos + n > len(self._noise):
+            rest = self._noise[self._noise_pos :]
+            block = self._rng.standard_normal((max(NOISE_BLOCK_ROWS, n), 3))
+            self._noise = np.ascontiguousarray(np.vstack([rest, block]))
+            self._noise_pos = 0
+        return self._noise[self._noise_pos : self._noise_pos + n]
+
+
+def _check_setpoint(sp: VelocitySetpoint) -> None:
+    if not isinstance(sp, VelocitySetpoint):
+        raise ValueError(f"expected a VelocitySetpoint, got {type(sp).__name__}")
+    if sp.frame not in ("ned", "body"):
+        raise ValueError(f"setpoint frame {sp.frame!r} unknown; use 'ned' or 'body'")
+    try:
+        vel = [float(v) for v in sp.vel_mps]
+        yaw_rate = float(sp.yaw_rate_radps)
+        yaw = None if sp.yaw_rad is None else float(sp.yaw_rad)
+    except (TypeError, ValueError):
+        raise ValueError(f"setpoint {sp!r} has non-numeric fields; give floats") from None
+    if len(vel) != 3 or not all(math.isfinite(v) and abs(v) <= MAX_SETPOINT_SPEED_MPS for v in vel):
+        raise ValueError(
+            f"setpoint velocity {sp.vel_mps!r} rejected: need 3 finite values within "
+            f"+-{MAX_SETPOINT_SPEED_MPS} m/s"
+        )
+    if not (math.isfinite(yaw_rate) and abs(yaw_rate) <= MAX_SETPOINT_YAW_RATE_RADPS):
+        raise ValueError(
+            f"setpoint yaw rate {sp.yaw_rate_radps!r} rejected: need a finite value within "
+            f"+-{MAX_SETPOINT_YAW_RATE_RADPS} rad/s"
+        )
+    if yaw is not None and not (math.isfinite(yaw) and abs(yaw) <= 4 * math.pi):
+        raise ValueError(f"setpoint yaw {sp.yaw_rad!r} rejected: need a finite angle in rad")
