@@ -4,7 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: setup demo test test-fast lint bench clean
+.PHONY: setup demo learning-demo study test test-fast lint bench clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -16,6 +16,12 @@ setup: $(STAMP)
 
 demo: setup
 	$(PY) -m scripts.demo
+
+learning-demo: setup
+	$(PY) -m scripts.learning_demo
+
+study: setup
+	$(VENV)/bin/study --out out/study
 
 test: setup
 	$(PY) -m pytest -n 2 -q

@@ -67,7 +67,7 @@ class NmpcSettings:
     dt_s: float = 0.1
     yaw_rate_limit_radps: float = 1.0
     max_iterations: int | None = None
-    compile_functions: bool = True
+    compile_functions: bool = False
 
     def __post_init__(self) -> None:
         if self.nominal_model not in MULTIROTOR_MODELS:

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import signal
 import subprocess
 import tempfile
 from pathlib import Path
@@ -61,10 +62,22 @@ def _build(source: str, library: Path) -> bool:
                 "-o",
                 str(out),
             ]
-            done = subprocess.run(cmd, capture_output=True, timeout=300, check=False)
-            if done.returncode != 0:
+            if not _run_compiler(cmd, timeout_s=300.0):
                 return False
             os.replace(out, library)
         return True
     except (OSError, subprocess.SubprocessError):
+        return False
+
+
+def _run_compiler(cmd: list[str], timeout_s: float) -> bool:
+    """Run ``cmd`` in its own process group; on timeout kill the whole group (cc and cc1)."""
+    proc = subprocess.Popen(
+        cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True
+    )
+    try:
+        return proc.wait(timeout=timeout_s) == 0
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
         return False

@@ -2,7 +2,7 @@
 
     study [--out out/study] [--trajectories 20] [--repeats 3] [--trials 6] [--m 30]
           [--workers 2] [--vehicle iris_study] [--model kinematic_4dof|first_order_lag]
-          [--tau-s 0.5] [--features velocity|state_input] [--seed 0] [--quick]
+          [--tau-s 0.5] [--features velocity|state_input] [--seed 0] [--no-compile] [--quick]
 
 Flies every flight in process (lockstep, deterministic, seeded) on ``--workers`` processes and
 writes OUT/report.md with PNG plots and the fitted model files. Progress goes to stderr; the
@@ -39,6 +39,8 @@ def parse_args(argv: list[str] | None) -> StudyConfig:
     parser.add_argument("--tau-s", type=float, default=0.5, help="first_order_lag's tau [s]")
     parser.add_argument("--features", choices=list(FEATURE_SETS), default="velocity")
     parser.add_argument("--seed", type=int, default=0, help="trajectory generator seed")
+    parser.add_argument("--no-compile", action="store_true",
+                        help="fly augmented planners uncompiled (no C compile per model)")
     parser.add_argument("--quick", action="store_true", help="small smoke version")
     args = parser.parse_args(argv)
     params = (("tau_s", args.tau_s),) if args.model == "first_order_lag" else ()
@@ -56,6 +58,7 @@ def parse_args(argv: list[str] | None) -> StudyConfig:
                 speed_limit_mps=2.5, nominal_model=args.model, nominal_params=params
             ),
             features=args.features,
+            compile_augmented=not args.no_compile,
         )
     except ValueError as exc:
         parser.error(str(exc))
