@@ -43,7 +43,7 @@ def draw(name: str, rng: np.random.Generator) -> tuple[dict, dict]:
     if name == "ground_effect":
         return {name: {"max_gain": u(0.15, 0.4), "rotor_radius_m": u(0.11, 0.16)}}, {}
     if name == "motor_lag":
-        return {name: {"tau_s": u(0.04, 0.12)}}, {}
+        return {name: {"tau_s": u(0.03, 0.08)}}, {}
     if name == "command_delay":
         return {name: {"delay_s": u(0.05, 0.3)}}, {}
     raise ValueError(name)
