@@ -3,8 +3,8 @@
 Starts `vehicle-sim` (the study vehicle, vehicle_sim/presets/iris_study.toml) as a MAVLink
 endpoint on loopback, flies missions/demo_bspline.toml with the nominal NMPC over MAVSDK, fits
 the residual GP from that flight's log, flies the mission again with the augmented NMPC, prints
-the comparison and writes out/demo/report.md with plots. Every process it starts is stopped,
-also on errors and Ctrl-C. Exit code 0 on success, 1 if a flight failed, 130 on Ctrl-C.
+the comparison and writes out/learning_demo/report.md with plots. Every process it starts is
+stopped, also on errors and Ctrl-C. Exit code 0 on success, 1 if a flight failed, 130 on Ctrl-C.
 """
 
 from __future__ import annotations

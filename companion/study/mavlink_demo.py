@@ -36,7 +36,7 @@ class DemoConfig:
     """The demo's inputs: mission file, vehicle config, output folder, seeds, loop rate."""
 
     mission_path: Path
-    out_dir: Path = Path("out/demo")
+    out_dir: Path = Path("out/learning_demo")
     vehicle: str = STUDY_VEHICLE
     rate_hz: float = 50.0
     seed: int = 0
