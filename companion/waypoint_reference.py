@@ -10,10 +10,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from planners.reference import ReferenceSample
+from planners.reference import ReferenceSample, SampledReference
 
 
-class WaypointReference:
+class WaypointReference(SampledReference):
     """Constant-speed polyline through ``points_ned_m`` (N, 3) [m] at ``speed_mps`` [m/s]."""
 
     def __init__(self, points_ned_m: np.ndarray, speed_mps: float) -> None:
@@ -49,13 +49,3 @@ class WaypointReference:
             vel[moving] = direction[leg[moving]] * self._speed_mps
         zeros = np.zeros(len(t))
         return ReferenceSample(pos, vel, np.zeros_like(pos), zeros, zeros.copy())
-
-    def x_ref(self, t_s: np.ndarray | float) -> np.ndarray:
-        sample = self.sample(t_s)
-        x = np.column_stack([sample.pos_ned_m, sample.yaw_rad])
-        return x[0] if np.ndim(t_s) == 0 else x
-
-    def u_ref(self, t_s: np.ndarray | float) -> np.ndarray:
-        sample = self.sample(t_s)
-        u = np.column_stack([sample.vel_ned_mps, sample.yaw_rate_radps])
-        return u[0] if np.ndim(t_s) == 0 else u

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from planners.reference import ReferenceSample
+from planners.reference import ReferenceSample, SampledReference
 
 # Rows: coefficients of 1, s, s^2, s^3 for the 4 control points of one segment.
 _BASIS = np.array([[1, 4, 1, 0], [-3, 0, 3, 0], [3, -6, 3, 0], [-1, 3, -3, 1]]) / 6.0
@@ -18,7 +18,7 @@ _LIMIT_SAMPLES_PER_SEGMENT = 64
 _LIMIT_MARGIN = 1.001
 
 
-class BSplineReference:
+class BSplineReference(SampledReference):
     """Cubic uniform B-spline through ``waypoints_ned_m`` (M+1, 3), M >= 1.
 
     Attributes:
@@ -81,17 +81,7 @@ class BSplineReference:
         yaw = np.full(t.shape, self.yaw_rad)
         return ReferenceSample(pos, vel, acc, yaw, np.zeros(t.shape))
 
-    def x_ref(self, t_s: np.ndarray | float) -> np.ndarray:
-        """(pos_n, pos_e, pos_d [m], yaw [rad]): shape (4,) for scalar t, else (n, 4)."""
-        smp = self.sample(t_s)
-        out = np.column_stack([smp.pos_ned_m, smp.yaw_rad])
-        return out[0] if np.ndim(t_s) == 0 else out
 
-    def u_ref(self, t_s: np.ndarray | float) -> np.ndarray:
-        """(vel_n, vel_e, vel_d [m/s], yaw_rate [rad/s]): shape (4,) for scalar t, else (n, 4)."""
-        smp = self.sample(t_s)
-        out = np.column_stack([smp.vel_ned_mps, smp.yaw_rate_radps])
-        return out[0] if np.ndim(t_s) == 0 else out
 
     def length_m(self) -> float:
         """Arc length [m] (dense polyline approximation)."""

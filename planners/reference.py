@@ -51,6 +51,25 @@ class Reference(Protocol):
         ...
 
 
+class SampledReference:
+    """Base for references that implement ``sample``: derives ``x_ref`` and ``u_ref`` from it."""
+
+    def sample(self, t_s: np.ndarray | float) -> ReferenceSample:
+        raise NotImplementedError(f"{type(self).__name__} must implement sample(t_s)")
+
+    def x_ref(self, t_s: np.ndarray | float) -> np.ndarray:
+        """(pos_n, pos_e, pos_d [m], yaw [rad]): shape (4,) for scalar t, else (n, 4)."""
+        smp = self.sample(t_s)
+        out = np.column_stack([smp.pos_ned_m, smp.yaw_rad])
+        return out[0] if np.ndim(t_s) == 0 else out
+
+    def u_ref(self, t_s: np.ndarray | float) -> np.ndarray:
+        """(vel_n, vel_e, vel_d [m/s], yaw_rate [rad/s]): shape (4,) for scalar t, else (n, 4)."""
+        smp = self.sample(t_s)
+        out = np.column_stack([smp.vel_ned_mps, smp.yaw_rate_radps])
+        return out[0] if np.ndim(t_s) == 0 else out
+
+
 @dataclass(frozen=True)
 class PlannerState:
     """The vehicle state a planner sees (NED, SI)."""
