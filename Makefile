@@ -4,7 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: setup demo learning-demo study test test-fast lint bench clean
+.PHONY: setup demo showcase study test test-fast lint bench clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -17,8 +17,8 @@ setup: $(STAMP)
 demo: setup
 	$(PY) -m scripts.demo
 
-learning-demo: setup
-	$(PY) -m scripts.learning_demo
+showcase: setup
+	$(PY) -m scripts.showcase
 
 study: setup
 	$(VENV)/bin/study --out out/study

@@ -80,7 +80,7 @@ def run_companion(config: CompanionConfig, progress: Callable[[str], None]) -> C
         mission = load_mission(config.mission_path)
         planner = make_planner(
             config.planner,
-            mission.speed_limit_mps,
+            mission.horizontal_command_limit_mps,
             gp_model=config.gp_model,
             rate_hz=config.runner.rate_hz,
             time_budget_s=LOCKSTEP_PLAN_BUDGET_S if config.link == "inprocess" else None,

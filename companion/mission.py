@@ -5,6 +5,8 @@ A mission file looks like this (units in the names; NED, so altitude is -down)::
     name = "line_20m"
     altitude_m = 2.5           # takeoff altitude above the origin [m]
     speed_limit_mps = 2.0      # reference speed and horizontal command limit [m/s]
+    command_limit_mps = 3.0    # optional: a higher horizontal command limit [m/s], headroom
+                               # for a planner that leads a lagging vehicle
     repeats = 1                # how many times the reference is flown (optional, default 1)
     goal_tolerance_m = 0.3     # "arrived" radius at the goal (optional, default 0.3)
     obstacles_world = "w.toml" # optional obstacle world, relative to the mission file
@@ -29,8 +31,8 @@ ReferenceKind = Literal["waypoints", "bspline"]
 REFERENCE_KINDS: tuple[str, ...] = get_args(ReferenceKind)
 
 _TOP_KEYS = {
-    "name", "altitude_m", "speed_limit_mps", "repeats", "goal_tolerance_m", "obstacles_world",
-    "reference",
+    "name", "altitude_m", "speed_limit_mps", "command_limit_mps", "repeats", "goal_tolerance_m",
+    "obstacles_world", "reference",
 }  # fmt: skip
 _REFERENCE_KEYS = {"kind", "points_ned_m"}
 
@@ -54,6 +56,10 @@ class Mission:
         goal_tolerance_m: radius around the goal counted as arrived [m].
         obstacles_world: obstacle world file, or None.
         repeats: how many times the points were repeated.
+        command_limit_mps: horizontal command limit [m/s] if above the reference speed, else
+            None (the reference speed is the limit). A vehicle lags its velocity command, so a
+            planner commanding exactly the reference speed falls behind a reference moving at
+            it; the headroom lets a planner that knows the lag (a learned model) lead.
     """
 
     name: str
@@ -64,6 +70,12 @@ class Mission:
     goal_tolerance_m: float = 0.3
     obstacles_world: Path | None = None
     repeats: int = 1
+    command_limit_mps: float | None = None
+
+    @property
+    def horizontal_command_limit_mps(self) -> float:
+        """The horizontal command limit [m/s]: command_limit_mps, else speed_limit_mps."""
+        return self.speed_limit_mps if self.command_limit_mps is None else self.command_limit_mps
 
     @property
     def goal_ned_m(self) -> tuple[float, float, float]:
@@ -107,15 +119,25 @@ def parse_mission(text: str, source: Path | str = "<mission>") -> Mission:
     if obstacles is not None and not isinstance(obstacles, str):
         raise MissionError(f"{where}: obstacles_world must be a file name string")
     base = Path(source).parent if isinstance(source, Path) else Path(".")
+    speed = _positive(raw.get("speed_limit_mps"), where, "speed_limit_mps")
+    command_limit = raw.get("command_limit_mps")
+    if command_limit is not None:
+        command_limit = _positive(command_limit, where, "command_limit_mps")
+        if command_limit < speed:
+            raise MissionError(
+                f"{where}: command_limit_mps {command_limit:g} is below speed_limit_mps "
+                f"{speed:g}; raise it or leave it out"
+            )
     return Mission(
         name=_text(raw.get("name", Path(where).stem), where, "name"),
         altitude_m=_positive(raw.get("altitude_m"), where, "altitude_m"),
-        speed_limit_mps=_positive(raw.get("speed_limit_mps"), where, "speed_limit_mps"),
+        speed_limit_mps=speed,
         reference_kind=kind,
         points_ned_m=points * repeats,
         goal_tolerance_m=_positive(raw.get("goal_tolerance_m", 0.3), where, "goal_tolerance_m"),
         obstacles_world=None if obstacles is None else base / obstacles,
         repeats=repeats,
+        command_limit_mps=command_limit,
     )
 
 

@@ -208,7 +208,7 @@ def _follow(
 ) -> _FollowEnd:
     goal = np.asarray(mission.goal_ned_m, dtype=float)
     limits = CommandLimits(
-        horizontal_mps=mission.speed_limit_mps,
+        horizontal_mps=mission.horizontal_command_limit_mps,
         up_mps=config.vertical_limit_up_mps,
         down_mps=config.vertical_limit_down_mps,
     )

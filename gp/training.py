@@ -15,6 +15,7 @@ from gp.datasets import DatasetConfig, ResidualDataset, residual_dataset
 from gp.evaluation import holdout_split, residual_rmse
 from gp.features import FeatureDefinition, feature_definition
 from gp.inducing import InducingConfig
+from gp.lag_identification import LagIdentification, identify_velocity_lag
 from gp.model_io import ResidualModel
 from gp.sparse_gp import SparseGP
 from vehicle_sim.flight_log import FlightLog
@@ -28,7 +29,9 @@ class TrainingConfig:
         features: feature-set name (see gp.features.FEATURE_SETS).
         nominal: nominal model name (planners.nominal_models.MODELS).
         nominal_params: its parameters; for kinematic_4dof, residual_dt_s defaults to the logs'
-            median step (the time base the residuals are measured over).
+            median step (the time base the residuals are measured over); for first_order_lag,
+            missing time constants are identified from the logs (gp.lag_identification), so
+            the GP learns only what the identified lag leaves.
         inducing: inducing strategy; m: number of inducing points.
         optimize_inducing: refine inducing positions on the bound.
         restarts: hyperparameter starting points.
@@ -65,7 +68,9 @@ def train_residual_model(
     progress: Callable[[str], None] = lambda message: None,
 ) -> TrainingResult:
     """Build the dataset, hold out blocks, fit an SGPR, and evaluate on the held-out blocks."""
-    features = resolve_features(logs, config)
+    features, identified = resolve_features(logs, config)
+    if identified is not None:
+        progress(f"identified {identified.describe()}")
     progress(f"features {features.describe()}")
     data = residual_dataset(logs, DatasetConfig(features, modes=config.modes))
     train, test = holdout_split(data, config.holdout_fraction, config.seed)
@@ -85,6 +90,8 @@ def train_residual_model(
     mean, _ = estimator.predict(test.X)
     metrics = residual_rmse(test, mean)
     training = {**train.summary(), "held_out": test.summary(), **metrics}
+    if identified is not None:
+        training["identified_lag"] = identified.to_dict()
     model = ResidualModel.from_estimator(
         estimator,
         features,
@@ -96,11 +103,19 @@ def train_residual_model(
     return TrainingResult(model, train, test, metrics)
 
 
-def resolve_features(logs: Sequence[FlightLog], config: TrainingConfig) -> FeatureDefinition:
-    """The feature definition, with kinematic_4dof's residual_dt_s taken from the logs."""
+def resolve_features(
+    logs: Sequence[FlightLog], config: TrainingConfig
+) -> tuple[FeatureDefinition, LagIdentification | None]:
+    """The feature definition with the nominal parameters the logs decide: kinematic_4dof's
+    residual_dt_s (their median step), first_order_lag's time constants when not given
+    (identified; the identification is returned too, else None)."""
     params = dict(config.nominal_params)
+    identified = None
     if config.nominal == "kinematic_4dof" and "residual_dt_s" not in params:
         steps = np.concatenate([np.diff(log["t_s"]) for log in logs])
         if steps.size:
             params["residual_dt_s"] = round(float(np.median(steps)), 6)
-    return feature_definition(config.features, config.nominal, **params)
+    if config.nominal == "first_order_lag" and "tau_s" not in params:
+        identified = identify_velocity_lag(logs, config.modes)
+        params = {**identified.nominal_params(), **params}
+    return feature_definition(config.features, config.nominal, **params), identified

@@ -9,8 +9,9 @@ Models:
         input (vel_n, vel_e, vel_d [m/s], yaw_rate [rad/s]). The vehicle is assumed to fly the
         commanded velocity; a residual y [m/s^2] corrects that velocity by ``y * residual_dt_s``,
         exactly as the residual was measured: y = (v_actual - v_cmd) / dt.
-    first_order_lag: adds the velocity to the state, v_dot = (v_cmd - v) / tau; a residual adds
-        to v_dot. State (pos[3], vel[3], yaw), same input.
+    first_order_lag: adds the velocity to the state, v_dot = (v_cmd - v) / tau per axis (tau_s
+        horizontal, tau_d_s vertical: PX4 tunes the two loops apart); a residual adds to v_dot.
+        State (pos[3], vel[3], yaw), same input.
     unicycle: paper 004's ground robot. State (x_n, x_e [m], heading [rad]); input (speed [m/s],
         turn rate [rad/s]); a residual (3-vector) adds to the state rates directly.
 """
@@ -132,13 +133,16 @@ def kinematic_4dof(residual_dt_s: float = 0.05) -> NominalModel:
     )
 
 
-def first_order_lag(tau_s: float = 0.3) -> NominalModel:
-    """Velocity follows the command with time constant ``tau_s`` [s]."""
-    if not tau_s > 0:
-        raise ValueError(f"first_order_lag: tau_s must be > 0 s, got {tau_s}")
+def first_order_lag(tau_s: float = 0.3, tau_d_s: float | None = None) -> NominalModel:
+    """Velocity follows the command with time constant ``tau_s`` [s] in north and east and
+    ``tau_d_s`` [s] in down (default: ``tau_s``)."""
+    tau_d_s = tau_s if tau_d_s is None else tau_d_s
+    for name, value in (("tau_s", tau_s), ("tau_d_s", tau_d_s)):
+        if not value > 0:
+            raise ValueError(f"first_order_lag: {name} must be > 0 s, got {value}")
     x = ca.SX.sym("x", 7)
     u = ca.SX.sym("u", 4)
-    vel_dot = (u[:3] - x[3:6]) / tau_s
+    vel_dot = (u[:3] - x[3:6]) / ca.DM([tau_s, tau_s, tau_d_s])
     f = ca.Function(
         "first_order_lag", [x, u], [ca.vertcat(x[3:6], vel_dot, u[3])], ["x", "u"], ["x_dot"]
     )

@@ -1,9 +1,13 @@
 """fit-gp: learn a residual model from flight logs.
 
     fit-gp LOGS... --out MODEL [--features velocity|state_input|history]
-           [--nominal kinematic_4dof] [--nominal-param residual_dt_s=0.05]
+           [--nominal kinematic_4dof|first_order_lag] [--nominal-param residual_dt_s=0.05]
            [--inducing low_speed|cluster|random] [--m 30] [--optimize-inducing]
            [--seed 0] [--holdout-fraction 0.2] [--restarts 3] [--mode offboard] [--no-plots]
+
+With ``--nominal first_order_lag`` and no ``--nominal-param tau_s=...``, the velocity loop's
+time constants are identified from the logs first (least squares, gp.lag_identification) and
+the GP learns what the identified lag leaves; the model file records them.
 
 Writes MODEL.json + MODEL.npz and MODEL_residual_{n,e,d}.png, prints the held-out nominal and
 augmented RMSE per axis (paper 000, Table 2) on stdout; progress goes to stderr. Exit code 0 on
@@ -62,7 +66,12 @@ def parse_args(argv: list[str] | None) -> FitGpConfig:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--holdout-fraction", type=float, default=0.2)
     parser.add_argument("--restarts", type=int, default=3)
-    parser.add_argument("--mode", action="append", default=None, help="keep only this mode")
+    parser.add_argument(
+        "--mode",
+        action="append",
+        default=None,
+        help="keep only rows in this flight mode (e.g. offboard; repeatable)",
+    )
     parser.add_argument("--no-plots", action="store_true")
     args = parser.parse_args(argv)
     params = []
@@ -87,7 +96,7 @@ def parse_args(argv: list[str] | None) -> FitGpConfig:
         optimize_inducing=args.optimize_inducing,
         restarts=args.restarts,
         holdout_fraction=args.holdout_fraction,
-        modes=tuple(args.mode) if args.mode else None,
+        modes=tuple(m.upper() for m in args.mode) if args.mode else None,
         seed=args.seed,
     )
     return FitGpConfig(tuple(args.logs), args.out, training, plots=not args.no_plots)

@@ -1,8 +1,13 @@
 """`study`: paper 000's residual-learning experiment and paper 004's trials, in simulation.
 
     study [--out out/study] [--trajectories 20] [--repeats 3] [--trials 6] [--m 30]
-          [--workers 2] [--vehicle iris_study] [--model kinematic_4dof|first_order_lag]
-          [--tau-s 0.5] [--features velocity|state_input] [--seed 0] [--no-compile] [--quick]
+          [--workers 2] [--vehicle iris_study] [--learned-model first_order_lag|kinematic_4dof]
+          [--features state_input|velocity] [--seed 0] [--compile] [--quick]
+
+The nominal planner is paper 000's kinematic NMPC. The learned model is, by default, a
+first-order velocity lag whose time constants are identified from the nominal flights plus a
+sparse GP on what is left; ``--learned-model kinematic_4dof --features velocity`` is paper
+000's setup (the GP alone).
 
 Flies every flight in process (lockstep, deterministic, seeded) on ``--workers`` processes and
 writes OUT/report.md with PNG plots and the fitted model files. Progress goes to stderr; the
@@ -17,7 +22,7 @@ import sys
 import time
 from pathlib import Path
 
-from companion.nmpc_planner import MULTIROTOR_MODELS, NmpcSettings
+from companion.nmpc_planner import MULTIROTOR_MODELS
 from companion.study.config import STUDY_VEHICLE, StudyConfig
 from companion.study.run import run_study
 from gp.features import FEATURE_SETS
@@ -34,16 +39,17 @@ def parse_args(argv: list[str] | None) -> StudyConfig:
     parser.add_argument("--m", type=int, default=30, help="inducing points per output")
     parser.add_argument("--workers", type=int, default=2, help="processes flying in parallel")
     parser.add_argument("--vehicle", default=STUDY_VEHICLE, help="simulator preset or config")
-    parser.add_argument("--model", choices=MULTIROTOR_MODELS, default="kinematic_4dof",
-                        help="the NMPC's nominal model")  # fmt: skip
-    parser.add_argument("--tau-s", type=float, default=0.5, help="first_order_lag's tau [s]")
-    parser.add_argument("--features", choices=list(FEATURE_SETS), default="velocity")
+    parser.add_argument("--learned-model", choices=MULTIROTOR_MODELS, default="first_order_lag",
+                        help="nominal model under the learned residual")  # fmt: skip
+    parser.add_argument("--features", choices=list(FEATURE_SETS), default="state_input")
     parser.add_argument("--seed", type=int, default=0, help="trajectory generator seed")
-    parser.add_argument("--no-compile", action="store_true",
-                        help="fly augmented planners uncompiled (no C compile per model)")
+    parser.add_argument(
+        "--compile",
+        action="store_true",
+        help="compile each augmented planner to C (minutes and gigabytes per model)",
+    )
     parser.add_argument("--quick", action="store_true", help="small smoke version")
     args = parser.parse_args(argv)
-    params = (("tau_s", args.tau_s),) if args.model == "first_order_lag" else ()
     try:
         config = StudyConfig(
             out_dir=args.out,
@@ -54,11 +60,9 @@ def parse_args(argv: list[str] | None) -> StudyConfig:
             m=args.m,
             workers=args.workers,
             trajectory_seed=args.seed,
-            nmpc=NmpcSettings(
-                speed_limit_mps=2.5, nominal_model=args.model, nominal_params=params
-            ),
+            learned_model=args.learned_model,
             features=args.features,
-            compile_augmented=not args.no_compile,
+            compile_augmented=args.compile,
         )
     except ValueError as exc:
         parser.error(str(exc))
@@ -95,7 +99,7 @@ def _check_inputs(config: StudyConfig) -> None:
     from vehicle_sim import load_sim_config
 
     load_sim_config(config.vehicle)
-    check_feature_set(config.features, config.nmpc.nominal_model)
+    check_feature_set(config.features, config.learned_model)
 
 
 if __name__ == "__main__":

@@ -6,7 +6,6 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from companion.nmpc_planner import NmpcSettings
 from gp.training import TrainingConfig, TrainingResult, train_residual_model
 from vehicle_sim.flight_log import FlightLog
 
@@ -16,23 +15,27 @@ FOLLOWING_MODES = ("OFFBOARD",)
 def fit_residual(
     logs: Sequence[FlightLog],
     inducing: str,
-    settings: NmpcSettings,
+    period_s: float,
     *,
-    features: str = "velocity",
+    learned_model: str = "first_order_lag",
+    features: str = "state_input",
     m: int = 30,
     seed: int = 0,
     restarts: int = 2,
     progress: Callable[[str], None] = lambda message: None,
 ) -> TrainingResult:
-    """An SGPR residual model against the NMPC's nominal model (kinematic_4dof: time base one
-    control period) from the following phase (OFFBOARD rows) of ``logs``, with ``m``
-    inducing points chosen by ``inducing`` ("low_speed", "cluster" or "random")."""
-    params = dict(settings.nominal_params)
-    if settings.nominal_model == "kinematic_4dof":
-        params["residual_dt_s"] = settings.period_s
+    """A residual model from the following phase (OFFBOARD rows) of ``logs``, flown with a
+    control period of ``period_s`` [s], with ``m`` inducing points chosen by ``inducing``
+    ("low_speed", "cluster" or "random").
+
+    ``learned_model`` is the nominal model under the residual: "first_order_lag" has its
+    time constants identified from the logs first (the model file records them);
+    "kinematic_4dof" is paper 000's (its residual time base is one control period).
+    """
+    params = {"residual_dt_s": period_s} if learned_model == "kinematic_4dof" else {}
     config = TrainingConfig(
         features=features,
-        nominal=settings.nominal_model,
+        nominal=learned_model,
         nominal_params=tuple(sorted(params.items())),
         inducing=inducing,
         m=m,
@@ -40,7 +43,7 @@ def fit_residual(
         modes=FOLLOWING_MODES,
         seed=seed,
     )
-    regular = [regular_rows(log, settings.period_s) for log in logs]
+    regular = [regular_rows(log, period_s) for log in logs]
     return train_residual_model(regular, config, progress)
 
 

@@ -1,11 +1,12 @@
 """The learning loop over MAVLink, end to end: what `make demo` runs.
 
 A `vehicle-sim` endpoint (the study vehicle) is started as a child process; the companion flies
-the mission with the nominal NMPC over MAVSDK; the residual model is fitted from that log
-(fit-gp's library function, low_speed inducing points); a fresh endpoint is started and the
-companion flies the mission again with the augmented NMPC. The two flights are compared and
-written up (report.md with PNGs). Every endpoint is stopped when its flight ends, also on
-errors and Ctrl-C (the companion itself lands the vehicle first).
+the mission with the nominal NMPC (paper 000's kinematic model) over MAVSDK; the model is
+learned from that log with fit-gp's library function: the velocity loop's lag identified by
+least squares, then a sparse GP (low_speed inducing points) on what is left; a fresh endpoint
+is started and the companion flies the mission again with the augmented NMPC. The two flights
+are compared and written up (report.md with PNGs). Every endpoint is stopped when its flight
+ends, also on errors and Ctrl-C (the companion itself lands the vehicle first).
 """
 
 from __future__ import annotations
@@ -19,13 +20,13 @@ import numpy as np
 from companion.app import CompanionConfig, CompanionResult, run_companion
 from companion.mission import load_mission
 from companion.mission_reference import reference_of
-from companion.nmpc_planner import NmpcSettings
 from companion.sim_endpoint import SimEndpoint
 from companion.study.config import STUDY_VEHICLE
 from companion.study.fitting import fit_residual
 from companion.study.metrics import residual_rmse_mps, tracking_errors_m, tracking_rmse_m
 from gp.model_io import save_model
 from gp.plots import plot_residuals
+from gp.training import TrainingResult
 from vehicle_sim.flight_log import FlightLog, read_flight_log
 
 SELECTION = "low_speed"
@@ -36,7 +37,7 @@ class DemoConfig:
     """The demo's inputs: mission file, vehicle config, output folder, seeds, loop rate."""
 
     mission_path: Path
-    out_dir: Path = Path("out/learning_demo")
+    out_dir: Path = Path("out/demo")
     vehicle: str = STUDY_VEHICLE
     rate_hz: float = 50.0
     seed: int = 0
@@ -66,18 +67,14 @@ def run_demo(config: DemoConfig, progress: Callable[[str], None]) -> list[Flight
     out.mkdir(parents=True, exist_ok=True)
     nominal = _fly(config, "nominal", None, config.seed, progress)
     progress(f"fitting the residual model ({SELECTION}, m=30) from {nominal.path}")
-    settings = NmpcSettings(
-        speed_limit_mps=load_mission(config.mission_path).speed_limit_mps,
-        period_s=1.0 / config.rate_hz,
-    )
-    fit = fit_residual([nominal], SELECTION, settings)
+    fit = fit_residual([nominal], SELECTION, 1.0 / config.rate_hz, progress=progress)
     model_path = save_model(out / f"gp_{SELECTION}", fit.model)
     progress(f"wrote {model_path}; the augmented planner compiles its solver before take-off")
     augmented = _fly(config, "augmented", model_path, config.seed + 1, progress)
     logs = {"nominal": nominal, "augmented": augmented}
     figures = [_figures(name, log) for name, log in logs.items()]
     images = _plots(config, logs, fit, out)
-    (out / "report.md").write_text(_report(config, figures, images, model_path))
+    (out / "report.md").write_text(_report(config, figures, images, model_path, fit))
     progress(f"wrote {out / 'report.md'}")
     return figures
 
@@ -162,14 +159,27 @@ def _plots(config: DemoConfig, logs: dict[str, FlightLog], fit, out: Path) -> li
 
 
 def _report(
-    config: DemoConfig, figures: list[FlightFigures], images: list[str], model_path: Path
+    config: DemoConfig,
+    figures: list[FlightFigures],
+    images: list[str],
+    model_path: Path,
+    fit: TrainingResult,
 ) -> str:
+    features = fit.model.features
+    lag = fit.model.training.get("identified_lag")
+    learned = (
+        f"the velocity lag identified from the first flight (tau_s={lag['tau_s']:.3f} s, "
+        f"tau_d_s={lag['tau_d_s']:.3f} s) plus"
+        if lag is not None
+        else f"`{features.nominal_model}` plus"
+    )
     lines = [
         "# Demo: the learning loop over MAVLink",
         "",
         f"Mission `{config.mission_path.name}`, vehicle `{config.vehicle}` behind a `vehicle-sim` "
         f"MAVLink endpoint, companion over MAVSDK at {config.rate_hz:g} Hz with the NMPC: first "
-        f"nominal, then augmented with `{model_path.name}` fitted from the first flight.",
+        f"nominal (paper 000's kinematic model), then augmented with `{model_path.name}`: "
+        f"{learned} a sparse GP on `{features.name}` features, fitted from the first flight.",
         "",
         comparison_table(figures),
         "",

@@ -3,14 +3,19 @@ then flown augmented, per inducing-point selection at equal m.
 
 Nominal flights use seeds 0..R-1 per trajectory, augmented flights seeds R..2R-1: the
 augmented flights are held out from the model's training data (and fly other gusts).
+
+With the default learned model (first_order_lag, time constants identified from the nominal
+flights, then the GP), an ablation flies the identified lag alone (no GP) on the augmented
+seeds too, so the report separates what the identified structure and the GP each bring.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from concurrent.futures import Executor
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
+from companion.nmpc_planner import NmpcSettings
 from companion.study.config import StudyConfig
 from companion.study.fitting import fit_residual
 from companion.study.jobs import FlightJob, FlightSummary, run_flight_job, warm_up_planner
@@ -19,11 +24,13 @@ from planners.bspline import BSplineReference
 from planners.trajectory_generator import TrajectorySpec, generate_trajectories
 
 NOMINAL = "nominal"
+IDENTIFIED_LAG = "identified_lag"
 
 
 @dataclass(frozen=True, eq=False)
 class Paper000Result:
-    """Flights per planner ("nominal" and each selection) and the fitted models."""
+    """Flights per planner ("nominal", each selection, "identified_lag" if flown) and the
+    fitted models."""
 
     references: list[BSplineReference]
     flights: dict[str, list[FlightSummary]]
@@ -50,8 +57,16 @@ def run_paper000(
     logs = [f.log for f in flights[NOMINAL]]
     progress(f"fitting {len(config.selections)} residual models on {len(logs)} nominal flights")
     futures = {
-        sel: pool.submit(fit_residual, logs, sel, config.nmpc, features=config.features,
-                         m=config.m, restarts=config.gp_restarts)  # fmt: skip
+        sel: pool.submit(
+            fit_residual,
+            logs,
+            sel,
+            config.nmpc.period_s,
+            learned_model=config.learned_model,
+            features=config.features,
+            m=config.m,
+            restarts=config.gp_restarts,
+        )  # fmt: skip
         for sel in config.selections
     }
     fits = {sel: fut.result() for sel, fut in futures.items()}
@@ -63,15 +78,48 @@ def run_paper000(
         models = [fits[sel].model for sel in config.selections]
         list(pool.map(warm_up_planner, [config.nmpc] * len(models), models))
     aug_jobs = [
-        FlightJob(i, ref, sel, config.repeats + seed, config.vehicle, config.nmpc,
-                  fits[sel].model, config.compile_augmented)  # fmt: skip
+        FlightJob(
+            i,
+            ref,
+            sel,
+            config.repeats + seed,
+            config.vehicle,
+            config.nmpc,
+            fits[sel].model,
+            config.compile_augmented,
+        )  # fmt: skip
         for sel in config.selections
         for i, ref in enumerate(refs)
         for seed in range(config.repeats)
     ]
+    lag = identified_lag_settings(config, fits[config.selections[0]])
+    if lag is not None:
+        aug_jobs += [
+            FlightJob(
+                i,
+                ref,
+                IDENTIFIED_LAG,
+                config.repeats + seed,
+                config.vehicle,
+                lag,
+                compile_functions=False,
+            )  # fmt: skip
+            for i, ref in enumerate(refs)
+            for seed in range(config.repeats)
+        ]
     for summary in _fly_all(aug_jobs, pool, "augmented", progress):
         flights.setdefault(summary.planner, []).append(summary)
     return Paper000Result(refs, flights, fits)
+
+
+def identified_lag_settings(config: StudyConfig, fit: TrainingResult) -> NmpcSettings | None:
+    """The nominal NMPC on the fit's identified first_order_lag (no GP), or None when the
+    learned model is not an identified lag."""
+    features = fit.model.features
+    if features.nominal_model != "first_order_lag":
+        return None
+    return replace(config.nmpc, nominal_model=features.nominal_model,
+                   nominal_params=features.nominal_params)  # fmt: skip
 
 
 def _fly_all(

@@ -47,8 +47,8 @@ def run_trials(config: StudyConfig, progress: Callable[[str], None]) -> TrialsRe
             f"{summary.tracking_rmse_m:.3f} m, residual {summary.residual_rmse_mps:.4f} m/s"
         )
         if trial < config.n_trials:
-            fit = fit_residual([t.log for t in trials], selection, config.nmpc,
-                               features=config.features, m=config.m,
-                               restarts=config.gp_restarts)  # fmt: skip
+            fit = fit_residual([t.log for t in trials], selection, config.nmpc.period_s,
+                               learned_model=config.learned_model, features=config.features,
+                               m=config.m, restarts=config.gp_restarts)  # fmt: skip
             model = fit.model
     return TrialsResult(reference, selection, trials)

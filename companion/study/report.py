@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from companion.study.config import StudyConfig
 from companion.study.figures import PlannerFigures
-from companion.study.paper000 import NOMINAL, Paper000Result
+from companion.study.paper000 import IDENTIFIED_LAG, NOMINAL, Paper000Result
 from companion.study.paper004 import TrialsResult
 
 
@@ -42,8 +42,10 @@ def render_report(
         "",
         f"Vehicle `{config.vehicle}`; NMPC on `{model}` (N={nmpc.horizon_steps}, "
         f"dt={nmpc.dt_s:g} s, loop {1 / nmpc.period_s:g} Hz, command limit "
-        f"{nmpc.speed_limit_mps:g} m/s); GP features `{config.features}`, m={config.m} per "
-        f"output. Lockstep in process, {config.workers} worker processes, {elapsed_s:.0f} s.",
+        f"{nmpc.speed_limit_mps:g} m/s). Learned model: `{config.learned_model}` "
+        f"{_identified(result)}plus a sparse GP on features `{config.features}`, m={config.m} "
+        f"per output. Lockstep in process, {config.workers} worker processes, "
+        f"{elapsed_s:.0f} s.",
         "",
         "## Paper 000: random trajectories, nominal vs augmented",
         "",
@@ -51,7 +53,13 @@ def render_report(
         f"{config.length_range_m[1]:g} m, {config.max_speed_mps:g} m/s), each flown "
         f"{config.repeats}x nominal (seeds 0-{config.repeats - 1}); one residual model per "
         "inducing selection fitted on all nominal flights; each trajectory flown "
-        f"{config.repeats}x augmented per selection on other seeds (held-out flights).",
+        f"{config.repeats}x augmented per selection on other seeds (held-out flights)"
+        + (
+            f"; `{IDENTIFIED_LAG}` flies the identified lag without the GP on the same seeds "
+            "(what the GP adds is the difference)."
+            if IDENTIFIED_LAG in figs
+            else "."
+        ),
         "",
         "Residual: one-step velocity error of the model that flew, "
         "v_meas(t+dt) - pred_vel(t), RMSE over the three axes; tracking: distance to the "
@@ -80,8 +88,18 @@ def render_report(
         "|---|---|---|---|",
     ]
     for k, t in enumerate(trials.trials, start=1):
-        lines.append(
-            f"| {k} | {t.planner} | {t.tracking_rmse_m:.4f} | {t.residual_rmse_mps:.4f} |"
-        )
+        lines.append(f"| {k} | {t.planner} | {t.tracking_rmse_m:.4f} | {t.residual_rmse_mps:.4f} |")
     lines += ["", *[f"![{p}]({p})" for p in images["trials"]], ""]
     return "\n".join(lines)
+
+
+def _identified(result: Paper000Result) -> str:
+    """ "with time constants identified from the nominal flights (...) " or ""."""
+    fit = next(iter(result.fits.values()))
+    lag = fit.model.training.get("identified_lag")
+    if lag is None:
+        return ""
+    return (
+        f"with time constants identified from the nominal flights (tau_s={lag['tau_s']:.3f} s, "
+        f"tau_d_s={lag['tau_d_s']:.3f} s) "
+    )

@@ -41,6 +41,14 @@ def test_repeats_unroll_points_and_defaults_apply() -> None:
     assert m.reference_kind == "waypoints"
 
 
+def test_command_limit_defaults_to_the_reference_speed_and_may_give_headroom() -> None:
+    assert parse_mission(GOOD).horizontal_command_limit_mps == 1.5
+    faster = parse_mission(GOOD.replace("repeats = 2", "command_limit_mps = 2.5"))
+    assert faster.speed_limit_mps == 1.5 and faster.horizontal_command_limit_mps == 2.5
+    demo = load_mission(REPO / "missions" / "demo_bspline.toml")
+    assert demo.horizontal_command_limit_mps > demo.speed_limit_mps
+
+
 def test_obstacles_world_is_relative_to_the_mission_file(tmp_path: Path) -> None:
     f = tmp_path / "m.toml"
     f.write_text('obstacles_world = "w.toml"\n' + GOOD)
@@ -57,6 +65,7 @@ def test_obstacles_world_is_relative_to_the_mission_file(tmp_path: Path) -> None
         (GOOD.replace('kind = "waypoints"', 'kind = "spiral"'), "choose one of waypoints, bspline"),
         (GOOD.replace("repeats = 2", "repeats = 0"), "repeats must be an integer >= 1"),
         (GOOD.replace("repeats = 2", "speed = 2"), "unknown key speed"),
+        (GOOD.replace("repeats = 2", "command_limit_mps = 1.0"), "below speed_limit_mps 1.5"),
         (GOOD.replace("[[0.0, 0.0, -2.0], ", "[[0.0, 0.0], "), r"points_ned_m\[0\]"),
         (GOOD.replace("[4.0, 0.0, -2.0]", "[4.0, 0.0, 1.0]"), "at or below the ground"),
         (GOOD.replace("[[0.0, 0.0, -2.0], ", "["), "at least 2 of them"),

@@ -50,3 +50,16 @@ def test_bad_input_exits_non_zero_with_one_line(tmp_path, capsys, args, message)
     assert main([*argv, "--out", str(tmp_path / "m"), "--no-plots"]) == 2
     err_lines = [line for line in capsys.readouterr().err.splitlines() if "error" in line]
     assert len(err_lines) == 1 and message in err_lines[0]
+
+
+def test_fit_gp_identifies_the_lag_when_flying_first_order_lag(tmp_path, capsys):
+    from test_lag_identification import lag_log
+
+    log = write_flight_log(tmp_path / "lag.csv", lag_log(0.55, 0.25))
+    out = tmp_path / "lag_model"
+    args = [str(log), "--out", str(out), "--nominal", "first_order_lag",
+            "--features", "state_input", "--m", "8", "--restarts", "1", "--no-plots"]  # fmt: skip
+    assert main(args) == 0
+    assert "identified velocity lag tau_s=0.55" in capsys.readouterr().err
+    params = dict(load_model(out).features.nominal_params)
+    assert params["tau_s"] == pytest.approx(0.55, rel=0.03)

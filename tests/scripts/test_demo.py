@@ -1,20 +1,46 @@
-"""`make demo` end to end: four real in-process flights, a table and a plot."""
+"""`make demo` end to end on a short mission: two real vehicle-sim endpoints, MAVSDK flights,
+a model fitted in between, the comparison and the report."""
 
 from __future__ import annotations
+
+import re
 
 import pytest
 
 from scripts import demo
 
+SHORT_MISSION = """
+name = "demo_short"
+altitude_m = 3.0
+speed_limit_mps = 2.0
+command_limit_mps = 3.0
+goal_tolerance_m = 0.5
+
+[reference]
+kind = "bspline"
+points_ned_m = [[0.0, 0.0, -3.0], [6.0, 4.0, -3.0], [12.0, -2.0, -3.0], [16.0, 0.0, -3.0]]
+"""
+
 
 @pytest.mark.slow
-def test_demo_flies_every_planner_in_calm_and_wind_and_plots(tmp_path, capsys):
-    assert demo.main(["--out", str(tmp_path)]) == 0
-    table = capsys.readouterr().out
-    rows = {line.split("|")[1].strip(): float(line.split("|")[2]) for line in table.splitlines()
-            if line.startswith("| pd") or line.startswith("| nmpc")}
-    assert set(rows) == {"pd, calm", "pd, wind", "nmpc, calm", "nmpc, wind"}
-    assert rows["nmpc, calm"] < rows["pd, calm"]
-    assert rows["pd, wind"] > rows["pd, calm"]
-    assert (tmp_path / "square.png").stat().st_size > 10_000
-    assert len(list(tmp_path.glob("square_*.csv"))) == 4
+def test_demo_flies_nominal_learns_and_flies_augmented_over_mavsdk(tmp_path, capsys):
+    mission = tmp_path / "demo_short.toml"
+    mission.write_text(SHORT_MISSION)
+    out = tmp_path / "demo"
+    assert demo.main(["--mission", str(mission), "--out", str(out)]) == 0
+    stdout = capsys.readouterr().out
+    rows = {
+        m.group(1): (float(m.group(2)), float(m.group(3)))
+        for m in re.finditer(r"^\| (nominal|augmented) \| ([\d.]+) \| ([\d.]+) \|", stdout, re.M)
+    }
+    assert set(rows) == {"nominal", "augmented"}
+    (nom_residual, nom_tracking), (aug_residual, aug_tracking) = rows["nominal"], rows["augmented"]
+    assert aug_residual < 0.25 * nom_residual
+    assert aug_tracking < nom_tracking
+    report = (out / "report.md").read_text()
+    assert "identified" in report
+    for name in ("paths.png", "gp_low_speed_residual_n.png", "nominal.csv", "augmented.csv",
+                 "gp_low_speed.json"):  # fmt: skip
+        assert (out / name).stat().st_size > 0
+        if name.endswith(".png"):
+            assert f"]({name})" in report

@@ -1,0 +1,87 @@
+"""Identifying the velocity loop's lag from logs: the time constants come back from data made
+by a lag with randomly drawn (seeded) time constants the identification never sees."""
+
+import numpy as np
+import pytest
+
+from gp.errors import DatasetError
+from gp.lag_identification import identify_velocity_lag
+from gp.training import TrainingConfig, train_residual_model
+from vehicle_sim.flight_log import FlightLogRecorder
+
+
+def lag_log(tau_s, tau_d_s, seed=0, n_rows=1500, dt_s=0.02, noise_mps=0.002, vertical=True):
+    """A log of a vehicle whose velocity follows piecewise-constant commands with a first-order
+    lag (exact discretisation), plus measurement-like noise [m/s]."""
+    rng = np.random.default_rng(seed)
+    taus = np.array([tau_s, tau_s, tau_d_s])
+    rec = FlightLogRecorder({"source": "synthetic-lag"})
+    vel = np.zeros(3)
+    cmd = np.zeros(3)
+    for k in range(n_rows):
+        if k % 60 == 0:
+            cmd = rng.uniform(-2.0, 2.0, 3) * np.array([1.0, 1.0, 0.5 if vertical else 0.0])
+        rec.append({
+            "t_s": k * dt_s, "pos_n_m": 0.0, "pos_e_m": 0.0, "pos_d_m": -5.0,
+            "vel_n_mps": vel[0], "vel_e_mps": vel[1], "vel_d_mps": vel[2],
+            "q_w": 1.0, "q_x": 0.0, "q_y": 0.0, "q_z": 0.0,
+            "cmd_vel_n_mps": cmd[0], "cmd_vel_e_mps": cmd[1], "cmd_vel_d_mps": cmd[2],
+            "cmd_yaw_rate_radps": 0.0,
+        })  # fmt: skip
+        vel = cmd + (vel - cmd) * np.exp(-dt_s / taus) + noise_mps * rng.normal(size=3)
+    return rec.to_log()
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_identifies_randomly_drawn_time_constants(seed):
+    rng = np.random.default_rng(100 + seed)
+    tau, tau_d = rng.uniform(0.15, 1.2), rng.uniform(0.1, 0.8)
+    found = identify_velocity_lag([lag_log(tau, tau_d, seed=seed)])
+    assert found.tau_s == pytest.approx(tau, rel=0.03)
+    assert found.tau_d_s == pytest.approx(tau_d, rel=0.05)
+    assert found.vertical_identified
+    assert np.linalg.norm(found.lag_rmse_mps) < 0.2 * np.linalg.norm(found.kinematic_rmse_mps)
+
+
+def test_unexcited_vertical_axis_takes_the_horizontal_time_constant():
+    found = identify_velocity_lag([lag_log(0.6, 0.2, vertical=False)])
+    assert not found.vertical_identified
+    assert found.tau_d_s == found.tau_s == pytest.approx(0.6, rel=0.03)
+    assert "copied" in found.describe()
+
+
+def test_hover_only_logs_are_refused_in_one_line():
+    log = lag_log(0.5, 0.5)
+    still = {c: np.zeros(log.n_rows) for c in log.columns if "vel_" in c}
+    with pytest.raises(DatasetError, match="never command a horizontal velocity change") as exc:
+        identify_velocity_lag([type(log)({**log.columns, **still}, log.metadata)])
+    assert "\n" not in str(exc.value)
+    with pytest.raises(DatasetError, match="no usable rows"):
+        identify_velocity_lag([log.slice(0, 2)])
+
+
+def test_training_against_first_order_lag_identifies_missing_time_constants():
+    logs = [lag_log(0.7, 0.3, seed=s) for s in range(2)]
+    messages = []
+    result = train_residual_model(
+        logs, TrainingConfig(features="state_input", nominal="first_order_lag", m=10, restarts=1),
+        messages.append,
+    )  # fmt: skip
+    params = dict(result.model.features.nominal_params)
+    assert params["tau_s"] == pytest.approx(0.7, rel=0.03)
+    assert params["tau_d_s"] == pytest.approx(0.3, rel=0.05)
+    assert result.model.training["identified_lag"]["tau_s"] == pytest.approx(params["tau_s"], 1e-3)
+    assert any(m.startswith("identified velocity lag") for m in messages)
+    # The identified lag leaves only the noise, so the GP has nothing left to take.
+    assert max(result.metrics["nominal_rmse_mps"]) < 0.003
+
+
+def test_given_time_constant_is_kept():
+    result = train_residual_model(
+        [lag_log(0.7, 0.3)],
+        TrainingConfig(features="state_input", nominal="first_order_lag",
+                       nominal_params=(("tau_s", 0.3),), m=10, restarts=1),
+    )  # fmt: skip
+    assert dict(result.model.features.nominal_params) == {"tau_s": 0.3}
+    assert "identified_lag" not in result.model.training
+    assert max(result.metrics["nominal_rmse_mps"]) > 0.01
