@@ -19,7 +19,8 @@ def make_planner(
     rate_hz: float = 50.0,
     time_budget_s: float | None = None,
 ) -> Planner:
-    """A planner with its paper defaults, its speed limited to ``speed_limit_mps`` [m/s];
+    """A planner with its paper defaults, its commands limited to ``speed_limit_mps`` [m/s]
+    (the mission's horizontal command limit);
     ValueError listing the names for an unknown one.
 
     pd: paper 000's PD regulator, v = Kp e - Kd vel (horizontal 1.2 / 0.25, vertical
