@@ -18,12 +18,12 @@ demo: setup
 	$(PY) -m scripts.demo
 
 showcase: setup
-	$(PY) -m scripts.showcase
+	$(PY) -m experiments.showcase
 
 study: setup
 	$(VENV)/bin/study --out out/study
 
-test: setup
+test: setup lint
 	$(PY) -m pytest -n 2 -q
 
 test-fast: setup
@@ -31,6 +31,7 @@ test-fast: setup
 
 lint: setup
 	$(VENV)/bin/ruff check .
+	$(VENV)/bin/ruff format --check .
 
 bench: setup
 	$(VENV)/bin/bench

@@ -7,7 +7,7 @@ parses arguments into a :class:`CompanionConfig` and maps the outcome to an exit
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal, get_args
 
@@ -15,9 +15,9 @@ from companion.flight_recorder import FlightRecorder
 from companion.link import Link
 from companion.mission import Mission, load_mission
 from companion.mission_reference import reference_of
-from companion.planner_registry import make_planner, velocity_state_of
+from companion.planner_registry import make_planner
 from companion.runner import FlightOutcome, RunnerConfig, fly_mission
-from vehicle_sim.flight_log import write_flight_log
+from flightlog.schema import write_flight_log
 
 LinkKind = Literal["mavsdk", "pymavlink", "inprocess"]
 LINK_KINDS: tuple[str, ...] = get_args(LinkKind)
@@ -85,7 +85,6 @@ def run_companion(config: CompanionConfig, progress: Callable[[str], None]) -> C
             rate_hz=config.runner.rate_hz,
             time_budget_s=LOCKSTEP_PLAN_BUDGET_S if config.link == "inprocess" else None,
         )
-        runner = replace(config.runner, velocity_state=velocity_state_of(config.planner))
         reference = reference_of(mission)
         link = open_link(config)
     except ValueError as exc:  # MissionError, SimConfigError, unknown planner or URL
@@ -95,7 +94,9 @@ def run_companion(config: CompanionConfig, progress: Callable[[str], None]) -> C
     )
     outcome: FlightOutcome | None = None
     try:
-        outcome = fly_mission(link, planner, reference, mission, runner, recorder.record, progress)
+        outcome = fly_mission(
+            link, planner, reference, mission, config.runner, recorder.record, progress
+        )
     finally:
         link.close()
         log_path = _write_log(config, mission, link, recorder, outcome, progress)

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from companion.control_loop import Tick
-from vehicle_sim.flight_log import FlightLog, FlightLogRecorder
+from flightlog.schema import FlightLog, FlightLogRecorder
 
 _AXES_NED = ("n", "e", "d")
 _AXES_FRD = ("x", "y", "z")

@@ -128,9 +128,7 @@ class CompanionNmpc:
         """One NMPC step (see :meth:`NmpcPlanner.plan`); never raises."""
         return self._planner.plan(state, reference, t_s)
 
-    def one_step_velocity(
-        self, vel_ned_mps: np.ndarray, cmd_vel_ned_mps: np.ndarray
-    ) -> np.ndarray:
+    def one_step_velocity(self, vel_ned_mps: np.ndarray, cmd_vel_ned_mps: np.ndarray) -> np.ndarray:
         """Velocity [m/s] (3,) this planner's model (with its residual) predicts one control
         period after sending ``cmd_vel_ned_mps`` (3,) at velocity ``vel_ned_mps`` (3,); the
         yaw-rate command is taken as zero (the study's references hold their yaw)."""

@@ -35,12 +35,11 @@ class PlannerPolicy:
         reference: the trajectory to follow (t = 0 at ``t0_s`` on the loop clock).
         t0_s: loop clock time at which the reference starts [s].
         limits: saturation for the planner's commands.
-        velocity_state: index range of the velocity in the planner's predicted state, e.g.
-            (3, 6) for a first-order-lag model; None when its model has no velocity state (the
-            kinematic model, whose one-step velocity is the command itself, or what the
-            planner's ``one_step_velocity`` says for the sent command, see
-            :class:`OneStepVelocityModel`). Predictions are logged only when the planner
-            returns a predicted trajectory.
+
+    The logged one-step velocity prediction is what the planner's ``one_step_velocity`` says
+    for the sent command (see :class:`OneStepVelocityModel`), else the command itself (the
+    kinematic model flies it at once). Predictions are logged only when the planner returns a
+    predicted trajectory.
     """
 
     def __init__(
@@ -49,13 +48,11 @@ class PlannerPolicy:
         reference: Reference,
         t0_s: float,
         limits: CommandLimits,
-        velocity_state: tuple[int, int] | None = None,
     ) -> None:
         self._planner = planner
         self._reference = reference
         self._t0_s = t0_s
         self._limits = limits
-        self._velocity_state = velocity_state
 
     def reference_time_s(self, t_s: float) -> float:
         """Reference time [s] at loop time ``t_s``."""
@@ -108,14 +105,11 @@ class PlannerPolicy:
         row = trajectory[1]
         if not np.all(np.isfinite(row)):
             return None, None
-        if self._velocity_state is None and isinstance(self._planner, OneStepVelocityModel):
-            cmd = np.asarray(sent.vel_ned_mps, dtype=float)
+        cmd = np.asarray(sent.vel_ned_mps, dtype=float)
+        if isinstance(self._planner, OneStepVelocityModel):
             vel = self._planner.one_step_velocity(state.vel_ned_mps, cmd)
-        elif self._velocity_state is None:
-            vel = np.asarray(sent.vel_ned_mps, dtype=float)
         else:
-            lo, hi = self._velocity_state
-            vel = row[lo:hi]
+            vel = cmd
         return row[:3].copy(), np.asarray(vel, dtype=float).copy()
 
 

@@ -8,8 +8,6 @@ from planners.reference import Planner
 
 PLANNER_NAMES: tuple[str, ...] = ("pd", "nmpc")
 
-_VELOCITY_STATE: dict[str, tuple[int, int] | None] = {"pd": None, "nmpc": None}
-
 
 def make_planner(
     name: str,
@@ -50,11 +48,3 @@ def make_planner(
         time_budget_s=period_s if time_budget_s is None else time_budget_s,
     )
     return load_nmpc(settings, gp_model)
-
-
-def velocity_state_of(name: str) -> tuple[int, int] | None:
-    """Where the named planner's predicted states hold the velocity (see PlannerPolicy);
-    None when it predicts none or its model flies the command (kinematic)."""
-    if name not in _VELOCITY_STATE:
-        raise ValueError(f"unknown planner {name!r}; choose one of {', '.join(PLANNER_NAMES)}")
-    return _VELOCITY_STATE[name]

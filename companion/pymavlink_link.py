@@ -212,9 +212,12 @@ class PymavlinkLink:
             self._send_setpoint()
         if now_s - self._heartbeat_sent_s >= 1.0:
             self._require_open().mav.heartbeat_send(
-                _MAV.MAV_TYPE_ONBOARD_CONTROLLER, _MAV.MAV_AUTOPILOT_INVALID, 0, 0,
+                _MAV.MAV_TYPE_ONBOARD_CONTROLLER,
+                _MAV.MAV_AUTOPILOT_INVALID,
+                0,
+                0,
                 _MAV.MAV_STATE_ACTIVE,
-            )  # fmt: skip
+            )
             self._heartbeat_sent_s = now_s
 
     def _send_setpoint(self) -> None:
@@ -223,9 +226,22 @@ class PymavlinkLink:
         vn, ve, vd = self._setpoint.vel_ned_mps
         time_boot_ms = int(self._clock.now_s() * 1000) & 0xFFFFFFFF
         self._require_open().mav.set_position_target_local_ned_send(
-            time_boot_ms, *self._target, _MAV.MAV_FRAME_LOCAL_NED, _VELOCITY_YAW_RATE_MASK,
-            0.0, 0.0, 0.0, vn, ve, vd, 0.0, 0.0, 0.0, 0.0, self._setpoint.yaw_rate_radps,
-        )  # fmt: skip
+            time_boot_ms,
+            *self._target,
+            _MAV.MAV_FRAME_LOCAL_NED,
+            _VELOCITY_YAW_RATE_MASK,
+            0.0,
+            0.0,
+            0.0,
+            vn,
+            ve,
+            vd,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            self._setpoint.yaw_rate_radps,
+        )
         self._setpoint_sent_s = self._clock.now_s()
 
     def _handle(self, msg: MAVLink_message) -> None:

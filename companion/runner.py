@@ -39,8 +39,6 @@ class RunnerConfig:
         offboard_grace_s: time after the switch before a non-OFFBOARD mode ends the follow
             phase (telemetry may lag a mode change by one heartbeat) [s].
         vertical_limit_up_mps, vertical_limit_down_mps: command limits [m/s].
-        velocity_state: where the planner's predicted state holds velocity (see
-            PlannerPolicy), or None.
     """
 
     rate_hz: float = 50.0
@@ -55,7 +53,6 @@ class RunnerConfig:
     offboard_grace_s: float = 2.5
     vertical_limit_up_mps: float = 1.5
     vertical_limit_down_mps: float = 1.0
-    velocity_state: tuple[int, int] | None = None
 
     def __post_init__(self) -> None:
         if not 1.0 <= self.rate_hz <= 500.0:
@@ -213,7 +210,7 @@ def _follow(
         down_mps=config.vertical_limit_down_mps,
     )
     t0_s = link.clock.now_s()
-    policy = PlannerPolicy(planner, reference, t0_s, limits, config.velocity_state)
+    policy = PlannerPolicy(planner, reference, t0_s, limits)
     monitor = _FollowMonitor(t0_s, goal, reference.duration_s, mission, config, progress)
     result = run_fixed_rate(
         link,

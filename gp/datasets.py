@@ -21,10 +21,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flightlog.schema import REQUIRED_COLUMNS, FlightLog
 from gp.errors import DatasetError
 from gp.features import FeatureDefinition
 from gp.log_signals import model_input, model_state
-from vehicle_sim.flight_log import REQUIRED_COLUMNS, FlightLog
 
 _VEL = ("vel_n_mps", "vel_e_mps", "vel_d_mps")
 
@@ -74,9 +74,14 @@ class ResidualDataset:
     def subset(self, rows: np.ndarray) -> ResidualDataset:
         """Rows selected by an index or boolean array."""
         return ResidualDataset(
-            self.features, self.X[rows], self.Y[rows], self.dt_s[rows],
-            self.vel_ned_mps[rows], self.segment[rows], self.segment_names,
-        )  # fmt: skip
+            self.features,
+            self.X[rows],
+            self.Y[rows],
+            self.dt_s[rows],
+            self.vel_ned_mps[rows],
+            self.segment[rows],
+            self.segment_names,
+        )
 
     def summary(self) -> dict[str, object]:
         """JSON-ready description: sizes, segments, input ranges and residual statistics."""

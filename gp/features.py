@@ -113,8 +113,9 @@ def feature_definition(
             f"unknown nominal model {nominal_model!r}; choose one of {', '.join(MODELS)}"
         )
     params = tuple(sorted((k, float(v)) for k, v in nominal_params.items()))
-    definition = FeatureDefinition(name, FEATURE_SETS[name], nominal_model=nominal_model,
-                                   nominal_params=params)  # fmt: skip
+    definition = FeatureDefinition(
+        name, FEATURE_SETS[name], nominal_model=nominal_model, nominal_params=params
+    )
     try:
         definition.nominal()
     except TypeError as exc:

@@ -128,9 +128,13 @@ def maximize(
         return -res.value, -np.concatenate(grad)
 
     result = optimize.minimize(
-        negative, theta0, jac=True, method="L-BFGS-B", bounds=bounds,
+        negative,
+        theta0,
+        jac=True,
+        method="L-BFGS-B",
+        bounds=bounds,
         options={"maxiter": max_iter, "ftol": rel_tol},
-    )  # fmt: skip
+    )
     theta = result.x if np.isfinite(result.fun) else theta0
     kern, noise, z = unpack(theta)
     value = -float(result.fun) if np.isfinite(result.fun) else objective(kern, noise, z).value

@@ -26,10 +26,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import minimize_scalar
 
+from flightlog.schema import FlightLog
 from gp.datasets import DatasetConfig, residual_dataset
 from gp.errors import DatasetError
 from gp.features import feature_definition
-from vehicle_sim.flight_log import FlightLog
 
 TAU_BOUNDS_S = (0.01, 10.0)
 MIN_EXCITATION_MPS = 0.02
@@ -124,6 +124,7 @@ def identify_velocity_lag(
 def _fit(cost) -> float:
     """argmin over tau in TAU_BOUNDS_S of cost(tau), searched on log(tau)."""
     lo, hi = np.log(TAU_BOUNDS_S)
-    result = minimize_scalar(lambda s: cost(float(np.exp(s))), bounds=(lo, hi), method="bounded",
-                             options={"xatol": 1e-4})  # fmt: skip
+    result = minimize_scalar(
+        lambda s: cost(float(np.exp(s))), bounds=(lo, hi), method="bounded", options={"xatol": 1e-4}
+    )
     return float(np.exp(result.x))

@@ -11,9 +11,9 @@ from collections.abc import Callable
 
 import numpy as np
 
+from flightlog.schema import FlightLog
 from gp.errors import DatasetError
 from planners.nominal_models import NominalModel
-from vehicle_sim.flight_log import FlightLog
 
 
 def yaw_from_quaternion(log: FlightLog) -> np.ndarray:

@@ -119,8 +119,11 @@ def save_model(path: str | Path, model: ResidualModel) -> Path:
     json_path.parent.mkdir(parents=True, exist_ok=True)
     doc = model.to_dict()
     doc["arrays"] = npz_path.name
-    np.savez(npz_path, noise_variance=model.noise_variance,
-             **{k: getattr(model.posterior, k) for k in _ARRAYS})  # fmt: skip
+    np.savez(
+        npz_path,
+        noise_variance=model.noise_variance,
+        **{k: getattr(model.posterior, k) for k in _ARRAYS},
+    )
     json_path.write_text(json.dumps(doc, indent=2) + "\n")
     return json_path
 
@@ -165,6 +168,10 @@ def load_model(path: str | Path, expected: FeatureDefinition | None = None) -> R
             f"{expected.describe()}; refit with matching --features/--nominal or load another model"
         )
     return ResidualModel(
-        features, posterior, noise, str(doc["model_type"]), doc.get("inducing", {}),
+        features,
+        posterior,
+        noise,
+        str(doc["model_type"]),
+        doc.get("inducing", {}),
         doc.get("training_data", {}),
-    )  # fmt: skip
+    )

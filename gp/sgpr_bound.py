@@ -153,9 +153,14 @@ class _Statistics:
 
     @classmethod
     def of(
-        cls, X: np.ndarray, y: np.ndarray, Z: np.ndarray, kernel: SquaredExponentialARD,
-        s2: float, jitter: float,
-    ) -> _Statistics:  # fmt: skip
+        cls,
+        X: np.ndarray,
+        y: np.ndarray,
+        Z: np.ndarray,
+        kernel: SquaredExponentialARD,
+        s2: float,
+        jitter: float,
+    ) -> _Statistics:
         m = Z.shape[0]
         K = kernel(Z, Z)
         L, used = jittered_cholesky(K, jitter * kernel.variance)

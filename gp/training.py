@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flightlog.schema import FlightLog
 from gp.datasets import DatasetConfig, ResidualDataset, residual_dataset
 from gp.evaluation import holdout_split, residual_rmse
 from gp.features import FeatureDefinition, feature_definition
@@ -18,7 +19,6 @@ from gp.inducing import InducingConfig
 from gp.lag_identification import LagIdentification, identify_velocity_lag
 from gp.model_io import ResidualModel
 from gp.sparse_gp import SparseGP
-from vehicle_sim.flight_log import FlightLog
 
 
 @dataclass(frozen=True)
@@ -95,11 +95,14 @@ def train_residual_model(
     model = ResidualModel.from_estimator(
         estimator,
         features,
-        inducing={"strategy": inducing.strategy, "m": inducing.m,
-                  "optimize_positions": inducing.optimize_positions,
-                  "speed_scale_mps": inducing.speed_scale_mps},
+        inducing={
+            "strategy": inducing.strategy,
+            "m": inducing.m,
+            "optimize_positions": inducing.optimize_positions,
+            "speed_scale_mps": inducing.speed_scale_mps,
+        },
         training=training,
-    )  # fmt: skip
+    )
     return TrainingResult(model, train, test, metrics)
 
 

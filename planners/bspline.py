@@ -81,8 +81,6 @@ class BSplineReference(SampledReference):
         yaw = np.full(t.shape, self.yaw_rad)
         return ReferenceSample(pos, vel, acc, yaw, np.zeros(t.shape))
 
-
-
     def length_m(self) -> float:
         """Arc length [m] (dense polyline approximation)."""
         s = np.linspace(0.0, self._n_seg, self._n_seg * _LIMIT_SAMPLES_PER_SEGMENT + 1)

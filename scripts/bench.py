@@ -1,6 +1,6 @@
 """`bench`: measure the project's speed and accuracy figures and print them as a table.
 
-Each part lives in ``scripts/bench_<part>.py`` and exposes ``run(progress, quick) -> dict``
+Each part lives in ``experiments/bench/<part>.py`` and exposes ``run(progress, quick) -> dict``
 of named figures (names are stable so they can be followed over time; see BENCHMARKS.md).
 Timings are only compared against baselines measured in the same run: machines are noisy.
 
@@ -21,13 +21,13 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 PARTS: dict[str, str] = {
-    "sim": "scripts.bench_sim",
-    "jsbsim": "scripts.bench_jsbsim",
-    "gp": "scripts.bench_gp",
-    "nmpc": "scripts.bench_nmpc",
-    "link": "scripts.bench_link",
-    "loop": "scripts.bench_loop",
-    "diagnose": "scripts.bench_diagnose",
+    "sim": "experiments.bench.sim",
+    "jsbsim": "experiments.bench.jsbsim",
+    "gp": "experiments.bench.gp",
+    "nmpc": "experiments.bench.nmpc",
+    "link": "experiments.bench.link",
+    "loop": "experiments.bench.loop",
+    "diagnose": "experiments.bench.diagnose",
 }
 
 
@@ -42,8 +42,12 @@ class BenchConfig:
 
 def parse_args(argv: Sequence[str] | None) -> BenchConfig:
     parser = argparse.ArgumentParser(prog="bench", description=__doc__.splitlines()[0])
-    parser.add_argument("--only", action="append", metavar="PART",
-                        help=f"run only this part (repeatable): {', '.join(PARTS)}")
+    parser.add_argument(
+        "--only",
+        action="append",
+        metavar="PART",
+        help=f"run only this part (repeatable): {', '.join(PARTS)}",
+    )
     parser.add_argument("--quick", action="store_true", help="small sizes, for a smoke run")
     parser.add_argument("--json", action="store_true", help="print one JSON object of figures")
     args = parser.parse_args(argv)

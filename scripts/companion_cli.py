@@ -47,9 +47,11 @@ def parse_args(argv: list[str] | None) -> CompanionConfig:
     parser.add_argument("--url", default=DEFAULT_URL, help=f"MAVLink URL (default {DEFAULT_URL})")
     parser.add_argument("--planner", choices=PLANNER_NAMES, default="pd")
     parser.add_argument(
-        "--gp-model", type=Path, default=None,
+        "--gp-model",
+        type=Path,
+        default=None,
         help="residual model from fit-gp: fly the NMPC augmented with it (needs --planner nmpc)",
-    )  # fmt: skip
+    )
     parser.add_argument("--rate-hz", type=float, default=50.0, help="control loop rate [Hz]")
     parser.add_argument("--log", type=Path, default=Path("out/flight.csv"), help="flight log")
     parser.add_argument("--seed", type=int, default=0, help="simulator seed (inprocess)")

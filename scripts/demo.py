@@ -16,8 +16,8 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from companion.app import CompanionInputError
-from companion.sim_endpoint import EndpointError
-from companion.study.mavlink_demo import DemoConfig, DemoError, comparison_table, run_demo
+from experiments.sim_endpoint import EndpointError
+from experiments.study.mavlink_demo import DemoConfig, DemoError, comparison_table, run_demo
 
 MISSION = Path(__file__).resolve().parent.parent / "missions" / "demo_bspline.toml"
 

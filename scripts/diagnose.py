@@ -16,13 +16,13 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from gp.diagnosis.diagnosis import diagnose
-from gp.diagnosis.extend_config import write_extended_config
-from gp.diagnosis.forces import ForceDataError
-from gp.diagnosis.report import write_report
-from gp.diagnosis.ulog_input import read_ulog
+from diagnosis.diagnosis import diagnose
+from diagnosis.extend_config import write_extended_config
+from diagnosis.forces import ForceDataError
+from diagnosis.report import write_report
+from flightlog.schema import FlightLogError, read_flight_log
+from flightlog.ulog import read_ulog
 from vehicle_sim import SimConfigError, load_sim_config
-from vehicle_sim.flight_log import FlightLogError, read_flight_log
 
 EXIT_OK = 0
 EXIT_BAD_INPUT = 2

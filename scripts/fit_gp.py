@@ -22,6 +22,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from flightlog.schema import FlightLogError, read_flight_log
 from gp.errors import DatasetError, GPInputError, ModelFileError
 from gp.features import FEATURE_SETS
 from gp.inducing import STRATEGIES
@@ -29,7 +30,6 @@ from gp.model_io import model_paths, save_model
 from gp.plots import plot_residuals
 from gp.training import TrainingConfig, train_residual_model
 from planners.nominal_models import MODELS
-from vehicle_sim.flight_log import FlightLogError, read_flight_log
 
 
 @dataclass(frozen=True)
@@ -57,9 +57,12 @@ def parse_args(argv: list[str] | None) -> FitGpConfig:
     parser.add_argument("--features", default="velocity", choices=list(FEATURE_SETS))
     parser.add_argument("--nominal", default="kinematic_4dof", choices=list(MODELS))
     parser.add_argument(
-        "--nominal-param", action="append", default=[], metavar="NAME=VALUE",
+        "--nominal-param",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
         help="nominal model parameter (repeatable), e.g. residual_dt_s=0.05",
-    )  # fmt: skip
+    )
     parser.add_argument("--inducing", default="low_speed", choices=list(STRATEGIES))
     parser.add_argument("--m", type=int, default=30, help="number of inducing points")
     parser.add_argument("--optimize-inducing", action="store_true", help="refine positions")
@@ -129,9 +132,11 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     print("axis  nominal_rmse_mps  augmented_rmse_mps")
     for axis, nom, aug in zip(
-        "ned", result.metrics["nominal_rmse_mps"], result.metrics["augmented_rmse_mps"],
+        "ned",
+        result.metrics["nominal_rmse_mps"],
+        result.metrics["augmented_rmse_mps"],
         strict=False,
-    ):  # fmt: skip
+    ):
         print(f"{axis:>4}  {nom:16.4f}  {aug:18.4f}")
     return 0
 

@@ -23,8 +23,8 @@ import time
 from pathlib import Path
 
 from companion.nmpc_planner import MULTIROTOR_MODELS
-from companion.study.config import STUDY_VEHICLE, StudyConfig
-from companion.study.run import run_study
+from experiments.study.config import STUDY_VEHICLE, StudyConfig
+from experiments.study.run import run_study
 from gp.features import FEATURE_SETS
 from vehicle_sim.effects.base import SimConfigError
 
@@ -39,8 +39,12 @@ def parse_args(argv: list[str] | None) -> StudyConfig:
     parser.add_argument("--m", type=int, default=30, help="inducing points per output")
     parser.add_argument("--workers", type=int, default=2, help="processes flying in parallel")
     parser.add_argument("--vehicle", default=STUDY_VEHICLE, help="simulator preset or config")
-    parser.add_argument("--learned-model", choices=MULTIROTOR_MODELS, default="first_order_lag",
-                        help="nominal model under the learned residual")  # fmt: skip
+    parser.add_argument(
+        "--learned-model",
+        choices=MULTIROTOR_MODELS,
+        default="first_order_lag",
+        help="nominal model under the learned residual",
+    )
     parser.add_argument("--features", choices=list(FEATURE_SETS), default="state_input")
     parser.add_argument("--seed", type=int, default=0, help="trajectory generator seed")
     parser.add_argument(
@@ -78,8 +82,9 @@ def main(argv: list[str] | None = None) -> int:
     start = time.perf_counter()
 
     def progress(message: str) -> None:
-        print(f"study [{time.perf_counter() - start:6.1f} s] {message}", file=sys.stderr,
-              flush=True)  # fmt: skip
+        print(
+            f"study [{time.perf_counter() - start:6.1f} s] {message}", file=sys.stderr, flush=True
+        )
 
     try:
         _check_inputs(config)

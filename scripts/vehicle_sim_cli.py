@@ -84,8 +84,9 @@ def _effect_overrides(specs: Sequence[str]) -> tuple[tuple[str, tuple[tuple[str,
     for spec in specs:
         name, _, assignment = spec.partition(".")
         if name not in EFFECT_NAMES:
-            raise UsageError(f"--effect {spec}: unknown effect {name!r}; choose from "
-                             f"{', '.join(EFFECT_NAMES)}")  # fmt: skip
+            raise UsageError(
+                f"--effect {spec}: unknown effect {name!r}; choose from {', '.join(EFFECT_NAMES)}"
+            )
         params = effects.setdefault(name, {})
         if not assignment:
             continue
@@ -95,31 +96,41 @@ def _effect_overrides(specs: Sequence[str]) -> tuple[tuple[str, tuple[tuple[str,
         try:
             params[key] = tomllib.loads(f"v = {raw}")["v"]
         except tomllib.TOMLDecodeError:
-            raise UsageError(f"--effect {spec}: {raw!r} is not a TOML value "
-                             "(e.g. 0.3 or [3, 0, 0])") from None  # fmt: skip
+            raise UsageError(
+                f"--effect {spec}: {raw!r} is not a TOML value (e.g. 0.3 or [3, 0, 0])"
+            ) from None
     return tuple((name, tuple(params.items())) for name, params in effects.items())
 
 
 def parse_args(argv: Sequence[str] | None) -> VehicleSimCliConfig:
     parser = _Parser(prog=PROG, description=__doc__.splitlines()[0])
     parser.add_argument("--vehicle", default="iris", help="preset name or config TOML path")
-    parser.add_argument("--effect", action="append", default=[], metavar="NAME[.KEY=VALUE]",
-                        help="switch an effect on, optionally setting one parameter "
-                             "(repeatable)")  # fmt: skip
-    parser.add_argument("--backend", choices=BACKEND_NAMES,
-                        help="physics backend (default: the config's [sim] backend, "
-                             "else builtin)")  # fmt: skip
+    parser.add_argument(
+        "--effect",
+        action="append",
+        default=[],
+        metavar="NAME[.KEY=VALUE]",
+        help="switch an effect on, optionally setting one parameter (repeatable)",
+    )
+    parser.add_argument(
+        "--backend",
+        choices=BACKEND_NAMES,
+        help="physics backend (default: the config's [sim] backend, else builtin)",
+    )
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--speed", type=float, default=1.0,
-                        help="simulated seconds per wall-clock second")  # fmt: skip
+    parser.add_argument(
+        "--speed", type=float, default=1.0, help="simulated seconds per wall-clock second"
+    )
     parser.add_argument("--host", default="127.0.0.1", help="address to bind and send to")
     parser.add_argument("--offboard-port", type=int, default=14540)
     parser.add_argument("--gcs-port", type=int, default=14550)
     parser.add_argument("--offboard-bind-port", type=int, default=14580)
     parser.add_argument("--gcs-bind-port", type=int, default=18570)
-    parser.add_argument("--signing-key", metavar="FILE",
-                        help="require MAVLink 2 signing with this key (64 hex digits or a "
-                             "passphrase)")  # fmt: skip
+    parser.add_argument(
+        "--signing-key",
+        metavar="FILE",
+        help="require MAVLink 2 signing with this key (64 hex digits or a passphrase)",
+    )
     parser.add_argument("--duration-s", type=float, help="stop after this wall-clock time")
     args = parser.parse_args(argv)
     if not (math.isfinite(args.speed) and 0.01 <= args.speed <= 100.0):
@@ -164,8 +175,10 @@ def _announce(config: VehicleSimCliConfig, endpoint: MavlinkEndpoint) -> None:
     ports = endpoint.local_ports
     host = config.host
     signing = "on (unsigned commands refused)" if config.signing_key_path else "off"
-    print(f"{PROG}: {config.vehicle} on {endpoint.sim.backend_name} at {config.speed:g}x "
-          f"real time, seed {config.seed}, signing {signing}")  # fmt: skip
+    print(
+        f"{PROG}: {config.vehicle} on {endpoint.sim.backend_name} at {config.speed:g}x "
+        f"real time, seed {config.seed}, signing {signing}"
+    )
     print(f"MAVSDK: udpin://{host}:{config.offboard_port}")
     print(f"pymavlink: udpin:{host}:{config.gcs_port} (or udpout:{host}:{ports['gcs']})")
     print(f"MAVProxy: mavproxy.py --master udpin:{host}:{config.gcs_port}")
@@ -195,8 +208,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
         return 2
     stop = threading.Event()
-    previous = {sig: signal.signal(sig, lambda *_: stop.set())
-                for sig in (signal.SIGINT, signal.SIGTERM)}  # fmt: skip
+    previous = {
+        sig: signal.signal(sig, lambda *_: stop.set()) for sig in (signal.SIGINT, signal.SIGTERM)
+    }
     try:
         return _run(config, stop)
     finally:
@@ -220,9 +234,12 @@ def _run(config: VehicleSimCliConfig, stop: threading.Event) -> int:
         print(f"{PROG}: error: {failure}", file=sys.stderr)
         return 1
     stats = endpoint.stats
-    print(f"{PROG}: stopped at t = {endpoint.state.t_s:.1f} s sim; received "
-          f"{stats.messages_received} messages, rejected {stats.garbage_datagrams} garbage "
-          f"datagrams and {stats.setpoints_rejected} setpoints", flush=True)  # fmt: skip
+    print(
+        f"{PROG}: stopped at t = {endpoint.state.t_s:.1f} s sim; received "
+        f"{stats.messages_received} messages, rejected {stats.garbage_datagrams} garbage "
+        f"datagrams and {stats.setpoints_rejected} setpoints",
+        flush=True,
+    )
     return 0
 
 

@@ -50,8 +50,13 @@ class AnchorState:
     acc_ned_mps2: tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:
-        for name, size in (("pos_ned_m", 3), ("vel_ned_mps", 3), ("q_wxyz", 4),
-                           ("rates_frd_radps", 3), ("acc_ned_mps2", 3)):  # fmt: skip
+        for name, size in (
+            ("pos_ned_m", 3),
+            ("vel_ned_mps", 3),
+            ("q_wxyz", 4),
+            ("rates_frd_radps", 3),
+            ("acc_ned_mps2", 3),
+        ):
             value = getattr(self, name)
             if value is not None:
                 object.__setattr__(self, name, _finite_vector(name, value, size))

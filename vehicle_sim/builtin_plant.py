@@ -34,9 +34,15 @@ class PlantBackend(Protocol):
     aux: np.ndarray
 
     def advance(
-        self, n_steps: int, dt_s: float, sp: np.ndarray, cs: np.ndarray, cp: np.ndarray,
-        mix: np.ndarray, noise: np.ndarray,
-    ) -> int:  # fmt: skip
+        self,
+        n_steps: int,
+        dt_s: float,
+        sp: np.ndarray,
+        cs: np.ndarray,
+        cp: np.ndarray,
+        mix: np.ndarray,
+        noise: np.ndarray,
+    ) -> int:
         """Run up to ``n_steps`` steps of control + physics; stop early right after a step in
         which ground contact changed. ``noise`` (>= n_steps, 3): white noise for gusts.
         Returns the number of steps done."""
@@ -84,10 +90,27 @@ class BuiltinPlant:
         self.aux[ph.AUX_CONTACT] = 1.0
 
     def advance(
-        self, n_steps: int, dt_s: float, sp: np.ndarray, cs: np.ndarray, cp: np.ndarray,
-        mix: np.ndarray, noise: np.ndarray,
-    ) -> int:  # fmt: skip
+        self,
+        n_steps: int,
+        dt_s: float,
+        sp: np.ndarray,
+        cs: np.ndarray,
+        cp: np.ndarray,
+        mix: np.ndarray,
+        noise: np.ndarray,
+    ) -> int:
         return run_closed_loop(
-            n_steps, dt_s, self.x, cs, sp, cp, mix, self.pp, self.rp, self.spin, self.ep,
-            noise, self.aux,
-        )  # fmt: skip
+            n_steps,
+            dt_s,
+            self.x,
+            cs,
+            sp,
+            cp,
+            mix,
+            self.pp,
+            self.rp,
+            self.spin,
+            self.ep,
+            noise,
+            self.aux,
+        )

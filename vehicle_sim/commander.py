@@ -167,9 +167,7 @@ class Commander:
                 self._hold(pos_ned_m, yaw_rad)
                 self._set_mode(FlightMode.HOLD)
                 what = "holding position"
-            self.events.append(
-                (SEVERITY_CRITICAL, f"Failsafe: offboard setpoints lost, {what}")
-            )
+            self.events.append((SEVERITY_CRITICAL, f"Failsafe: offboard setpoints lost, {what}"))
 
     def next_deadline(self, t: float) -> float:
         """Latest simulated time to which physics may run before :meth:`update` is due."""

@@ -39,10 +39,27 @@ CS_VEL_INT, CS_RATE_INT, CS_PREV_RATES, CS_YAW_SP, CS_VEL_SP, CS_THR_SP = 0, 3, 
 N_CTRL = 16
 
 (
-    C_VEL_P_XY, C_VEL_I_XY, C_VEL_D_XY, C_VEL_P_Z, C_VEL_I_Z, C_VEL_D_Z, C_POS_P_XY, C_POS_P_Z,
-    C_THR_HOVER, C_THR_MIN, C_THR_MAX, C_ATT_P, C_YAW_WEIGHT, C_RATE_P, C_RATE_I, C_RATE_D,
-    C_RATE_INT_LIM, C_RATE_MAX, C_IDLE, C_G,
-) = (0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 14, 15, 18, 21, 24, 27, 30, 31)  # fmt: skip
+    C_VEL_P_XY,
+    C_VEL_I_XY,
+    C_VEL_D_XY,
+    C_VEL_P_Z,
+    C_VEL_I_Z,
+    C_VEL_D_Z,
+    C_POS_P_XY,
+    C_POS_P_Z,
+    C_THR_HOVER,
+    C_THR_MIN,
+    C_THR_MAX,
+    C_ATT_P,
+    C_YAW_WEIGHT,
+    C_RATE_P,
+    C_RATE_I,
+    C_RATE_D,
+    C_RATE_INT_LIM,
+    C_RATE_MAX,
+    C_IDLE,
+    C_G,
+) = (0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 14, 15, 18, 21, 24, 27, 30, 31)
 N_CP = 32
 
 
@@ -239,9 +256,7 @@ def rate_control(x, rsp, cs, cp, dt, torque):
         err = rsp[i] - rate
         d_rate = (rate - cs[CS_PREV_RATES + i]) / dt
         cs[CS_PREV_RATES + i] = rate
-        torque[i] = (
-            cp[C_RATE_P + i] * err + cs[CS_RATE_INT + i] - cp[C_RATE_D + i] * d_rate
-        )
+        torque[i] = cp[C_RATE_P + i] * err + cs[CS_RATE_INT + i] - cp[C_RATE_D + i] * d_rate
         # integrate less for large errors (PX4), keep within the integrator limit
         i_factor = max(0.0, 1.0 - (err / math.radians(400.0)) ** 2)
         lim = cp[C_RATE_INT_LIM + i]

@@ -120,7 +120,9 @@ class Px4Params:
             cp[fc.C_RATE_D + axis] = p[prefix + "_D"]
             cp[fc.C_RATE_MAX + axis] = math.radians(p[prefix + "_MAX"])
         cp[fc.C_RATE_INT_LIM : fc.C_RATE_INT_LIM + 3] = (
-            p["MC_RR_INT_LIM"], p["MC_PR_INT_LIM"], p["MC_YR_INT_LIM"]
+            p["MC_RR_INT_LIM"],
+            p["MC_PR_INT_LIM"],
+            p["MC_YR_INT_LIM"],
         )
         cp[fc.C_IDLE] = IDLE_THRUST_NORM
         cp[fc.C_G] = gravity_mps2

@@ -1,4 +1,4 @@
-"""Truth logging: one schema-v1 row (vehicle_sim.flight_log) of the simulated vehicle's state.
+"""Truth logging: one schema-v1 row (flightlog.schema) of the simulated vehicle's state.
 
 Only quantities a real vehicle could measure go into a row; effect parameters never do.
 """
@@ -13,9 +13,12 @@ def truth_row(
 ) -> dict[str, float | str]:
     """A flight-log row (column -> value) for ``state`` and the command that was in force."""
     p, v, a, q, r = (
-        state.pos_ned_m, state.vel_ned_mps, state.acc_ned_mps2, state.q_wxyz,
+        state.pos_ned_m,
+        state.vel_ned_mps,
+        state.acc_ned_mps2,
+        state.q_wxyz,
         state.rates_frd_radps,
-    )  # fmt: skip
+    )
     return {
         "t_s": float(state.t_s),
         "pos_n_m": float(p[0]), "pos_e_m": float(p[1]), "pos_d_m": float(p[2]),

@@ -9,7 +9,7 @@ from companion.control_loop import Tick, run_fixed_rate
 from companion.decision import Decision, safe_decision
 from companion.flight_recorder import FlightRecorder
 from companion.link import LandedPhase, LinkState, VelocityCommand
-from vehicle_sim.flight_log import read_flight_log, write_flight_log
+from flightlog.schema import read_flight_log, write_flight_log
 
 
 class ManualClock:
@@ -74,9 +74,13 @@ def test_loop_ticks_at_its_rate_until_the_condition_and_sends_every_tick() -> No
     link = IntegratorLink()
     ticks: list[Tick] = []
     result = run_fixed_rate(
-        link, GoNorth(), rate_hz=50.0, until=lambda s, t: t >= 1.0, timeout_s=5.0,
+        link,
+        GoNorth(),
+        rate_hz=50.0,
+        until=lambda s, t: t >= 1.0,
+        timeout_s=5.0,
         on_tick=ticks.append,
-    )  # fmt: skip
+    )
     assert result.stop_reason == "done"
     assert result.ticks == 51 == len(link.sent) == len(ticks)
     assert result.deadline_misses == 0
@@ -86,9 +90,13 @@ def test_loop_ticks_at_its_rate_until_the_condition_and_sends_every_tick() -> No
 def test_loop_stops_at_its_timeout() -> None:
     link = IntegratorLink()
     result = run_fixed_rate(
-        link, GoNorth(), rate_hz=20.0, until=lambda s, t: False, timeout_s=0.5,
+        link,
+        GoNorth(),
+        rate_hz=20.0,
+        until=lambda s, t: False,
+        timeout_s=0.5,
         on_tick=lambda tick: None,
-    )  # fmt: skip
+    )
     assert result.stop_reason == "timeout"
     assert result.ticks == 10
     assert link.clock.t_s == pytest.approx(0.5)
@@ -99,9 +107,13 @@ def test_overrunning_ticks_count_as_deadline_misses_and_do_not_burst() -> None:
     slow = GoNorth(link.clock, work_s=0.05)  # 50 ms of work at a 20 ms period
     ticks: list[Tick] = []
     result = run_fixed_rate(
-        link, slow, rate_hz=50.0, until=lambda s, t: len(ticks) >= 10, timeout_s=5.0,
+        link,
+        slow,
+        rate_hz=50.0,
+        until=lambda s, t: len(ticks) >= 10,
+        timeout_s=5.0,
         on_tick=ticks.append,
-    )  # fmt: skip
+    )
     assert result.deadline_misses == 9
     assert min(np.diff([t.t_s for t in ticks])) == pytest.approx(0.05)
 
@@ -109,9 +121,13 @@ def test_overrunning_ticks_count_as_deadline_misses_and_do_not_burst() -> None:
 def test_bad_rate_is_refused() -> None:
     with pytest.raises(ValueError, match="rate_hz must be positive"):
         run_fixed_rate(
-            IntegratorLink(), GoNorth(), rate_hz=0.0, until=lambda s, t: True, timeout_s=1.0,
+            IntegratorLink(),
+            GoNorth(),
+            rate_hz=0.0,
+            until=lambda s, t: True,
+            timeout_s=1.0,
             on_tick=lambda tick: None,
-        )  # fmt: skip
+        )
 
 
 def test_recorded_log_validates_and_holds_the_commands_sent(tmp_path) -> None:
@@ -126,9 +142,13 @@ def test_recorded_log_validates_and_holds_the_commands_sent(tmp_path) -> None:
             return policy.decide(state, t_s)
 
     run_fixed_rate(
-        link, SafeOnNaN(), rate_hz=50.0, until=lambda s, t: t >= 0.4, timeout_s=1.0,
+        link,
+        SafeOnNaN(),
+        rate_hz=50.0,
+        until=lambda s, t: t >= 0.4,
+        timeout_s=1.0,
         on_tick=recorder.record,
-    )  # fmt: skip
+    )
     path = write_flight_log(tmp_path / "f.csv", recorder.to_log({"source": "test"}))
     log = read_flight_log(path)
     assert log.n_rows == len(link.sent) - 1  # the NaN tick is not a row

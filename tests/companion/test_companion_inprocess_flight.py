@@ -14,9 +14,9 @@ from companion.mission import load_mission
 from companion.mission_reference import reference_of
 from companion.planner_registry import make_planner
 from companion.runner import RunnerConfig, fly_mission
+from flightlog.schema import read_flight_log, sidecar_path, write_flight_log
 from scripts.companion_cli import main
 from vehicle_sim import Simulator, load_sim_config
-from vehicle_sim.flight_log import read_flight_log, sidecar_path, write_flight_log
 
 REPO = Path(__file__).resolve().parents[2]
 LINE = REPO / "missions" / "line_20m.toml"
@@ -59,9 +59,14 @@ def fly(planner, seed: int = 0, rate_hz: float = 50.0):
     mission = load_mission(LINE)
     recorder = FlightRecorder(period_s=1.0 / rate_hz, wall_clock_columns=False)
     outcome = fly_mission(
-        link, planner, reference_of(mission), mission, RunnerConfig(rate_hz=rate_hz),
-        recorder.record, lambda message: None,
-    )  # fmt: skip
+        link,
+        planner,
+        reference_of(mission),
+        mission,
+        RunnerConfig(rate_hz=rate_hz),
+        recorder.record,
+        lambda message: None,
+    )
     return sim, link, recorder, outcome
 
 
@@ -175,9 +180,14 @@ def test_refused_offboard_fails_the_flight_safely_and_lands() -> None:
     mission = load_mission(LINE)
     messages: list[str] = []
     outcome = fly_mission(
-        SetpointDroppingLink(sim), make_planner("pd", 3.0), reference_of(mission), mission,
-        RunnerConfig(), lambda tick: None, messages.append,
-    )  # fmt: skip
+        SetpointDroppingLink(sim),
+        make_planner("pd", 3.0),
+        reference_of(mission),
+        mission,
+        RunnerConfig(),
+        lambda tick: None,
+        messages.append,
+    )
     assert outcome.status == "failed"
     assert outcome.detail.startswith("OFFBOARD refused: Offboard denied")
     assert outcome.goal_error_m is None

@@ -32,8 +32,8 @@ from companion.planner_registry import make_planner
 from companion.pymavlink_link import PymavlinkLink
 from companion.runner import RunnerConfig, fly_mission
 from companion.waiting import command_until_accepted, wait_for
+from flightlog.schema import read_flight_log, write_flight_log
 from vehicle_sim import LandedState, Simulator, load_sim_config
-from vehicle_sim.flight_log import read_flight_log, write_flight_log
 from vehicle_sim.mavlink import EndpointConfig, LinkConfig, MavlinkEndpoint
 
 REPO = Path(__file__).resolve().parents[2]
@@ -96,9 +96,14 @@ def test_20m_mission_ends_within_half_a_metre_of_the_goal_and_lands(
     messages: list[str] = []
     try:
         outcome = fly_mission(
-            link, make_planner("pd", 3.0), reference_of(mission), mission, RunnerConfig(),
-            recorder.record, messages.append,
-        )  # fmt: skip
+            link,
+            make_planner("pd", 3.0),
+            reference_of(mission),
+            mission,
+            RunnerConfig(),
+            recorder.record,
+            messages.append,
+        )
     finally:
         link.close()
         if vehicle.endpoint is not None:
@@ -207,15 +212,23 @@ def test_yaw_rate_commands_turn_the_vehicle_on_every_link(kind: str) -> None:
         wait_for(link, lambda s: s.altitude_m > 1.7, 30.0, "takeoff")
         policy = TurnInPlace(yaw_rate_radps)
         run_fixed_rate(
-            link, HoverPolicy(np.zeros(3)), rate_hz=50.0, until=lambda s, t: False,
-            timeout_s=1.0, on_tick=lambda tick: None,
-        )  # fmt: skip
+            link,
+            HoverPolicy(np.zeros(3)),
+            rate_hz=50.0,
+            until=lambda s, t: False,
+            timeout_s=1.0,
+            on_tick=lambda tick: None,
+        )
         assert link.start_offboard().accepted
         yaw_start = link.read_state().yaw_rad
         run_fixed_rate(
-            link, policy, rate_hz=50.0, until=lambda s, t: False, timeout_s=turn_s,
+            link,
+            policy,
+            rate_hz=50.0,
+            until=lambda s, t: False,
+            timeout_s=turn_s,
             on_tick=lambda tick: None,
-        )  # fmt: skip
+        )
         turned_rad = math.remainder(link.read_state().yaw_rad - yaw_start, 2.0 * math.pi)
         assert link.hold().accepted and link.land().accepted
         wait_for(link, lambda s: not s.armed, 60.0, "landing")
@@ -241,9 +254,14 @@ def test_losing_the_vehicle_mid_flight_fails_the_mission_within_deadlines() -> N
     started = time.monotonic()
     try:
         outcome = fly_mission(
-            link, make_planner("pd", 3.0), reference_of(mission), mission, RunnerConfig(),
-            cut_the_link_once_following, messages.append,
-        )  # fmt: skip
+            link,
+            make_planner("pd", 3.0),
+            reference_of(mission),
+            mission,
+            RunnerConfig(),
+            cut_the_link_once_following,
+            messages.append,
+        )
     finally:
         link.close()
         if vehicle.endpoint.running:

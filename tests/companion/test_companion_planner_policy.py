@@ -54,8 +54,8 @@ def ok_result(command, trajectory=None) -> PlanResult:
     return PlanResult(np.asarray(command, float), trajectory, True, "", 0.004)
 
 
-def policy(planner, velocity_state=None) -> PlannerPolicy:
-    return PlannerPolicy(planner, LineReference(), 100.0, LIMITS, velocity_state)
+def policy(planner) -> PlannerPolicy:
+    return PlannerPolicy(planner, LineReference(), 100.0, LIMITS)
 
 
 def test_good_command_is_sent_saturated_with_reference_time_and_ref_pos() -> None:
@@ -101,13 +101,10 @@ def test_non_finite_telemetry_never_reaches_the_planner() -> None:
     assert d.command.vel_ned_mps == (0.0, 0.0, 0.0)
 
 
-def test_prediction_row_one_kinematic_and_velocity_state() -> None:
-    traj = np.array([[1.0, 0.0, -2.0, 0.0, 0.5, 0.0, 0.0], [1.02, 0.0, -2.0, 0.0, 0.9, 0.1, 0.0]])
-    lag = policy(ScriptedPlanner(lambda s, t: ok_result([1.0, 0.0, 0.0, 0.0], traj)), (4, 7))
-    d = lag.decide(state(), 101.0)
-    np.testing.assert_allclose(d.pred_pos_ned_m, [1.02, 0.0, -2.0])
-    np.testing.assert_allclose(d.pred_vel_ned_mps, [0.9, 0.1, 0.0])
-    kin = policy(ScriptedPlanner(lambda s, t: ok_result([1.0, 0.0, 0.0, 0.0], traj[:, :4])))
+def test_prediction_row_one_kinematic() -> None:
+    traj = np.array([[1.0, 0.0, -2.0, 0.0], [1.02, 0.0, -2.0, 0.0]])
+    kin = policy(ScriptedPlanner(lambda s, t: ok_result([1.0, 0.0, 0.0, 0.0], traj)))
+    np.testing.assert_allclose(kin.decide(state(), 101.0).pred_pos_ned_m, [1.02, 0.0, -2.0])
     np.testing.assert_allclose(kin.decide(state(), 101.0).pred_vel_ned_mps, [1.0, 0.0, 0.0])
 
 

@@ -7,10 +7,10 @@ from pathlib import Path
 
 import numpy as np
 
-from gp.diagnosis.excitation import ExcitationSchedule, load_schedule
-from gp.diagnosis.fly_schedule import fly_schedule
+from diagnosis.excitation import ExcitationSchedule, load_schedule
+from diagnosis.fly_schedule import fly_schedule
+from flightlog.schema import FlightLog, read_flight_log, write_flight_log
 from vehicle_sim import load_sim_config
-from vehicle_sim.flight_log import FlightLog, read_flight_log, write_flight_log
 
 MISSION = Path(__file__).resolve().parents[2] / "missions" / "excite_full.toml"
 DEFAULT_ROTOR_DRAG = {"k_n_per_mps": [0.35, 0.35, 0.1]}

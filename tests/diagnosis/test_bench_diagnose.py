@@ -6,14 +6,14 @@ import math
 
 import pytest
 
+from experiments.bench.diagnose import run
 from scripts.bench import PARTS
-from scripts.bench_diagnose import run
 
 
 @pytest.mark.slow
 def test_quick_bench_gives_finite_positive_figures():
     figures = run(progress=lambda msg: None, quick=True)
-    assert PARTS["diagnose"] == "scripts.bench_diagnose"
+    assert PARTS["diagnose"] == "experiments.bench.diagnose"
     assert {"diagnose_5min_s", "diagnose_speedup_vs_realtime", "diagnose_log_sim_s"} <= set(figures)
     assert all(math.isfinite(v) and v > 0.0 for v in figures.values()), figures
     assert math.isclose(

@@ -54,8 +54,9 @@ def test_cli_writes_schema_report_plots_and_a_loadable_extended_config(tmp_path,
 def test_cli_bad_input_gives_one_line_and_exit_2(args, message, tmp_path, capsys):
     log = tmp_path / "flight_0.csv"
     log.write_text("t_s,pos_n_m\n0,0\n")
-    argv = [str(log) if a == "LOG" else str(tmp_path / a) if a.endswith(".csv") else a
-            for a in args]  # fmt: skip
+    argv = [
+        str(log) if a == "LOG" else str(tmp_path / a) if a.endswith(".csv") else a for a in args
+    ]
     assert main([*argv, "--out", str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and message in err[0]

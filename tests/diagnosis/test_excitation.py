@@ -7,16 +7,26 @@ from pathlib import Path
 
 import pytest
 
-from gp.diagnosis.excitation import ExcitationError, load_schedule, schedule_from_mapping
+from diagnosis.excitation import ExcitationError, load_schedule, schedule_from_mapping
 
 MISSIONS = sorted((Path(__file__).resolve().parents[2] / "missions").glob("excite_*.toml"))
 
 
 def test_velocity_segment_points_along_heading_and_climbs_up():
-    s = schedule_from_mapping({"segment": [
-        {"kind": "velocity", "duration_s": 2.0, "speed_mps": 4.0, "heading_deg": 90.0,
-         "climb_mps": 1.0, "yaw_rate_degps": 30.0},
-    ]})  # fmt: skip
+    s = schedule_from_mapping(
+        {
+            "segment": [
+                {
+                    "kind": "velocity",
+                    "duration_s": 2.0,
+                    "speed_mps": 4.0,
+                    "heading_deg": 90.0,
+                    "climb_mps": 1.0,
+                    "yaw_rate_degps": 30.0,
+                },
+            ]
+        }
+    )
     (vn, ve, vd), yaw_rate = s.setpoint(1.0, alt_m=2.0)
     assert vn == pytest.approx(0.0, abs=1e-12) and ve == pytest.approx(4.0)
     assert vd == -1.0 and yaw_rate == pytest.approx(math.radians(30.0))
@@ -30,10 +40,14 @@ def test_altitude_segment_steers_towards_its_altitude_with_a_speed_limit():
 
 
 def test_segments_follow_each_other_and_the_last_one_holds():
-    s = schedule_from_mapping({"segment": [
-        {"kind": "velocity", "duration_s": 1.0, "speed_mps": 1.0},
-        {"kind": "velocity", "duration_s": 1.0, "speed_mps": 2.0},
-    ]})  # fmt: skip
+    s = schedule_from_mapping(
+        {
+            "segment": [
+                {"kind": "velocity", "duration_s": 1.0, "speed_mps": 1.0},
+                {"kind": "velocity", "duration_s": 1.0, "speed_mps": 2.0},
+            ]
+        }
+    )
     assert [s.setpoint(t, 2.0)[0][0] for t in (0.5, 1.5, 5.0)] == [1.0, 2.0, 2.0]
     assert s.duration_s == 2.0
 

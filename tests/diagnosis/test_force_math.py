@@ -6,14 +6,14 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from gp.diagnosis.candidates import fit_jointly, make_candidate
-from gp.diagnosis.force_model import (
+from diagnosis.candidates import fit_jointly, make_candidate
+from diagnosis.force_model import (
     BatteryModel,
     flight_time_from_voltage,
     predicted_residual,
 )
-from gp.diagnosis.forces import ForceData, acceleration, rotation_matrices
-from vehicle_sim.flight_log import FlightLog
+from diagnosis.forces import ForceData, acceleration, rotation_matrices
+from flightlog.schema import FlightLog
 
 BATTERY = BatteryModel(full_v=16.8, empty_v=14.0)
 MASS_KG = 1.5
@@ -25,12 +25,17 @@ def synthetic(n: int = 600, seed: int = 0, alt_m: np.ndarray | None = None) -> F
     rot = Rotation.from_euler("xyz", rng.uniform(-0.4, 0.4, (n, 3))).as_matrix()
     t = np.arange(n) * 0.05
     return ForceData(
-        t_s=t, segment=np.zeros(n, int), vel_ned_mps=rng.uniform(-8.0, 8.0, (n, 3)),
-        acc_ned_mps2=rng.normal(0.0, 1.0, (n, 3)), rot=rot,
+        t_s=t,
+        segment=np.zeros(n, int),
+        vel_ned_mps=rng.uniform(-8.0, 8.0, (n, 3)),
+        acc_ned_mps2=rng.normal(0.0, 1.0, (n, 3)),
+        rot=rot,
         thrust_n=rng.uniform(12.0, 18.0, n),
         alt_m=rng.uniform(0.02, 0.4, n) if alt_m is None else alt_m,
-        battery_v=16.8 - 0.004 * t, mass_kg=MASS_KG, resid_ned_n=np.zeros((n, 3)),
-    )  # fmt: skip
+        battery_v=16.8 - 0.004 * t,
+        mass_kg=MASS_KG,
+        resid_ned_n=np.zeros((n, 3)),
+    )
 
 
 def with_residual(data: ForceData, effects: dict, noise_n: float = 0.0) -> ForceData:

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gp.diagnosis.diagnosis import diagnose
+from diagnosis.diagnosis import diagnose
 from tests.diagnosis.hidden_effects import draw, fly_hidden
 from vehicle_sim import load_sim_config
 
@@ -22,8 +22,9 @@ def main_parameter_errors(name: str, truth: dict, params: dict) -> dict[str, flo
     p = truth[name]
     if name in ("rotor_drag", "body_drag"):
         key = "k_n_per_mps" if name == "rotor_drag" else "c_n_per_mps2"
-        return {f"{key}_{a}": abs(params[f"{key}_{a}"] / p[key][i] - 1.0) for i, a in
-                enumerate("xy")}  # fmt: skip
+        return {
+            f"{key}_{a}": abs(params[f"{key}_{a}"] / p[key][i] - 1.0) for i, a in enumerate("xy")
+        }
     if name == "wind":
         est = np.array([params["vel_ned_mps_n"], params["vel_ned_mps_e"]])
         true = np.array(p["vel_ned_mps"][:2])

@@ -5,22 +5,26 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gp.diagnosis.diagnosis import diagnose
-from gp.diagnosis.excitation import schedule_from_mapping
-from gp.diagnosis.fly_schedule import fly_schedule
-from gp.diagnosis.identifiability import check_identifiability
-from gp.diagnosis.replay import windows
+from diagnosis.diagnosis import diagnose
+from diagnosis.excitation import schedule_from_mapping
+from diagnosis.fly_schedule import fly_schedule
+from diagnosis.identifiability import check_identifiability
+from diagnosis.replay import windows
+from flightlog.schema import FlightLog
 from tests.diagnosis.hidden_effects import fly_hidden
 from vehicle_sim import load_sim_config
-from vehicle_sim.flight_log import FlightLog
 
 HOVER = schedule_from_mapping({"segment": [{"kind": "hover", "duration_s": 30.0}]})
-HOVER_AND_MOVE = schedule_from_mapping({"segment": [
-    {"kind": "hover", "duration_s": 8.0},
-    {"kind": "velocity", "duration_s": 4.0, "speed_mps": 3.0, "heading_deg": 60.0},
-    {"kind": "velocity", "duration_s": 4.0, "climb_mps": 1.0},
-    {"kind": "hover", "duration_s": 8.0},
-]})  # fmt: skip
+HOVER_AND_MOVE = schedule_from_mapping(
+    {
+        "segment": [
+            {"kind": "hover", "duration_s": 8.0},
+            {"kind": "velocity", "duration_s": 4.0, "speed_mps": 3.0, "heading_deg": 60.0},
+            {"kind": "velocity", "duration_s": 4.0, "climb_mps": 1.0},
+            {"kind": "hover", "duration_s": 8.0},
+        ]
+    }
+)
 
 
 def without(log: FlightLog, *names: str) -> FlightLog:

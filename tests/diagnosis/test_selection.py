@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from gp.diagnosis.candidates import FORCE_CAUSES
-from gp.diagnosis.selection import select_causes, train_test_masks
+from diagnosis.candidates import FORCE_CAUSES
+from diagnosis.selection import select_causes, train_test_masks
 from tests.diagnosis.test_force_math import BATTERY, synthetic, with_residual
 
 

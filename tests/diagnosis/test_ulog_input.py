@@ -5,18 +5,22 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gp.diagnosis.diagnosis import diagnose
-from gp.diagnosis.excitation import schedule_from_mapping
-from gp.diagnosis.fly_schedule import fly_schedule
-from gp.diagnosis.ulog_input import flight_log_from_topics, read_ulog
+from diagnosis.diagnosis import diagnose
+from diagnosis.excitation import schedule_from_mapping
+from diagnosis.fly_schedule import fly_schedule
+from flightlog.schema import FlightLog, FlightLogError
+from flightlog.ulog import flight_log_from_topics, read_ulog
 from vehicle_sim import load_sim_config
-from vehicle_sim.flight_log import FlightLog, FlightLogError
 
-HOVER = schedule_from_mapping({"segment": [
-    {"kind": "hover", "duration_s": 10.0},
-    {"kind": "velocity", "duration_s": 3.0, "speed_mps": 2.0, "heading_deg": 30.0},
-    {"kind": "hover", "duration_s": 7.0},
-]})  # fmt: skip
+HOVER = schedule_from_mapping(
+    {
+        "segment": [
+            {"kind": "hover", "duration_s": 10.0},
+            {"kind": "velocity", "duration_s": 3.0, "speed_mps": 2.0, "heading_deg": 30.0},
+            {"kind": "hover", "duration_s": 7.0},
+        ]
+    }
+)
 
 
 def topics_of(log: FlightLog) -> dict[str, dict[str, np.ndarray]]:

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from vehicle_sim.flight_log import FlightLogRecorder
+from flightlog.schema import FlightLogRecorder
 
 
 def drag_residual(vel_mps):

@@ -4,13 +4,20 @@ import math
 
 import pytest
 
-from scripts.bench_gp import run
+from experiments.bench.gp import run
 
 
 @pytest.mark.slow
 def test_quick_bench_returns_every_figure():
     figures = run(progress=lambda message: None, quick=True)
-    for name in ("gp_fit_s", "gp_fit_rmse", "gp_sklearn_fit_s", "gp_sklearn_rmse",
-                 "gp_predict_us", "gp_predict_call_us", "gp_predict_ingraph_us"):  # fmt: skip
+    for name in (
+        "gp_fit_s",
+        "gp_fit_rmse",
+        "gp_sklearn_fit_s",
+        "gp_sklearn_rmse",
+        "gp_predict_us",
+        "gp_predict_call_us",
+        "gp_predict_ingraph_us",
+    ):
         assert math.isfinite(figures[name]) and figures[name] > 0, name
     assert figures["gp_fit_rmse"] < 0.05

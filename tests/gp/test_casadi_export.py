@@ -26,8 +26,9 @@ def test_export_jacobian_matches_finite_differences_of_numpy(small_model):
         return small_model.predict(x[None])[0][0]
 
     for x in 1.5 * np.random.default_rng(2).normal(size=(5, 3)):
-        numeric = np.column_stack([(mean_at(x + h * e) - mean_at(x - h * e)) / (2 * h)
-                                   for e in np.eye(3)])  # fmt: skip
+        numeric = np.column_stack(
+            [(mean_at(x + h * e) - mean_at(x - h * e)) / (2 * h) for e in np.eye(3)]
+        )
         np.testing.assert_allclose(np.array(jac(x)), numeric, atol=1e-6)
 
 
@@ -50,5 +51,6 @@ def test_export_plugs_into_the_nmpc_residual_term_with_sx_inputs(small_model):
     x, u = ca.SX.sym("x", 4), ca.SX.sym("u", 4)
     g = ca.Function("g", [x, u], [term(x, u)])
     cmd = np.array([0.5, -0.2, 0.1, 0.0])
-    np.testing.assert_allclose(np.array(g(np.zeros(4), cmd)).ravel(),
-                               small_model.predict(cmd[None, :3])[0][0], atol=1e-9)  # fmt: skip
+    np.testing.assert_allclose(
+        np.array(g(np.zeros(4), cmd)).ravel(), small_model.predict(cmd[None, :3])[0][0], atol=1e-9
+    )

@@ -6,13 +6,13 @@ import numpy as np
 import pytest
 from gp_synthetic_logs import drag_residual, record_log
 
+from flightlog.schema import FlightLog
 from gp.datasets import DatasetConfig, residual_dataset
 from gp.errors import DatasetError
 from gp.evaluation import holdout_split, residual_rmse
 from gp.features import FeatureDefinition, feature_definition
 from gp.log_signals import model_input, model_state
 from planners.nominal_models import make_model
-from vehicle_sim.flight_log import FlightLog
 
 
 def _config(name="velocity", **kwargs):

@@ -27,8 +27,9 @@ def test_exact_gp_equals_sklearn_with_fixed_hyperparameters(lengthscales, varian
     sk_mean, sk_std = sk.predict(X_test, return_std=True)
     np.testing.assert_allclose(mean[:, 0], sk_mean, atol=1e-6)
     np.testing.assert_allclose(std[:, 0], sk_std, atol=1e-6)
-    np.testing.assert_allclose(ours.log_marginal_likelihood()[0], sk.log_marginal_likelihood_value_,
-                               atol=1e-6)  # fmt: skip
+    np.testing.assert_allclose(
+        ours.log_marginal_likelihood()[0], sk.log_marginal_likelihood_value_, atol=1e-6
+    )
 
 
 def test_log_marginal_likelihood_gradients_match_finite_differences():

@@ -6,15 +6,17 @@ import numpy as np
 import pytest
 from gp_synthetic_logs import record_log
 
+from flightlog.schema import write_flight_log
 from gp.features import feature_definition
 from gp.model_io import load_model
 from scripts.fit_gp import main
-from vehicle_sim.flight_log import write_flight_log
 
 
 def test_fit_gp_writes_model_plots_and_reports_rmse(tmp_path, capsys):
-    logs = [write_flight_log(tmp_path / f"flight{i}.csv", record_log(400, seed=i, noise_mps=0.002))
-            for i in range(2)]  # fmt: skip
+    logs = [
+        write_flight_log(tmp_path / f"flight{i}.csv", record_log(400, seed=i, noise_mps=0.002))
+        for i in range(2)
+    ]
     out = tmp_path / "models" / "residual"
     code = main([*map(str, logs), "--out", str(out), "--m", "10", "--restarts", "1"])
     assert code == 0
@@ -57,8 +59,20 @@ def test_fit_gp_identifies_the_lag_when_flying_first_order_lag(tmp_path, capsys)
 
     log = write_flight_log(tmp_path / "lag.csv", lag_log(0.55, 0.25))
     out = tmp_path / "lag_model"
-    args = [str(log), "--out", str(out), "--nominal", "first_order_lag",
-            "--features", "state_input", "--m", "8", "--restarts", "1", "--no-plots"]  # fmt: skip
+    args = [
+        str(log),
+        "--out",
+        str(out),
+        "--nominal",
+        "first_order_lag",
+        "--features",
+        "state_input",
+        "--m",
+        "8",
+        "--restarts",
+        "1",
+        "--no-plots",
+    ]
     assert main(args) == 0
     assert "identified velocity lag tau_s=0.55" in capsys.readouterr().err
     params = dict(load_model(out).features.nominal_params)

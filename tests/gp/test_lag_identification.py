@@ -4,10 +4,10 @@ by a lag with randomly drawn (seeded) time constants the identification never se
 import numpy as np
 import pytest
 
+from flightlog.schema import FlightLogRecorder
 from gp.errors import DatasetError
 from gp.lag_identification import identify_velocity_lag
 from gp.training import TrainingConfig, train_residual_model
-from vehicle_sim.flight_log import FlightLogRecorder
 
 
 def lag_log(tau_s, tau_d_s, seed=0, n_rows=1500, dt_s=0.02, noise_mps=0.002, vertical=True):
@@ -21,13 +21,25 @@ def lag_log(tau_s, tau_d_s, seed=0, n_rows=1500, dt_s=0.02, noise_mps=0.002, ver
     for k in range(n_rows):
         if k % 60 == 0:
             cmd = rng.uniform(-2.0, 2.0, 3) * np.array([1.0, 1.0, 0.5 if vertical else 0.0])
-        rec.append({
-            "t_s": k * dt_s, "pos_n_m": 0.0, "pos_e_m": 0.0, "pos_d_m": -5.0,
-            "vel_n_mps": vel[0], "vel_e_mps": vel[1], "vel_d_mps": vel[2],
-            "q_w": 1.0, "q_x": 0.0, "q_y": 0.0, "q_z": 0.0,
-            "cmd_vel_n_mps": cmd[0], "cmd_vel_e_mps": cmd[1], "cmd_vel_d_mps": cmd[2],
-            "cmd_yaw_rate_radps": 0.0,
-        })  # fmt: skip
+        rec.append(
+            {
+                "t_s": k * dt_s,
+                "pos_n_m": 0.0,
+                "pos_e_m": 0.0,
+                "pos_d_m": -5.0,
+                "vel_n_mps": vel[0],
+                "vel_e_mps": vel[1],
+                "vel_d_mps": vel[2],
+                "q_w": 1.0,
+                "q_x": 0.0,
+                "q_y": 0.0,
+                "q_z": 0.0,
+                "cmd_vel_n_mps": cmd[0],
+                "cmd_vel_e_mps": cmd[1],
+                "cmd_vel_d_mps": cmd[2],
+                "cmd_yaw_rate_radps": 0.0,
+            }
+        )
         vel = cmd + (vel - cmd) * np.exp(-dt_s / taus) + noise_mps * rng.normal(size=3)
     return rec.to_log()
 
@@ -64,9 +76,10 @@ def test_training_against_first_order_lag_identifies_missing_time_constants():
     logs = [lag_log(0.7, 0.3, seed=s) for s in range(2)]
     messages = []
     result = train_residual_model(
-        logs, TrainingConfig(features="state_input", nominal="first_order_lag", m=10, restarts=1),
+        logs,
+        TrainingConfig(features="state_input", nominal="first_order_lag", m=10, restarts=1),
         messages.append,
-    )  # fmt: skip
+    )
     params = dict(result.model.features.nominal_params)
     assert params["tau_s"] == pytest.approx(0.7, rel=0.03)
     assert params["tau_d_s"] == pytest.approx(0.3, rel=0.05)
@@ -79,9 +92,14 @@ def test_training_against_first_order_lag_identifies_missing_time_constants():
 def test_given_time_constant_is_kept():
     result = train_residual_model(
         [lag_log(0.7, 0.3)],
-        TrainingConfig(features="state_input", nominal="first_order_lag",
-                       nominal_params=(("tau_s", 0.3),), m=10, restarts=1),
-    )  # fmt: skip
+        TrainingConfig(
+            features="state_input",
+            nominal="first_order_lag",
+            nominal_params=(("tau_s", 0.3),),
+            m=10,
+            restarts=1,
+        ),
+    )
     assert dict(result.model.features.nominal_params) == {"tau_s": 0.3}
     assert "identified_lag" not in result.model.training
     assert max(result.metrics["nominal_rmse_mps"]) > 0.01

@@ -29,22 +29,26 @@ def test_round_trip_keeps_predictions_and_description(small_model, tmp_path):
     doc = json.loads(json_path.read_text())
     assert doc["format_version"] == 1
     assert doc["feature_definition"]["nominal_model"] == {
-        "name": "kinematic_4dof", "params": {"residual_dt_s": 0.05}
-    }  # fmt: skip
+        "name": "kinematic_4dof",
+        "params": {"residual_dt_s": 0.05},
+    }
     assert len(doc["hyperparameters"]) == 3 and doc["training_data"] == {"n_rows": 600}
     f = loaded.casadi_function()
-    np.testing.assert_allclose(np.array(f(X[0])[0]).ravel(), small_model.predict(X[:1])[0][0],
-                               atol=1e-9)  # fmt: skip
+    np.testing.assert_allclose(
+        np.array(f(X[0])[0]).ravel(), small_model.predict(X[:1])[0][0], atol=1e-9
+    )
 
 
 @pytest.mark.parametrize(
     ("expected", "message"),
     [
         (feature_definition("history"), r"trained on features 'velocity' .* expects 'history'"),
-        (feature_definition("velocity", "kinematic_4dof", residual_dt_s=0.02),
-         r"residual_dt_s=0\.05\).* expects .*residual_dt_s=0\.02"),
+        (
+            feature_definition("velocity", "kinematic_4dof", residual_dt_s=0.02),
+            r"residual_dt_s=0\.05\).* expects .*residual_dt_s=0\.02",
+        ),
     ],
-)  # fmt: skip
+)
 def test_loading_against_another_feature_definition_is_an_error(
     small_model, tmp_path, expected, message
 ):

@@ -60,8 +60,9 @@ def test_bound_gradients_match_finite_differences():
     res = bound(theta, Z)
     h = 1e-6
     analytic = np.r_[res.grad_log_lengthscales, res.grad_log_variance, res.grad_log_noise]
-    numeric = [(bound(theta + h * e, Z).value - bound(theta - h * e, Z).value) / (2 * h)
-               for e in np.eye(5)]  # fmt: skip
+    numeric = [
+        (bound(theta + h * e, Z).value - bound(theta - h * e, Z).value) / (2 * h) for e in np.eye(5)
+    ]
     np.testing.assert_allclose(analytic, numeric, rtol=1e-5, atol=1e-5)
     numeric_z = np.zeros_like(Z)
     for idx in np.ndindex(Z.shape):

@@ -54,8 +54,9 @@ def test_optimising_inducing_positions_does_not_lower_the_bound():
     X = rng.uniform(-3, 3, size=(800, 1))
     y = np.sin(2 * X[:, 0]) + 0.05 * rng.normal(size=800)
     fixed = SparseGP(inducing=InducingConfig("random", m=6), n_restarts=1).fit(X, y)
-    moved = SparseGP(inducing=InducingConfig("random", m=6, optimize_positions=True),
-                     n_restarts=1).fit(X, y)  # fmt: skip
+    moved = SparseGP(
+        inducing=InducingConfig("random", m=6, optimize_positions=True), n_restarts=1
+    ).fit(X, y)
     assert moved.objective_[0] > fixed.objective_[0]
     assert not np.allclose(moved.inducing_points_, fixed.inducing_points_)
 
@@ -121,5 +122,6 @@ def test_bad_training_data_give_one_line_errors():
     with pytest.raises(GPInputError, match=r"30 inducing points requested but .* 20 distinct"):
         SparseGP(inducing=InducingConfig(m=30)).fit(X, np.zeros(20))
     with pytest.raises(GPInputError, match=r"kernel has 3 lengthscales but X has 2"):
-        SparseGP(kernel=SquaredExponentialARD(np.ones(3), 1.0),
-                 inducing=InducingConfig(m=4)).fit(X, np.zeros(20))  # fmt: skip
+        SparseGP(kernel=SquaredExponentialARD(np.ones(3), 1.0), inducing=InducingConfig(m=4)).fit(
+            X, np.zeros(20)
+        )

@@ -18,8 +18,9 @@ from gp.training import TrainingConfig, train_residual_model
 )
 def test_every_feature_set_halves_the_held_out_nominal_error(features, nominal, params):
     logs = [record_log(500, seed=s, noise_mps=0.002) for s in range(2)]
-    config = TrainingConfig(features=features, nominal=nominal, nominal_params=params, m=20,
-                            restarts=2, seed=1)  # fmt: skip
+    config = TrainingConfig(
+        features=features, nominal=nominal, nominal_params=params, m=20, restarts=2, seed=1
+    )
     messages = []
     result = train_residual_model(logs, config, messages.append)
     nominal_rmse = np.array(result.metrics["nominal_rmse_mps"])

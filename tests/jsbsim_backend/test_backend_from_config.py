@@ -6,12 +6,12 @@ from dataclasses import replace
 import pytest
 
 from companion.inprocess_link import InProcessLink
+from flightlog.schema import FlightLogRecorder, read_flight_log, write_flight_log
 from scripts.vehicle_sim_cli import build_endpoint, main, parse_args
 from tests.jsbsim_backend.jsbsim_helpers import f450_config
 from vehicle_sim import SimConfigError, Simulator
 from vehicle_sim.backends import make_backend
 from vehicle_sim.config import PRESET_DIR
-from vehicle_sim.flight_log import FlightLogRecorder, read_flight_log, write_flight_log
 from vehicle_sim.jsbsim_backend import JsbsimBackend
 
 FREE_PORTS = ["--offboard-bind-port", "0", "--gcs-bind-port", "0"]

@@ -2,7 +2,7 @@
 
 import pytest
 
-from scripts import bench_jsbsim
+from experiments.bench import jsbsim as bench_jsbsim
 
 
 @pytest.mark.slow

@@ -5,8 +5,8 @@ from pathlib import Path
 
 import pytest
 
-from scripts.jsbsim_diagnosis import main
-from vehicle_sim.flight_log import read_flight_log
+from experiments.jsbsim_diagnosis import main
+from flightlog.schema import read_flight_log
 
 SPEED_MISSION = Path(__file__).resolve().parents[2] / "missions" / "excite_speed.toml"
 

@@ -50,9 +50,14 @@ def test_mavsdk_mission_flies_on_both_backends(backend):
         action.arm()
         wait_until(telemetry.armed, 3.0, "MAVSDK to see the vehicle armed")
         action.takeoff()
-        wait_until(lambda: endpoint.state.mode == FlightMode.HOLD
-                   and -endpoint.state.pos_ned_m[2] > TAKEOFF_ALT_M - 0.2, 30.0,
-                   "takeoff")  # fmt: skip
+        wait_until(
+            lambda: (
+                endpoint.state.mode == FlightMode.HOLD
+                and -endpoint.state.pos_ned_m[2] > TAKEOFF_ALT_M - 0.2
+            ),
+            30.0,
+            "takeoff",
+        )
         wait_until(telemetry.in_air, 3.0, "MAVSDK in_air")
         assert telemetry.position().relative_altitude_m == pytest.approx(TAKEOFF_ALT_M, abs=0.3)
 

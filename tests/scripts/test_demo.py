@@ -39,8 +39,13 @@ def test_demo_flies_nominal_learns_and_flies_augmented_over_mavsdk(tmp_path, cap
     assert aug_tracking < nom_tracking
     report = (out / "report.md").read_text()
     assert "identified" in report
-    for name in ("paths.png", "gp_low_speed_residual_n.png", "nominal.csv", "augmented.csv",
-                 "gp_low_speed.json"):  # fmt: skip
+    for name in (
+        "paths.png",
+        "gp_low_speed_residual_n.png",
+        "nominal.csv",
+        "augmented.csv",
+        "gp_low_speed.json",
+    ):
         assert (out / name).stat().st_size > 0
         if name.endswith(".png"):
             assert f"]({name})" in report

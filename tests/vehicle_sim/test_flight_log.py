@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from vehicle_sim.flight_log import (
+from flightlog.schema import (
     REQUIRED_COLUMNS,
     FlightLogError,
     FlightLogRecorder,

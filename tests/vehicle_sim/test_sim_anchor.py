@@ -101,8 +101,12 @@ def test_a_nearly_unit_quaternion_is_normalised():
     ],
 )
 def test_bad_anchor_states_are_rejected(kwargs, match):
-    fields = {"pos_ned_m": (0.0, 0.0, -1.0), "vel_ned_mps": (0.0, 0.0, 0.0),
-              "q_wxyz": (1.0, 0.0, 0.0, 0.0), **kwargs}  # fmt: skip
+    fields = {
+        "pos_ned_m": (0.0, 0.0, -1.0),
+        "vel_ned_mps": (0.0, 0.0, 0.0),
+        "q_wxyz": (1.0, 0.0, 0.0, 0.0),
+        **kwargs,
+    }
     with pytest.raises(ValueError, match=match):
         AnchorState(**fields)
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from flightlog.schema import FlightLogRecorder, read_flight_log, write_flight_log
 from tests.vehicle_sim.sim_flying import fly
 from vehicle_sim import (
     CommandResult,
@@ -14,7 +15,6 @@ from vehicle_sim import (
     VelocitySetpoint,
     load_sim_config,
 )
-from vehicle_sim.flight_log import FlightLogRecorder, read_flight_log, write_flight_log
 
 
 def test_full_flight_through_the_public_api(tmp_path):

@@ -32,11 +32,16 @@ def test_presets_have_the_documented_vehicles():
 
 
 def test_effects_from_toml_from_mappings_and_from_objects(tmp_path):
-    path = variant(tmp_path, "# No effects by default", "# none", extra=(
-        "\n[effects.rotor_drag]\nk_n_per_mps = [0.3, 0.3, 0.1]\n"
-        "[effects.wind]\nvel_ned_mps = [0.0, 2.0, 0.0]\n"
-        "[effects.payload]\nenabled = false\nmass_ratio = 1.4\n"
-    ))  # fmt: skip
+    path = variant(
+        tmp_path,
+        "# No effects by default",
+        "# none",
+        extra=(
+            "\n[effects.rotor_drag]\nk_n_per_mps = [0.3, 0.3, 0.1]\n"
+            "[effects.wind]\nvel_ned_mps = [0.0, 2.0, 0.0]\n"
+            "[effects.payload]\nenabled = false\nmass_ratio = 1.4\n"
+        ),
+    )
     cfg = load_sim_config(path)
     assert cfg.effect_names == ("rotor_drag", "wind") and cfg.preset_name == "vehicle"
     assert cfg.effect("wind").vel_ned_mps == (0.0, 2.0, 0.0)
@@ -46,9 +51,16 @@ def test_effects_from_toml_from_mappings_and_from_objects(tmp_path):
     cfg = load_sim_config("iris", effects=[RotorDrag(k_n_per_mps=(0.5, 0.5, 0.2)), Wind()])
     assert cfg.without_effects("wind").effect_names == ("rotor_drag",)
     assert set(EFFECT_NAMES) == {
-        "rotor_drag", "body_drag", "wind", "gusts", "payload", "battery_sag", "ground_effect",
-        "motor_lag", "command_delay",
-    }  # fmt: skip
+        "rotor_drag",
+        "body_drag",
+        "wind",
+        "gusts",
+        "payload",
+        "battery_sag",
+        "ground_effect",
+        "motor_lag",
+        "command_delay",
+    }
 
 
 @pytest.mark.parametrize(
@@ -63,12 +75,15 @@ def test_effects_from_toml_from_mappings_and_from_objects(tmp_path):
         ("full_v = 16.8", "full_v = 12.0", r"battery\.empty_v = 14\.0 must be below full_v"),
         ("[sim]", "[simulation]", r"simulation: unknown section"),
         ("= 1100.0", "= 300.0", r"vehicle\.thrust_coeff_n_per_radps2: the rotors give only"),
-        ("[sim]", '[sim]\nbackend = "xplane"',
-         r"sim\.backend = 'xplane' is unknown; choose one of builtin, jsbsim$"),
+        (
+            "[sim]",
+            '[sim]\nbackend = "xplane"',
+            r"sim\.backend = 'xplane' is unknown; choose one of builtin, jsbsim$",
+        ),
         ("[sim]", "[sim]\nbackend = 1", r"sim\.backend = 1 is unknown; choose one of builtin"),
         ("[sim]", '[sim]\nbackends = "jsbsim"', r"sim\.backends: unknown key; did you mean"),
     ],
-)  # fmt: skip
+)
 def test_bad_vehicle_files(tmp_path, old, new, match):
     with pytest.raises(SimConfigError, match=match) as info:
         load_sim_config(variant(tmp_path, old, new))
@@ -82,15 +97,20 @@ def test_bad_vehicle_files(tmp_path, old, new, match):
         ({"payload": {"mass_ratio": -1.0}}, r"effects\.payload\.mass_ratio = -1\.0 is out of"),
         ({"payload": {"mass_ratio": "1.2"}}, r"effects\.payload\.mass_ratio: expected a number"),
         ({"rotor_drag": {"k_n_per_mps": 0.3}}, r"rotor_drag\.k_n_per_mps: expected a list of 3"),
-        ({"rotor_drag": {"k": [0.3, 0.3, 0.1]}}, r"rotor_drag\.k: unknown parameter; rotor_drag "
-                                                 r"takes k_n_per_mps \[N/\(m/s\)\]"),
+        (
+            {"rotor_drag": {"k": [0.3, 0.3, 0.1]}},
+            r"rotor_drag\.k: unknown parameter; rotor_drag "
+            r"takes k_n_per_mps \[N/\(m/s\)\]",
+        ),
         ({"motor_lag": {"tau_s": 0.0}}, r"effects\.motor_lag\.tau_s = 0\.0 is out of range"),
         ({"wind": {}}, r"effects\.wind: acts only through drag; also enable rotor_drag"),
-        ({"gusts": {}, "body_drag": {}, "command_delay": {"enabled": "yes"}},
-         r"effects\.command_delay\.enabled: expected true or false"),
+        (
+            {"gusts": {}, "body_drag": {}, "command_delay": {"enabled": "yes"}},
+            r"effects\.command_delay\.enabled: expected true or false",
+        ),
         ({"ground_effect": 3}, r"effects\.ground_effect: expected a table of parameters"),
     ],
-)  # fmt: skip
+)
 def test_bad_effects(effects, match):
     with pytest.raises(SimConfigError, match=match) as info:
         load_sim_config("iris", effects)

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import json
 
+from flightlog.schema import FlightLogRecorder, read_flight_log, write_flight_log
 from vehicle_sim import FlightMode, Simulator, VelocitySetpoint, load_sim_config
 from vehicle_sim.effects import EFFECT_CLASSES
-from vehicle_sim.flight_log import FlightLogRecorder, read_flight_log, write_flight_log
 
 ALL_EFFECTS = {name: {} for name in EFFECT_CLASSES}
 

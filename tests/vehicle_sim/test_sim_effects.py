@@ -34,15 +34,25 @@ def accel(p: BuiltinPlant) -> np.ndarray:
     """Instantaneous acceleration NED of the plant's state, rotors commanded at hover."""
     dx = np.zeros(ph.N_DYN)
     cmd = np.full(4, N_HOVER)
-    ph.derivatives(p.x, cmd, p.pp, p.rp, p.spin, p.ep, p.x[ph.GUST : ph.GUST + 3],
-                   ph.thrust_factor(p.x, p.ep), dx)  # fmt: skip
+    ph.derivatives(
+        p.x,
+        cmd,
+        p.pp,
+        p.rp,
+        p.spin,
+        p.ep,
+        p.x[ph.GUST : ph.GUST + 3],
+        ph.thrust_factor(p.x, p.ep),
+        dx,
+    )
     return dx[ph.VEL : ph.VEL + 3]
 
 
 def coast(p: BuiltinPlant, seconds: float, noise=None, n_cmd=N_HOVER) -> None:
     noise = np.zeros((0, 3)) if noise is None else noise
-    ph.run_plant(round(seconds / DT), DT, p.x, np.full(4, n_cmd), p.pp, p.rp, p.spin, p.ep,
-                 noise, p.aux)  # fmt: skip
+    ph.run_plant(
+        round(seconds / DT), DT, p.x, np.full(4, n_cmd), p.pp, p.rp, p.spin, p.ep, noise, p.aux
+    )
 
 
 def test_no_effect_hover_is_force_free():
@@ -54,8 +64,9 @@ def test_rotor_drag_decelerates_by_k_v_over_m_in_body_axes():
     p = in_air({"rotor_drag": {"k_n_per_mps": k}}, vel=(3.0, -2.0, 1.0))
     np.testing.assert_allclose(accel(p), (-0.4 * 3 / M, 0.3 * 2 / M, -0.2 * 1 / M), rtol=1e-12)
     # heading east, flying north: the velocity is along the body's -y axis, so k_y acts
-    p = in_air({"rotor_drag": {"k_n_per_mps": (0.5, 0.1, 0.0)}}, vel=(2.0, 0.0, 0.0),
-               yaw_rad=math.pi / 2)  # fmt: skip
+    p = in_air(
+        {"rotor_drag": {"k_n_per_mps": (0.5, 0.1, 0.0)}}, vel=(2.0, 0.0, 0.0), yaw_rad=math.pi / 2
+    )
     np.testing.assert_allclose(accel(p), (-0.1 * 2 / M, 0.0, 0.0), atol=1e-12)
     # coasting with the velocity loop frozen: v(t) = v0 exp(-k t / m)
     p = in_air({"rotor_drag": {"k_n_per_mps": k}}, vel=(3.0, 0.0, 0.0))
@@ -85,8 +96,11 @@ def test_wind_acts_through_drag_on_the_air_relative_velocity():
 def test_gusts_are_seeded_zero_mean_with_the_configured_intensity():
     sigma, length = 1.5, 2.0  # ~2 s correlation time at hover (speed floor 1 m/s)
     samples = []
-    p = BuiltinPlant(load_sim_config("iris", {
-        "rotor_drag": {}, "gusts": {"intensity_mps": sigma, "length_scale_m": length}}))
+    p = BuiltinPlant(
+        load_sim_config(
+            "iris", {"rotor_drag": {}, "gusts": {"intensity_mps": sigma, "length_scale_m": length}}
+        )
+    )
     noise = np.random.default_rng(3).standard_normal((1_000_000, 3))
     for i in range(20_000):  # 2000 s on the ground, sampled every 0.1 s
         coast(p, 0.1, noise[i * 50 : (i + 1) * 50], n_cmd=0.0)
@@ -145,8 +159,9 @@ def test_battery_sag_loses_thrust_with_discharge():
 
 def test_ground_effect_raises_thrust_below_two_rotor_radii_only():
     gain, radius, height = 0.25, 0.127, 0.1
-    effects = {"ground_effect": {"max_gain": gain, "rotor_radius_m": radius,
-                                 "rotor_height_m": height}}  # fmt: skip
+    effects = {
+        "ground_effect": {"max_gain": gain, "rotor_radius_m": radius, "rotor_height_m": height}
+    }
     for alt in (0.0, 0.05, 0.12, 2 * radius - height - 1e-3):
         h = alt + height
         expected = -G * gain * (1 - h / (2 * radius)) ** 2

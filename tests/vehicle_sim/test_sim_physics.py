@@ -19,17 +19,29 @@ def plant(effects=None, preset="iris"):
 
 
 def run(p: BuiltinPlant, n_cmd, seconds: float, noise=NO_NOISE):
-    ph.run_plant(round(seconds / DT), DT, p.x, np.asarray(n_cmd, float), p.pp, p.rp, p.spin,
-                 p.ep, noise, p.aux)  # fmt: skip
+    ph.run_plant(
+        round(seconds / DT),
+        DT,
+        p.x,
+        np.asarray(n_cmd, float),
+        p.pp,
+        p.rp,
+        p.spin,
+        p.ep,
+        noise,
+        p.aux,
+    )
 
 
 def rotation(q):
     w, x, y, z = q
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-    ])  # fmt: skip
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
 
 
 def test_free_fall_with_motors_off_matches_g():

@@ -64,12 +64,19 @@ class Client:
     socket buffer while a test waits (the kernel would then drop the replies it waits for).
     """
 
-    def __init__(self, port: int | None = None, source_system: int = 245,
-                 signing_key: bytes | None = None, url: str | None = None):  # fmt: skip
+    def __init__(
+        self,
+        port: int | None = None,
+        source_system: int = 245,
+        signing_key: bytes | None = None,
+        url: str | None = None,
+    ):
         self.conn = mavutil.mavlink_connection(
-            url or f"udpout:{LOOPBACK}:{port}", source_system=source_system,
-            source_component=190, dialect="common",
-        )  # fmt: skip
+            url or f"udpout:{LOOPBACK}:{port}",
+            source_system=source_system,
+            source_component=190,
+            dialect="common",
+        )
         if signing_key is not None:
             self.conn.setup_signing(signing_key, sign_outgoing=True)
         self.source_system = source_system
@@ -125,15 +132,22 @@ class Client:
         while not self._inbox.empty():
             self._inbox.get_nowait()
 
-    def command(self, command: int, *params: float, target_system: int = 1,
-                timeout_s: float = 3.0, use_int: bool = False):  # fmt: skip
+    def command(
+        self,
+        command: int,
+        *params: float,
+        target_system: int = 1,
+        timeout_s: float = 3.0,
+        use_int: bool = False,
+    ):
         """Send a COMMAND_LONG (or COMMAND_INT) and return its ACK (None if none came)."""
         p = list(params) + [0.0] * (7 - len(params))
         self.forget()
         with self.send_lock:
             if use_int:
-                self.mav.command_int_send(target_system, 1, 0, command, 0, 0, *p[:4],
-                                          int(p[4]), int(p[5]), p[6])  # fmt: skip
+                self.mav.command_int_send(
+                    target_system, 1, 0, command, 0, 0, *p[:4], int(p[4]), int(p[5]), p[6]
+                )
             else:
                 self.mav.command_long_send(target_system, 1, command, 0, *p)
         return self.recv(
@@ -148,14 +162,32 @@ class Client:
             self.mav.param_set_send(1, 1, name.encode(), value, 9)
         return self.recv("PARAM_VALUE", 3.0, lambda m: m.param_id == name)
 
-    def send_velocity(self, vel_ned_mps=(0.0, 0.0, 0.0), frame: int = 1,
-                      mask: int = MASK_VELOCITY_YAW_RATE, yaw_rate_radps: float = 0.0,
-                      time_boot_ms: int = 0, target_system: int = 1):  # fmt: skip
+    def send_velocity(
+        self,
+        vel_ned_mps=(0.0, 0.0, 0.0),
+        frame: int = 1,
+        mask: int = MASK_VELOCITY_YAW_RATE,
+        yaw_rate_radps: float = 0.0,
+        time_boot_ms: int = 0,
+        target_system: int = 1,
+    ):
         with self.send_lock:
             self.mav.set_position_target_local_ned_send(
-                time_boot_ms, target_system, 1, frame, mask, 0.0, 0.0, 0.0, *vel_ned_mps,
-                0.0, 0.0, 0.0, 0.0, yaw_rate_radps,
-            )  # fmt: skip
+                time_boot_ms,
+                target_system,
+                1,
+                frame,
+                mask,
+                0.0,
+                0.0,
+                0.0,
+                *vel_ned_mps,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                yaw_rate_radps,
+            )
 
     def start_stream(self, vel_ned_mps=(0.0, 0.0, 0.0), rate_hz: float = 20.0) -> None:
         """Stream a constant velocity setpoint from a thread until ``stop_stream``."""

@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from scripts.bench_link import run
+from experiments.bench.link import run
 
 
 @pytest.mark.slow

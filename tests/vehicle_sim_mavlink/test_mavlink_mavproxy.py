@@ -24,11 +24,22 @@ class MavproxyProcess:
     def __init__(self, port: int, workdir: Path) -> None:
         self.lines: list[str] = []
         self.proc = subprocess.Popen(
-            [sys.executable, str(MAVPROXY), "--master", f"udpin:127.0.0.1:{port}", "--no-state",
-             "--default-modules", MODULES],
-            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-            cwd=workdir, env={**os.environ, "HOME": str(workdir)},
-        )  # fmt: skip
+            [
+                sys.executable,
+                str(MAVPROXY),
+                "--master",
+                f"udpin:127.0.0.1:{port}",
+                "--no-state",
+                "--default-modules",
+                MODULES,
+            ],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+            cwd=workdir,
+            env={**os.environ, "HOME": str(workdir)},
+        )
         self._reader = threading.Thread(target=self._read, daemon=True)
         self._reader.start()
 
@@ -74,8 +85,11 @@ def test_mavproxy_connects_arms_and_takes_off(tmp_path):
 
         mavproxy.send("long NAV_TAKEOFF 0 0 0 0 0 0 2.5")
         wait_until(lambda: -endpoint.state.pos_ned_m[2] > 1.0, 10.0, "the vehicle to climb")
-        wait_until(lambda: endpoint.state.mode == FlightMode.HOLD
-                   and -endpoint.state.pos_ned_m[2] > 2.3, 15.0, "takeoff to finish")  # fmt: skip
+        wait_until(
+            lambda: endpoint.state.mode == FlightMode.HOLD and -endpoint.state.pos_ned_m[2] > 2.3,
+            15.0,
+            "takeoff to finish",
+        )
         assert mavproxy.said("NAV_TAKEOFF: ACCEPTED")
         wait_until(lambda: mavproxy.said("Takeoff complete"), 5.0, "STATUSTEXT in MAVProxy")
         assert endpoint.state.armed

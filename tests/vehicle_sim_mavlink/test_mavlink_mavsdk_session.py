@@ -44,8 +44,11 @@ def test_mavsdk_full_session():
         action.arm()
         wait_until(telemetry.armed, 3.0, "MAVSDK to see the vehicle armed")
         action.takeoff()
-        wait_until(lambda: endpoint.state.mode == FlightMode.HOLD
-                   and -endpoint.state.pos_ned_m[2] > 2.8, 20.0, "takeoff to 3 m")  # fmt: skip
+        wait_until(
+            lambda: endpoint.state.mode == FlightMode.HOLD and -endpoint.state.pos_ned_m[2] > 2.8,
+            20.0,
+            "takeoff to 3 m",
+        )
         wait_until(telemetry.in_air, 3.0, "MAVSDK in_air")
         assert telemetry.position().relative_altitude_m == pytest.approx(3.0, abs=0.3)
 

@@ -43,7 +43,9 @@ def test_request_list_sends_every_param_with_count_and_index():
 def test_request_read_by_name_and_by_index():
     store = Store()
     assert fields(params.request_read(store, b"MIS_TAKEOFF_ALT", -1).values[0])[:2] == (
-        "MIS_TAKEOFF_ALT", 2.5)  # fmt: skip
+        "MIS_TAKEOFF_ALT",
+        2.5,
+    )
     assert fields(params.request_read(store, "", 1).values[0])[0] == "COM_OF_LOSS_T"
     missing = params.request_read(store, "NOPE", -1)
     assert missing.values == () and "NOPE unknown" in missing.problem

@@ -30,8 +30,13 @@ def frame(msg: mavlink2.MAVLink_message, source_system: int = 245) -> bytes:
     return bytes(msg.pack(mavlink2.MAVLink(None, srcSystem=source_system, srcComponent=190)))
 
 
-def setpoint(vel=(0.0, 0.0, 0.0), frame_id: int = 1, mask: int = MASK_VELOCITY,
-             target_system: int = 1, yaw_rate: float = 0.0):  # fmt: skip
+def setpoint(
+    vel=(0.0, 0.0, 0.0),
+    frame_id: int = 1,
+    mask: int = MASK_VELOCITY,
+    target_system: int = 1,
+    yaw_rate: float = 0.0,
+):
     return mavlink2.MAVLink_set_position_target_local_ned_message(
         0, target_system, 1, frame_id, mask, 0, 0, 0, *vel, 0, 0, 0, 0, yaw_rate
     )
@@ -118,12 +123,18 @@ def hostile_packets(rng: random.Random, n: int) -> list[bytes]:
             packets.append(bytes(data))
         elif kind == 3:  # well-formed, for another system, from random sources
             target = rng.randint(2, 255)
-            msg = rng.choice([
-                mavlink2.MAVLink_command_long_message(target, 1, 400, 0, 0, 21196, 0, 0, 0, 0, 0),
-                mavlink2.MAVLink_command_int_message(target, 1, 0, 21, 0, 0, 0, 0, 0, 0, 0, 0, 0),
-                setpoint((5.0, 5.0, 5.0), target_system=target),
-                mavlink2.MAVLink_param_set_message(target, 1, b"COM_OF_LOSS_T", 0.0, 9),
-            ])  # fmt: skip
+            msg = rng.choice(
+                [
+                    mavlink2.MAVLink_command_long_message(
+                        target, 1, 400, 0, 0, 21196, 0, 0, 0, 0, 0
+                    ),
+                    mavlink2.MAVLink_command_int_message(
+                        target, 1, 0, 21, 0, 0, 0, 0, 0, 0, 0, 0, 0
+                    ),
+                    setpoint((5.0, 5.0, 5.0), target_system=target),
+                    mavlink2.MAVLink_param_set_message(target, 1, b"COM_OF_LOSS_T", 0.0, 9),
+                ]
+            )
             packets.append(frame(msg, source_system=rng.randint(1, 255)))
         else:  # well-formed, for us, unusable
             vel = tuple(rng.choice([math.nan, math.inf, -1e9, 1e9, 0.5]) for _ in range(3))
@@ -137,8 +148,11 @@ def hostile_packets(rng: random.Random, n: int) -> list[bytes]:
 def test_ten_thousand_hostile_packets_leave_the_vehicle_flying(endpoint, client):
     assert client.command(400, 1).result == MAV_RESULT_ACCEPTED
     assert client.command(22, *[math.nan] * 7).result == MAV_RESULT_ACCEPTED
-    wait_until(lambda: endpoint.state.mode == FlightMode.HOLD
-               and -endpoint.state.pos_ned_m[2] > 2.3, 15.0, "takeoff")  # fmt: skip
+    wait_until(
+        lambda: endpoint.state.mode == FlightMode.HOLD and -endpoint.state.pos_ned_m[2] > 2.3,
+        15.0,
+        "takeoff",
+    )
     wait_until(lambda: np.linalg.norm(endpoint.state.vel_ned_mps) < 0.05, 10.0, "settled hover")
     hover_m = endpoint.state.pos_ned_m.copy()
     before = endpoint.stats
@@ -149,8 +163,11 @@ def test_ten_thousand_hostile_packets_leave_the_vehicle_flying(endpoint, client)
             for data in packets[start : start + 200]:
                 sock.sendto(data, (LOOPBACK, endpoint.local_port))
             sent = start + min(200, len(packets) - start)
-            wait_until(lambda n=sent: endpoint.stats.datagrams_received - before.datagrams_received
-                       >= n, 10.0, "the endpoint to read the packets")  # fmt: skip
+            wait_until(
+                lambda n=sent: endpoint.stats.datagrams_received - before.datagrams_received >= n,
+                10.0,
+                "the endpoint to read the packets",
+            )
 
     pong = None
     for _ in range(3):
@@ -168,7 +185,12 @@ def test_ten_thousand_hostile_packets_leave_the_vehicle_flying(endpoint, client)
 
     stats = endpoint.stats
     assert stats.datagrams_received - before.datagrams_received >= 10_000
-    for name in ("garbage_datagrams", "bad_frames", "truncated_datagrams", "wrong_target",
-                 "setpoints_rejected"):  # fmt: skip
+    for name in (
+        "garbage_datagrams",
+        "bad_frames",
+        "truncated_datagrams",
+        "wrong_target",
+        "setpoints_rejected",
+    ):
         assert getattr(stats, name) > getattr(before, name), name
     assert stats.handler_errors == 0

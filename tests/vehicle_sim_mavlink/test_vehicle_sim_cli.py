@@ -47,8 +47,16 @@ def test_taken_port_is_reported(capsys):
 
 
 def test_effect_flags_become_overrides():
-    config = parse_args(["--effect", "rotor_drag", "--effect", "wind.vel_ned_mps=[3, 0, 0]",
-                         "--effect", "rotor_drag.k_n_per_mps=[0.3, 0.3, 0.1]"])  # fmt: skip
+    config = parse_args(
+        [
+            "--effect",
+            "rotor_drag",
+            "--effect",
+            "wind.vel_ned_mps=[3, 0, 0]",
+            "--effect",
+            "rotor_drag.k_n_per_mps=[0.3, 0.3, 0.1]",
+        ]
+    )
     assert dict(config.effects) == {
         "rotor_drag": (("k_n_per_mps", [0.3, 0.3, 0.1]),),
         "wind": (("vel_ned_mps", [3, 0, 0]),),
@@ -66,11 +74,26 @@ def test_serves_mavlink_and_stops_cleanly_on_signal(sig):
     offboard_port, gcs_port = free_udp_port(), free_udp_port()
     gcs = Client(url=f"udpin:127.0.0.1:{gcs_port}")
     proc = subprocess.Popen(
-        [sys.executable, "-m", "scripts.vehicle_sim_cli", "--speed", "2",
-         "--offboard-port", str(offboard_port), "--gcs-port", str(gcs_port),
-         "--offboard-bind-port", "0", "--gcs-bind-port", "0"],
-        cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "scripts.vehicle_sim_cli",
+            "--speed",
+            "2",
+            "--offboard-port",
+            str(offboard_port),
+            "--gcs-port",
+            str(gcs_port),
+            "--offboard-bind-port",
+            "0",
+            "--gcs-bind-port",
+            "0",
+        ],
+        cwd=REPO,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     lines: queue.Queue = queue.Queue()
     reader = threading.Thread(target=read_lines, args=(proc.stdout, lines), daemon=True)
     reader.start()

@@ -53,9 +53,15 @@ class JsbsimBackend:
         self._write_state(self.plant.state())
 
     def advance(
-        self, n_steps: int, dt_s: float, sp: np.ndarray, cs: np.ndarray, cp: np.ndarray,
-        mix: np.ndarray, noise: np.ndarray,
-    ) -> int:  # fmt: skip
+        self,
+        n_steps: int,
+        dt_s: float,
+        sp: np.ndarray,
+        cs: np.ndarray,
+        cp: np.ndarray,
+        mix: np.ndarray,
+        noise: np.ndarray,
+    ) -> int:
         """Up to ``n_steps`` steps of control + JSBSim; stops right after a step in which ground
         contact changed. ``noise`` is unused (no gusts here). Returns the steps done."""
         contact0 = self.aux[ph.AUX_CONTACT]

@@ -155,9 +155,11 @@ class Dispatcher:
         )
         outcome = handle_command(176, p, CommandContext(self._sim, self._telemetry, scheduler))
         ack = _FACTORY.command_ack_encode(
-            command=176, result=outcome.result, target_system=msg.get_srcSystem(),
+            command=176,
+            result=outcome.result,
+            target_system=msg.get_srcSystem(),
             target_component=msg.get_srcComponent(),
-        )  # fmt: skip
+        )
         return [Outgoing(ack)] + self._notices(outcome.notices)
 
     # -- offboard -----------------------------------------------------------------------------

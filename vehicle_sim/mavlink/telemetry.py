@@ -133,11 +133,15 @@ def home_position(state: VehicleState, ctx: TelemetryContext) -> mavlink2.MAVLin
         latitude=int(round(origin.lat_deg * 1e7)),
         longitude=int(round(origin.lon_deg * 1e7)),
         altitude=int(round(origin.alt_amsl_m * 1000.0)),
-        x=0.0, y=0.0, z=0.0,
+        x=0.0,
+        y=0.0,
+        z=0.0,
         q=(1.0, 0.0, 0.0, 0.0),
-        approach_x=0.0, approach_y=0.0, approach_z=0.0,
+        approach_x=0.0,
+        approach_y=0.0,
+        approach_z=0.0,
         time_usec=int(state.t_s * 1e6),
-    )  # fmt: skip
+    )
 
 
 def global_position_int(state: VehicleState, ctx: TelemetryContext) -> mavlink2.MAVLink_message:

@@ -1,0 +1,274 @@
+"""The whole diagnosis (DESIGN.md section 8) as one pure function of logs and config.
+
+1. Identifiability checks drop causes the data cannot support (:mod:`.identifiability`).
+2. Airframe causes: forward selection on the force residual (:mod:`.selection`).
+3. Command-path causes: replay search on top of the force-extended config (:mod:`.command_path`).
+4. Held-out replay of the config and of the extended config measures the gain, and so does
+   closed-loop tracking of the logged setpoints (:mod:`.closed_loop`).
+5. What stays large without a generalising cause is reported as ``unexplained`` (a stochastic
+   disturbance such as gusts); with nothing to report the ranking starts with ``none``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.ndimage import uniform_filter1d
+
+from diagnosis.candidates import FORCE_CAUSES
+from diagnosis.cause import Cause, flatten_params
+from diagnosis.closed_loop import ClosedLoopResult, closed_loop
+from diagnosis.command_path import COMMAND_CAUSES, ReplayThresholds, select_command_causes
+from diagnosis.force_model import (
+    ASSUMED_ROTOR_HEIGHT_M,
+    BatteryModel,
+    flight_time_from_voltage,
+    gust_intensity_mps,
+    predicted_residual,
+)
+from diagnosis.forces import GRAVITY_MPS2, ForceData, force_data, with_thrust_n
+from diagnosis.identifiability import NotIdentifiable, check_identifiability
+from diagnosis.replay import ReplayResult, replay, windows
+from diagnosis.selection import (
+    ForceSelection,
+    SelectionConfig,
+    select_causes,
+    train_test_masks,
+)
+from flightlog.schema import FlightLog
+from vehicle_sim import SimConfig
+from vehicle_sim.effects.base import effect_as_mapping
+
+Progress = Callable[[str], None]
+
+
+@dataclass(frozen=True)
+class DiagnosisConfig:
+    """Knobs of the diagnosis.
+
+    Attributes:
+        selection: held-out split and thresholds of the force selection.
+        window_s: replay window length [s].
+        search_log_s: log time [s] whose training windows the command-path search replays.
+        replay: acceptance thresholds of command-path causes.
+        unexplained_force_fraction: held-out force residual RMS [fraction of the weight] above
+            which what is left is reported as ``unexplained``.
+        persistence_s: moving-average window [s] applied to that residual first, so white
+            sensor noise does not count as a disturbance.
+    """
+
+    selection: SelectionConfig = field(default_factory=SelectionConfig)
+    window_s: float = 2.0
+    search_log_s: float = 60.0
+    replay: ReplayThresholds = field(default_factory=ReplayThresholds)
+    unexplained_force_fraction: float = 0.01
+    persistence_s: float = 1.0
+
+
+@dataclass(frozen=True)
+class Diagnosis:
+    """Outcome of :func:`diagnose`.
+
+    Attributes:
+        causes: ranked, strongest first (accepted causes first, in order of acceptance).
+        verdict: names of the accepted causes (and ``unexplained``), () if none.
+        added_effects: effects (name -> parameters) the extended config adds or replaces.
+        baseline, extended: held-out replay of the config and of the extended config.
+        closed_loop: closed-loop tracking by both, scored on the held-out rows.
+        not_identifiable: causes the data cannot support.
+        force: airborne rows with the force residual (None without a thrust column).
+        base_effects, final_effects: the config's effects and the extended ones.
+        battery: voltage model of the config.
+    """
+
+    causes: tuple[Cause, ...]
+    verdict: tuple[str, ...]
+    added_effects: dict[str, dict[str, object]]
+    baseline: ReplayResult
+    extended: ReplayResult
+    closed_loop: ClosedLoopResult
+    not_identifiable: tuple[NotIdentifiable, ...]
+    force: ForceData | None
+    base_effects: dict[str, dict[str, object]]
+    final_effects: dict[str, dict[str, object]]
+    battery: BatteryModel
+
+    @property
+    def gain(self) -> float:
+        """Baseline / extended held-out replay velocity RMSE (1 when nothing was added)."""
+        if not self.added_effects:
+            return 1.0
+        return self.baseline.rmse_mps() / max(self.extended.rmse_mps(), 1e-9)
+
+
+def diagnose(
+    logs: Sequence[FlightLog],
+    sim_config: SimConfig,
+    config: DiagnosisConfig = DiagnosisConfig(),
+    progress: Progress = lambda msg: None,
+) -> Diagnosis:
+    """Diagnose what ``sim_config`` gets wrong about the vehicle that flew ``logs``."""
+    vehicle = sim_config.vehicle
+    max_thrust_n = len(vehicle.rotor_spin) * vehicle.max_rotor_thrust_n
+    logs = [with_thrust_n(log, max_thrust_n) for log in logs]
+    not_ident = check_identifiability(logs)
+    excluded = {n.name for n in not_ident}
+    for n in not_ident:
+        progress(f"not identifiable: {n.name} ({n.reason})")
+    base = {e.name: effect_as_mapping(e) for e in sim_config.effects}
+    battery = BatteryModel(vehicle.battery_full_v, vehicle.battery_empty_v)
+    causes: list[Cause] = []
+    rejected: list[Cause] = []
+    effects = {k: dict(v) for k, v in base.items()}
+    data = None
+    selection = None
+    force_names = [n for n in FORCE_CAUSES if n not in excluded]
+    if force_names:
+        data = force_data(logs, sim_config.mass_kg)
+        progress(f"force residual: {data.n_rows} airborne rows")
+        selection = select_causes(data, base, battery, force_names, config.selection, progress)
+        effects = _complete(selection.effects, data, battery)
+        causes, rejected = _force_causes(selection, effects)
+    added = _added(base, effects)
+    force_config = sim_config.with_effects(added) if added else sim_config
+    wins = windows(logs, config.window_s)
+    block = config.selection.block_s
+    test = [w for w in wins if (int(w.t_anchor_s // block) + w.log_index) % 2 == 1]
+    train = [w for w in wins if w not in test]
+    search = [w for w in train if w.t_anchor_s < config.search_log_s]
+    progress(f"replay: {len(train)} training and {len(test)} held-out windows")
+    baseline = replay(sim_config, logs, test)
+    current = replay(force_config, logs, test) if added else baseline
+    progress(f"baseline held-out replay RMSE {baseline.rmse_mps():.4f} m/s")
+    current, accepted, tried = select_command_causes(
+        force_config,
+        logs,
+        search,
+        test,
+        current,
+        baseline,
+        effects,
+        [n for n in COMMAND_CAUSES if n not in excluded],
+        config.replay,
+        progress,
+    )
+    causes += accepted
+    rejected = [c for c in rejected if c.name not in {t.name for t in tried}] + tried
+    added = _added(base, effects)
+    extended = current
+    progress("closed-loop tracking of the logged setpoints")
+    extended_config = sim_config.with_effects(added) if added else sim_config
+    tracking = closed_loop(sim_config, extended_config, logs, test)
+    verdict = [c.name for c in causes]
+    if selection is not None and data is not None:
+        extra = _unexplained(selection, data, effects, battery, config)
+        if extra is not None:
+            causes.append(extra)
+            verdict.append(extra.name)
+    if not verdict:
+        nothing = "no candidate cause generalises to held-out data"
+        causes.insert(0, Cause("none", {}, 0.0, 1.0, nothing))
+    rejected.sort(key=lambda c: -c.explained_fraction)
+    ranked = (
+        causes
+        + rejected
+        + [
+            Cause(n.name, {}, 0.0, 0.0, f"not identifiable: {n.reason}; fly: {n.flight}")
+            for n in not_ident
+        ]
+    )
+    return Diagnosis(
+        tuple(ranked),
+        tuple(verdict),
+        added,
+        baseline,
+        extended,
+        tracking,
+        not_ident,
+        data,
+        base,
+        effects,
+        battery,
+    )
+
+
+def _force_causes(
+    selection: ForceSelection, final: dict[str, dict[str, object]]
+) -> tuple[list[Cause], list[Cause]]:
+    accepted, rejected = [], []
+    for s in selection.scores:
+        fitted = final if s.accepted else s.effects
+        params = flatten_params(s.name, fitted.get(s.name, {}))
+        if s.name == "wind" and "rotor_drag" in fitted:
+            params.update(flatten_params("rotor_drag", fitted["rotor_drag"]))
+        verb = "named" if s.accepted else "not named: does not generalise enough"
+        cause = Cause(
+            s.name,
+            params,
+            s.explained_fraction,
+            max(0.0, s.step_gain_fraction),
+            f"held-out force residual RMS {s.before_rms_n:.3f} -> {s.after_rms_n:.3f} N ({verb})",
+        )
+        (accepted if s.accepted else rejected).append(cause)
+    return accepted, rejected
+
+
+def _complete(
+    effects: dict[str, dict[str, object]], data: ForceData, battery: BatteryModel
+) -> dict[str, dict[str, object]]:
+    """Fill the parameters the force fit does not estimate."""
+    out = {k: dict(v) for k, v in effects.items()}
+    if "battery_sag" in out and "full_flight_time_s" not in out["battery_sag"]:
+        endurance = flight_time_from_voltage(data, battery)
+        out["battery_sag"]["full_flight_time_s"] = float(np.clip(endurance or 900.0, 10.0, 36000.0))
+    if "ground_effect" in out:
+        out["ground_effect"].setdefault("rotor_height_m", ASSUMED_ROTOR_HEIGHT_M)
+    return out
+
+
+def _added(
+    base: dict[str, dict[str, object]], effects: dict[str, dict[str, object]]
+) -> dict[str, dict[str, object]]:
+    return {k: v for k, v in effects.items() if base.get(k) != v}
+
+
+def _unexplained(
+    selection: ForceSelection,
+    data: ForceData,
+    effects: dict[str, dict[str, object]],
+    battery: BatteryModel,
+    config: DiagnosisConfig,
+) -> Cause | None:
+    """``unexplained`` if the held-out force residual left over, averaged over
+    ``config.persistence_s`` to drop white sensor noise, stays above the threshold."""
+    _, test_mask = train_test_masks(data, config.selection.block_s)
+    test = data.take(test_mask)
+    left = test.resid_ned_n - predicted_residual(effects, test, battery)
+    dt = float(np.median(np.diff(test.t_s))) if test.n_rows > 1 else 1.0
+    size = max(1, round(config.persistence_s / dt))
+    smooth = np.vstack(
+        [
+            uniform_filter1d(left[test.segment == s], size, axis=0, mode="nearest")
+            for s in np.unique(test.segment)
+        ]
+    )
+    rms = float(np.sqrt(np.mean(smooth * smooth)))
+    weight = data.mass_kg * GRAVITY_MPS2
+    if rms < config.unexplained_force_fraction * weight:
+        return None
+    params = {"rms_force_n": rms}
+    gust = gust_intensity_mps(effects, data, battery)
+    if gust is not None:
+        params["gust_intensity_mps"] = gust
+    share = selection.final_sse_n2 / max(selection.baseline_sse_n2, 1e-12)
+    return Cause(
+        "unexplained",
+        params,
+        float(min(share, 1.0)),
+        float(min(share, 1.0)),
+        f"held-out force residual RMS {rms:.3f} N ({100 * rms / weight:.1f} % of the weight, "
+        f"averaged over {config.persistence_s} s) stays after every deterministic candidate: "
+        "a stochastic disturbance such as gusts",
+    )

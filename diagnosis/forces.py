@@ -1,0 +1,152 @@
+"""Force residual from a flight log: what the nominal rigid body with rotor thrust leaves over.
+
+    r = m_nom * (a - g_ned) - R(q) @ [0, 0, -T]        [N], NED, per row
+
+with m_nom the nominal mass, a the kinematic acceleration (the ``acc_*`` columns, or the
+velocity differentiated with a Savitzky-Golay filter), g_ned = (0, 0, 9.80665) and T the
+logged total rotor thrust ``thrust_n`` (the thrust the vehicle's own rotor model attributes to
+its motor speeds). Drag, wind, a payload, ground effect and battery sag all show up in r; it does
+not depend on which controller flew the vehicle.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.signal import savgol_filter
+
+from flightlog.schema import FlightLog
+
+GRAVITY_MPS2 = 9.80665
+MIN_AIRBORNE_ALT_M = 0.01  # rows lower than this count as on the ground
+SAVGOL_WINDOW_S = 0.25  # differentiation window when no acceleration is logged [s]
+
+
+class ForceDataError(ValueError):
+    """A log from which no force residual can be computed; the message says what is missing."""
+
+
+@dataclass(frozen=True)
+class ForceData:
+    """Airborne rows of one or more logs, with the force residual.
+
+    Attributes (n = number of airborne rows):
+        t_s: (n,) time since the start of the log [s].
+        segment: (n,) index of the log (and gap-free piece) each row came from.
+        vel_ned_mps: (n, 3) velocity over ground.
+        acc_ned_mps2: (n, 3) kinematic acceleration.
+        rot: (n, 3, 3) body FRD to NED rotation matrices.
+        thrust_n: (n,) logged total rotor thrust.
+        alt_m: (n,) altitude above the take-off point (-pos_d).
+        battery_v: (n,) battery voltage, NaN when not logged.
+        mass_kg: nominal mass used for the residual.
+        resid_ned_n: (n, 3) the force residual r defined in the module docstring.
+    """
+
+    t_s: np.ndarray
+    segment: np.ndarray
+    vel_ned_mps: np.ndarray
+    acc_ned_mps2: np.ndarray
+    rot: np.ndarray
+    thrust_n: np.ndarray
+    alt_m: np.ndarray
+    battery_v: np.ndarray
+    mass_kg: float
+    resid_ned_n: np.ndarray
+
+    @property
+    def n_rows(self) -> int:
+        return len(self.t_s)
+
+    def take(self, rows: np.ndarray) -> ForceData:
+        """The subset of rows ``rows`` (boolean mask or indices)."""
+        return ForceData(
+            **{k: getattr(self, k)[rows] for k in _ROW_FIELDS},
+            mass_kg=self.mass_kg,
+        )
+
+    def thrust_axis_ned(self) -> np.ndarray:
+        """(n, 3) unit thrust direction in NED (body -z)."""
+        return -self.rot[:, :, 2]
+
+
+_ROW_FIELDS = (
+    "t_s", "segment", "vel_ned_mps", "acc_ned_mps2", "rot", "thrust_n", "alt_m", "battery_v",
+    "resid_ned_n",
+)  # fmt: skip
+
+
+def rotation_matrices(q_wxyz: np.ndarray) -> np.ndarray:
+    """(n, 3, 3) body-to-NED rotation matrices of unit quaternions ``q_wxyz`` (n, 4)."""
+    q = q_wxyz / np.linalg.norm(q_wxyz, axis=1, keepdims=True)
+    w, x, y, z = q.T
+    return np.stack(
+        [
+            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+            np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
+        ],
+        axis=1,
+    )
+
+
+def acceleration(log: FlightLog) -> np.ndarray:
+    """(n, 3) kinematic acceleration NED [m/s^2]: logged, or differentiated velocity."""
+    if log.has("acc_n_mps2", "acc_e_mps2", "acc_d_mps2"):
+        return log.stack("acc_n_mps2", "acc_e_mps2", "acc_d_mps2")
+    t = log["t_s"]
+    vel = log.stack("vel_n_mps", "vel_e_mps", "vel_d_mps")
+    dt = float(np.median(np.diff(t))) if len(t) > 1 else 1.0
+    window = max(5, 2 * round(SAVGOL_WINDOW_S / dt / 2) + 1)
+    if len(t) < window:
+        raise ForceDataError(f"log too short ({len(t)} rows) to differentiate its velocity")
+    return savgol_filter(vel, window, 2, deriv=1, delta=dt, axis=0)
+
+
+def with_thrust_n(log: FlightLog, max_total_thrust_n: float) -> FlightLog:
+    """``log`` with ``thrust_n`` = ``thrust_norm`` * ``max_total_thrust_n`` [N] when it logs only
+    the normalised thrust (PX4's thrust setpoint; assumes thrust linear in the command, as the
+    simulator's mixer does); unchanged otherwise."""
+    if log.has("thrust_n") or not log.has("thrust_norm"):
+        return log
+    cols = {**log.columns, "thrust_n": log["thrust_norm"] * max_total_thrust_n}
+    return FlightLog(cols, log.metadata, log.path)
+
+
+def force_data(logs: list[FlightLog], mass_kg: float) -> ForceData:
+    """Stack the airborne rows of ``logs`` and compute their force residual.
+
+    Raises:
+        ForceDataError: no ``thrust_n`` column (force-based causes need it) or no airborne row.
+    """
+    parts = []
+    for i, log in enumerate(logs):
+        if not log.has("thrust_n"):
+            raise ForceDataError(
+                f"log {i + 1} has no thrust_n column: force-based causes are not identifiable; "
+                "log the total rotor thrust (from motor RPM and the thrust coefficient)"
+            )
+        alt = -log["pos_d_m"]
+        armed = log["armed"] > 0.5 if log.has("armed") else np.ones(log.n_rows, bool)
+        air = (alt > MIN_AIRBORNE_ALT_M) & armed & (log["thrust_n"] > 0.0)
+        battery = log["battery_v"] if log.has("battery_v") else np.full(log.n_rows, np.nan)
+        q = log.stack("q_w", "q_x", "q_y", "q_z")
+        cols = {
+            "t_s": log["t_s"] - log["t_s"][0],
+            "segment": np.full(log.n_rows, i),
+            "vel_ned_mps": log.stack("vel_n_mps", "vel_e_mps", "vel_d_mps"),
+            "acc_ned_mps2": acceleration(log),
+            "rot": rotation_matrices(q),
+            "thrust_n": log["thrust_n"],
+            "alt_m": alt,
+            "battery_v": battery,
+        }
+        parts.append({k: v[air] for k, v in cols.items()})
+    if not any(len(p["t_s"]) for p in parts):
+        raise ForceDataError("no airborne rows (altitude > 1 cm, armed, thrust > 0) in the logs")
+    cols = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
+    g = np.array([0.0, 0.0, GRAVITY_MPS2])
+    thrust_force = -cols["rot"][:, :, 2] * cols["thrust_n"][:, None]
+    resid = mass_kg * (cols["acc_ned_mps2"] - g) - thrust_force
+    return ForceData(**cols, mass_kg=mass_kg, resid_ned_n=resid)

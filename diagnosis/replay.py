@@ -1,0 +1,161 @@
+"""Replay logged setpoints through the simulation from measured states, in short windows.
+
+A simulated vehicle of the config (a copy of a hovering template) follows each log: at every
+row it is put into the measured state (``Simulator.anchor``) while its flight control runs on the
+logged setpoint, so its controller state (velocity integral, delayed setpoints in flight, rotor
+speeds, yaw setpoint) builds up as the measured vehicle's did; during the first ``LEAD_IN_S`` of
+each airborne run the integral is restored from the measured thrust at every row
+(``integral="match_thrust"``), and windows start after that. At each window's anchor row a copy
+of it flies free for ``window_s`` on the logged setpoints; the error is simulated minus measured
+velocity.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from diagnosis import sim_anchor
+from flightlog.schema import FlightLog
+from vehicle_sim import AnchorState, SimConfig, VelocitySetpoint
+
+STATE_COLUMNS = (
+    "pos_n_m", "pos_e_m", "pos_d_m", "vel_n_mps", "vel_e_mps", "vel_d_mps",
+    "q_w", "q_x", "q_y", "q_z",
+)  # fmt: skip
+RATE_COLUMNS = ("rate_x_radps", "rate_y_radps", "rate_z_radps")
+CMD_COLUMNS = ("cmd_vel_n_mps", "cmd_vel_e_mps", "cmd_vel_d_mps")
+ACC_COLUMNS = ("acc_n_mps2", "acc_e_mps2", "acc_d_mps2")
+MIN_REPLAY_ALT_M = 0.02
+LEAD_IN_S = 1.0
+
+
+@dataclass(frozen=True)
+class Window:
+    """Free flight over rows [anchor, stop) of log ``log_index``; ``t_anchor_s`` since its start."""
+
+    log_index: int
+    anchor: int
+    stop: int
+    t_anchor_s: float
+
+
+@dataclass(frozen=True)
+class ReplayResult:
+    """Replay of some windows.
+
+    Attributes:
+        t_s: (m,) log time of each compared row [s].
+        sim_vel_ned_mps, meas_vel_ned_mps: (m, 3) simulated and measured velocity.
+        window: (m,) index of the window each row belongs to.
+    """
+
+    t_s: np.ndarray
+    sim_vel_ned_mps: np.ndarray
+    meas_vel_ned_mps: np.ndarray
+    window: np.ndarray
+
+    def rmse_mps(self) -> float:
+        """RMS over rows of the 3-D velocity error [m/s]."""
+        if len(self.t_s) == 0:
+            return float("nan")
+        err = self.sim_vel_ned_mps - self.meas_vel_ned_mps
+        return float(np.sqrt(np.mean(np.sum(err * err, axis=1))))
+
+
+def airborne_runs(log: FlightLog) -> list[tuple[int, int]]:
+    """[start, stop) row ranges in which the vehicle is airborne (and in OFFBOARD, if the log
+    has a ``mode`` column: only then do the logged setpoints drive it) throughout."""
+    air = -log["pos_d_m"] > MIN_REPLAY_ALT_M
+    if log.has("mode"):
+        air &= np.char.upper(log["mode"].astype(str)) == "OFFBOARD"
+    air = np.concatenate([[False], air, [False]])
+    edges = np.flatnonzero(np.diff(air.astype(int)))
+    return [(int(a), int(b)) for a, b in zip(edges[::2], edges[1::2], strict=True)]
+
+
+def windows(logs: Sequence[FlightLog], window_s: float = 2.0) -> list[Window]:
+    """Consecutive windows of ``window_s`` [s] over the airborne runs of every log."""
+    out = []
+    for i, log in enumerate(logs):
+        t = log["t_s"]
+        for run_start, run_stop in airborne_runs(log):
+            anchor = int(np.searchsorted(t, t[run_start] + LEAD_IN_S))
+            while True:
+                stop = int(np.searchsorted(t, t[anchor] + window_s))
+                if stop >= run_stop:
+                    break
+                out.append(Window(i, anchor, stop, float(t[anchor] - t[0])))
+                anchor = stop
+    return out
+
+
+def replay(
+    sim_config: SimConfig, logs: Sequence[FlightLog], wins: Sequence[Window]
+) -> ReplayResult:
+    """Replay ``wins`` of ``logs`` through a vehicle of ``sim_config``."""
+    template = sim_anchor.hovering_template(sim_config)
+    t_out, sim_out, meas_out, win_out = [], [], [], []
+    for i, log in enumerate(logs):
+        a = LogArrays(log)
+        mine = {w.anchor: (k, w) for k, w in enumerate(wins) if w.log_index == i}
+        for run_start, run_stop in airborne_runs(log):
+            if not any(run_start <= anchor < run_stop for anchor in mine):
+                continue
+            follower = sim_anchor.fresh_copy(template)
+            follower.anchor(a.anchor(run_start, lead=False), integral="reset")
+            lead_end = a.t[run_start] + LEAD_IN_S
+            last = max(w.stop for w in wins if w.log_index == i and w.anchor < run_stop)
+            for j in range(run_start, last):
+                lead = a.t[j] < lead_end
+                follower.set_velocity_setpoint(a.setpoint[j])
+                match = lead and a.thrust[j] > 0.0
+                follower.anchor(a.anchor(j, lead), integral="match_thrust" if match else "keep")
+                if j in mine:
+                    k, w = mine[j]
+                    free = sim_anchor.fresh_copy(follower)
+                    for r in range(w.anchor, w.stop):
+                        if r > w.anchor:
+                            free.set_velocity_setpoint(a.setpoint[r])
+                        state = free.step(a.t[r + 1] - a.t[r])
+                        t_out.append(a.t[r + 1])
+                        sim_out.append(state.vel_ned_mps)
+                        meas_out.append(a.state[r + 1, 3:6])
+                        win_out.append(k)
+                follower.step(a.t[j + 1] - a.t[j])
+    if not t_out:
+        return ReplayResult(np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0, int))
+    return ReplayResult(np.array(t_out), np.array(sim_out), np.array(meas_out), np.array(win_out))
+
+
+class LogArrays:
+    """The columns a replay reads, as plain arrays (n rows)."""
+
+    def __init__(self, log: FlightLog) -> None:
+        n = log.n_rows
+        rates = log.stack(*RATE_COLUMNS) if log.has(*RATE_COLUMNS) else np.zeros((n, 3))
+        self.t = log["t_s"]
+        self.state = np.hstack([log.stack(*STATE_COLUMNS), rates])
+        self.setpoint = [
+            VelocitySetpoint(tuple(float(v) for v in row), float(yaw_rate))
+            for row, yaw_rate in zip(
+                log.stack(*CMD_COLUMNS), log["cmd_yaw_rate_radps"], strict=True
+            )
+        ]
+        self.thrust = log["thrust_n"] if log.has("thrust_n") else np.zeros(n)
+        self.acc = log.stack(*ACC_COLUMNS) if log.has(*ACC_COLUMNS) else np.zeros((n, 3))
+
+    def anchor(self, j: int, lead: bool) -> AnchorState:
+        """The measured state of row ``j``; during the lead-in with its thrust and acceleration
+        (thrust 0 = not logged: rotor speeds are kept)."""
+        s = self.state[j]
+        return AnchorState(
+            pos_ned_m=s[0:3],
+            vel_ned_mps=s[3:6],
+            q_wxyz=s[6:10],
+            rates_frd_radps=s[10:13],
+            thrust_n=float(self.thrust[j]) if lead else None,
+            acc_ned_mps2=self.acc[j] if lead else None,
+        )

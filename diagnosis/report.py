@@ -1,0 +1,141 @@
+"""Write the diagnosis out: report.json (schema diagnosis/1), report.md with plots, extended config.
+
+The JSON follows DESIGN.md section 8 exactly, plus one additional key ``closed_loop``: held-out
+closed-loop tracking velocity RMSE of the config and of the extended config, and their ratio.
+Causes that the data cannot identify appear in the ranking with confidence 0 and say in their
+evidence what flight would make them so.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from diagnosis.diagnosis import Diagnosis
+from diagnosis.report_plots import plot_closed_loop, plot_replay, plot_residuals
+
+SCHEMA = "diagnosis/1"
+
+
+def report_document(diagnosis: Diagnosis) -> dict[str, Any]:
+    """The report.json content (schema diagnosis/1 and ``closed_loop``)."""
+    cl = diagnosis.closed_loop
+    return {
+        "schema": SCHEMA,
+        "baseline": {"replay_vel_rmse_mps": _num(diagnosis.baseline.rmse_mps())},
+        "causes": [
+            {
+                "name": c.name,
+                "params": {k: _num(v) for k, v in c.params.items()},
+                "explained_fraction": _num(c.explained_fraction),
+                "confidence": _num(c.confidence),
+                "evidence": c.evidence,
+            }
+            for c in diagnosis.causes
+        ],
+        "verdict": list(diagnosis.verdict),
+        "extended": {
+            "replay_vel_rmse_mps": _num(diagnosis.extended.rmse_mps()),
+            "gain": _num(diagnosis.gain),
+        },
+        "closed_loop": {
+            "baseline_vel_rmse_mps": _num(cl.baseline_rmse_mps()),
+            "extended_vel_rmse_mps": _num(cl.extended_rmse_mps()),
+            "gain": _num(cl.gain() if diagnosis.added_effects else 1.0),
+        },
+    }
+
+
+def write_report(
+    diagnosis: Diagnosis,
+    out_dir: Path,
+    log_names: Sequence[str],
+    config_name: str,
+    extended_config: Path,
+) -> list[Path]:
+    """Write report.json, report.md and its plots into ``out_dir``; returns the files."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    json_path = out_dir / "report.json"
+    json_path.write_text(json.dumps(report_document(diagnosis), indent=2) + "\n")
+    plots = [plot_replay(diagnosis, out_dir / "replay_velocity.png")]
+    plots += plot_residuals(diagnosis, out_dir)
+    tracking_plot = plot_closed_loop(diagnosis, out_dir / "closed_loop_velocity.png")
+    md_path = out_dir / "report.md"
+    md = _markdown(diagnosis, log_names, config_name, extended_config, plots)
+    md_path.write_text(md + _closed_loop_markdown(report_document(diagnosis), tracking_plot))
+    return [json_path, md_path, *plots, tracking_plot]
+
+
+def _markdown(
+    d: Diagnosis, log_names: Sequence[str], config_name: str, extended: Path, plots: list[Path]
+) -> str:
+    verdict = ", ".join(f"`{v}`" for v in d.verdict) or "none: the config explains the logs"
+    lines = [
+        "# Diagnosis: what the simulation gets wrong",
+        "",
+        f"- Logs: {', '.join(f'`{n}`' for n in log_names)}",
+        f"- Simulation config: `{config_name}`",
+        f"- **Verdict: {verdict}**",
+        f"- Held-out replay velocity RMSE: baseline {d.baseline.rmse_mps():.4f} m/s, "
+        f"extended {d.extended.rmse_mps():.4f} m/s (gain {d.gain:.1f}x)",
+        f"- Extended config: `{extended.name}`",
+        "",
+        "## Causes, strongest first",
+        "",
+        "| cause | parameters | explained | confidence | evidence |",
+        "|---|---|---|---|---|",
+    ]
+    for c in d.causes:
+        params = ", ".join(f"{k} = {v:.4g}" for k, v in c.params.items()) or "-"
+        lines.append(
+            f"| `{c.name}` | {params} | {100 * c.explained_fraction:.0f} % | "
+            f"{c.confidence:.2f} | {c.evidence} |"
+        )
+    if d.not_identifiable:
+        lines += ["", "## Not identifiable from these logs", ""]
+        lines += [
+            f"- `{n.name}`: {n.reason}. To identify it: {n.flight}." for n in d.not_identifiable
+        ]
+    if "ground_effect" in d.added_effects:
+        lines += [
+            "",
+            "Ground effect assumes the rotor height above ground when landed given "
+            "in the extended config (`rotor_height_m`); measure it and refit if it differs.",
+        ]
+    lines += ["", "## Plots", ""]
+    lines += [f"![{p.stem}]({p.name})" for p in plots]
+    return "\n".join(lines) + "\n"
+
+
+def _closed_loop_markdown(doc: dict[str, Any], plot: Path) -> str:
+    cl = doc["closed_loop"]
+    figures = ", ".join(
+        f"{label} {value:.4f} m/s" if value is not None else f"{label} n/a"
+        for label, value in (
+            ("config", cl["baseline_vel_rmse_mps"]),
+            ("extended", cl["extended_vel_rmse_mps"]),
+        )
+    )
+    gain = "n/a" if cl["gain"] is None else f"{cl['gain']:.1f}x"
+    return "\n".join(
+        [
+            "",
+            "## Closed-loop tracking",
+            "",
+            "Each configuration, anchored once at the start of every airborne run, flies the "
+            "logged setpoints under its own flight control; its velocity is compared with the "
+            "measured one (the real vehicle) on the held-out rows.",
+            "",
+            f"- Velocity RMSE: {figures} (gain {gain})",
+            "",
+            f"![{plot.stem}]({plot.name})",
+            "",
+        ]
+    )
+
+
+def _num(value: float) -> float | None:
+    return float(value) if math.isfinite(value) else None

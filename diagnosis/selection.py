@@ -1,0 +1,171 @@
+"""Choose causes by held-out error: forward selection over the force candidates.
+
+Rows are cut into blocks of ``block_s`` seconds; even blocks train, odd blocks test. Starting
+from the config's own effects, each round fits every remaining candidate on the training rows
+and keeps the one that lowers the held-out squared residual most, if it removes at least
+``min_gain_fraction`` of what is left and at least ``min_force_fraction`` of the weight in RMS
+force. Otherwise selection stops: what does not generalise is not named.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from diagnosis.candidates import Candidate, fit_jointly, make_candidate, residual_sse
+from diagnosis.force_model import BatteryModel, EffectParams
+from diagnosis.forces import GRAVITY_MPS2, ForceData
+
+
+@dataclass(frozen=True)
+class SelectionConfig:
+    """Held-out split and acceptance thresholds.
+
+    Attributes:
+        block_s: length of the alternating train/test blocks [s].
+        min_gain_fraction: least fraction of the remaining held-out squared residual a cause
+            must remove to be named.
+        min_force_fraction: least RMS force [fraction of the nominal weight] a cause must explain.
+        max_fit_rows: training rows used by the fits at most (evenly spaced), to bound the time.
+    """
+
+    block_s: float = 4.0
+    min_gain_fraction: float = 0.5
+    min_force_fraction: float = 0.0005
+    max_fit_rows: int = 2000
+
+
+@dataclass(frozen=True)
+class CauseScore:
+    """How one candidate did when it was last tried.
+
+    Attributes:
+        name: cause name.
+        effects: the fitted effects (base merged with this cause).
+        explained_fraction: fraction of the baseline held-out squared residual it removes
+            (on top of the causes accepted before it).
+        step_gain_fraction: fraction of the then-remaining held-out squared residual it removes.
+        before_rms_n, after_rms_n: held-out force residual RMS per component without and with
+            it (on top of the causes accepted before it) [N].
+        accepted: whether it was named.
+    """
+
+    name: str
+    effects: dict[str, dict[str, object]]
+    explained_fraction: float
+    step_gain_fraction: float
+    before_rms_n: float
+    after_rms_n: float
+    accepted: bool
+
+
+@dataclass(frozen=True)
+class ForceSelection:
+    """Outcome of forward selection.
+
+    Attributes:
+        scores: accepted causes in order, then the rejected ones, best first.
+        effects: the config's effects plus the accepted causes.
+        baseline_sse_n2, final_sse_n2: held-out squared residual before and after.
+        n_test: held-out rows.
+    """
+
+    scores: tuple[CauseScore, ...]
+    effects: dict[str, dict[str, object]]
+    baseline_sse_n2: float
+    final_sse_n2: float
+    n_test: int
+
+    @property
+    def accepted(self) -> tuple[str, ...]:
+        return tuple(s.name for s in self.scores if s.accepted)
+
+    def remaining_rms_n(self) -> float:
+        """RMS per component of the held-out force residual left over [N]."""
+        return float(np.sqrt(self.final_sse_n2 / max(3 * self.n_test, 1)))
+
+
+def train_test_masks(data: ForceData, block_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """Boolean (n,) masks of training and held-out rows (alternating time blocks)."""
+    block = np.floor(data.t_s / block_s).astype(int) + data.segment
+    test = block % 2 == 1
+    return ~test, test
+
+
+def select_causes(
+    data: ForceData,
+    base: EffectParams,
+    battery: BatteryModel,
+    names: Sequence[str],
+    config: SelectionConfig = SelectionConfig(),
+    progress: Callable[[str], None] = lambda msg: None,
+) -> ForceSelection:
+    """Forward selection of force causes ``names`` on top of the config's effects ``base``."""
+    train_mask, test_mask = train_test_masks(data, config.block_s)
+    train_rows = np.flatnonzero(train_mask)
+    stride = max(1, -(-len(train_rows) // config.max_fit_rows))
+    train, test = data.take(train_rows[::stride]), data.take(test_mask)
+    base = {k: dict(v) for k, v in base.items()}
+    current = base
+    baseline = residual_sse(current, test, battery)
+    remaining_sse = baseline
+    floor_sse = test.n_rows * 3 * (config.min_force_fraction * data.mass_kg * GRAVITY_MPS2) ** 2
+    scale = max(baseline, floor_sse)
+    chosen: list[Candidate] = []
+    accepted: list[CauseScore] = []
+    last_try: dict[str, CauseScore] = {}
+    left = list(names)
+    while left:
+        tried = []
+        for name in left:
+            fit = fit_jointly([*chosen, make_candidate(name, base)], base, train, battery)
+            sse = residual_sse(fit.effects, test, battery)
+            tried.append((sse, fit))
+            last_try[name] = _score(name, fit.effects, scale, remaining_sse, sse, test, False)
+            progress(f"  {name}: held-out force residual {_rms(sse, test):.3f} N")
+        best_sse, best = _simplest_of_best(tried, remaining_sse)
+        removed = remaining_sse - best_sse
+        if removed < config.min_gain_fraction * remaining_sse or removed < floor_sse:
+            break
+        accepted.append(_score(best.name, best.effects, scale, remaining_sse, best_sse, test, True))
+        chosen.append(make_candidate(best.name, base))
+        current = best.effects
+        remaining_sse = best_sse
+        left.remove(best.name)
+        progress(f"accepted {best.name}")
+    rejected = sorted(
+        (s for n, s in last_try.items() if n in left), key=lambda s: -s.explained_fraction
+    )
+    return ForceSelection(
+        tuple(accepted) + tuple(rejected), current, baseline, remaining_sse, test.n_rows
+    )
+
+
+def _simplest_of_best(tried: list, before: float, tolerance: float = 0.05):
+    """The candidate with fewest parameters among those within ``tolerance`` of the best
+    removal; (held-out sse, fit)."""
+    best_sse = min(sse for sse, _ in tried)
+    if best_sse >= before:
+        return min(tried, key=lambda t: t[0])
+    near = [t for t in tried if before - t[0] >= (1.0 - tolerance) * (before - best_sse)]
+    return min(near, key=lambda t: (t[1].n_params, t[0]))
+
+
+def _score(name, effects, scale, before, after, test, accepted) -> CauseScore:
+    explained = (before - after) / scale if scale > 0 else 0.0
+    step = (before - after) / before if before > 0 else 0.0
+    return CauseScore(
+        name,
+        effects,
+        float(explained),
+        float(step),
+        _rms(before, test),
+        _rms(after, test),
+        accepted,
+    )
+
+
+def _rms(sse: float, data: ForceData) -> float:
+    return float(np.sqrt(sse / max(3 * data.n_rows, 1)))

@@ -1,0 +1,1 @@
+"""Experiments that use every part below them: the study, the demo, the showcase, benchmarks."""

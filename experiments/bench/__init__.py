@@ -1,0 +1,1 @@
+"""Benchmark parts: each module exposes ``run(progress, quick) -> dict`` of named figures."""

@@ -1,0 +1,75 @@
+"""Learning-loop benchmark (`bench --only loop`): the study's headline figures and the 50 Hz
+control loop's deadline misses with the augmented NMPC.
+
+Figures:
+    residual_rmse_nominal, residual_rmse_low_speed, residual_rmse_cluster   one-step velocity
+        residual RMSE [m/s] of the model that flew (nominal NMPC; augmented per selection)
+    tracking_rmse_nominal_m, tracking_rmse_augmented_m   position tracking RMSE [m]
+        (augmented: low_speed)
+    loop_deadline_miss_fraction   deadline misses / ticks of a whole mission flown at 50 Hz
+        with the augmented NMPC (compiled) against the simulator paced by the wall clock
+The figures come from a reduced study (4 trajectories, one flight each per planner, m = 30);
+``study`` runs paper 000's full experiment. ``quick=True`` runs the study's smoke version and
+a short paced flight with the uncompiled planner (under a minute; its deadline figure is then
+only a smoke value).
+"""
+
+from __future__ import annotations
+
+import tempfile
+from collections.abc import Callable
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from companion.flight_recorder import FlightRecorder
+from companion.mission import Mission
+from companion.nmpc_planner import CompanionNmpc
+from companion.runner import RunnerConfig, fly_mission
+from experiments.study.config import StudyConfig
+from experiments.study.paced_link import WallPacedInProcessLink
+from experiments.study.run import run_study
+from gp.model_io import ResidualModel
+from planners.bspline import BSplineReference
+from vehicle_sim import Simulator, load_sim_config
+
+_PACED_POINTS_QUICK = ((0.0, 0.0, -3.0), (3.0, 2.0, -3.0), (6.0, 0.0, -3.0))
+_PACED_POINTS = ((0.0, 0.0, -3.0), (8.0, 4.0, -3.0), (16.0, -4.0, -3.5), (24.0, 0.0, -3.0))
+
+
+def paced_deadline_miss_fraction(
+    config: StudyConfig,
+    model: ResidualModel,
+    points: tuple[tuple[float, float, float], ...],
+    progress: Callable[[str], None],
+) -> float:
+    """Fly ``points`` (a B-spline) at the loop rate with the augmented NMPC, real time."""
+    settings = replace(
+        config.nmpc,
+        time_budget_s=config.nmpc.period_s,
+        compile_functions=config.compile_augmented,
+    )
+    planner = CompanionNmpc(settings, model)
+    reference = BSplineReference(np.asarray(points), config.max_speed_mps)
+    mission = Mission("paced", 3.0, settings.speed_limit_mps, "bspline", points, 0.5)
+    link = WallPacedInProcessLink(Simulator(load_sim_config(config.vehicle), seed=0))
+    recorder = FlightRecorder(settings.period_s)
+    runner = RunnerConfig(rate_hz=1.0 / settings.period_s)
+    outcome = fly_mission(link, planner, reference, mission, runner, recorder.record, progress)
+    return outcome.deadline_misses / max(outcome.ticks, 1)
+
+
+def run(progress: Callable[[str], None] = print, quick: bool = False) -> dict[str, float]:
+    """Run the reduced (or smoke) study and the paced flight; returns the figures."""
+    with tempfile.TemporaryDirectory() as tmp:
+        config = StudyConfig(out_dir=Path(tmp), n_trajectories=4, repeats=1, n_trials=2)
+        if quick:
+            config = replace(config.quick(), n_trials=2)
+        progress(f"loop: study with {config.n_trajectories} trajectories")
+        result = run_study(config, progress)
+    model = result.paper000.fits[config.selections[0]].model
+    progress("loop: flying the augmented NMPC at 50 Hz on the wall clock")
+    points = _PACED_POINTS_QUICK if quick else _PACED_POINTS
+    miss = paced_deadline_miss_fraction(config, model, points, progress)
+    return {**result.headline, "loop_deadline_miss_fraction": miss}

@@ -1,0 +1,87 @@
+"""Start and stop a `vehicle-sim` MAVLink endpoint as a child process (loopback, free ports).
+
+Used by the demo to stand in for PX4 SITL: the companion then reaches it only over MAVLink,
+as it would a real vehicle. The endpoint is always stopped on exit of the ``with`` block
+(SIGINT, then SIGKILL after a deadline), also on errors and Ctrl-C.
+"""
+
+from __future__ import annotations
+
+import signal
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+from types import TracebackType
+
+_STOP_TIMEOUT_S = 10.0
+_STARTUP_S = 0.5
+
+
+class EndpointError(RuntimeError):
+    """The endpoint process could not be started or died at once; one line."""
+
+
+def free_udp_ports(count: int) -> list[int]:
+    """``count`` distinct loopback UDP ports free right now."""
+    sockets = []
+    try:
+        for _ in range(count):
+            s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+            s.bind(("127.0.0.1", 0))
+            sockets.append(s)
+        return [s.getsockname()[1] for s in sockets]
+    finally:
+        for s in sockets:
+            s.close()
+
+
+class SimEndpoint:
+    """``vehicle-sim --vehicle VEHICLE --seed SEED`` on free loopback ports.
+
+    Attributes:
+        mavsdk_url: where the companion's MAVSDK link listens (udpin://127.0.0.1:PORT).
+        log_path: the endpoint's stderr, kept for diagnosis.
+    """
+
+    def __init__(self, vehicle: str, seed: int, log_path: Path) -> None:
+        offboard, gcs, offboard_bind, gcs_bind = free_udp_ports(4)
+        self.mavsdk_url = f"udpin://127.0.0.1:{offboard}"
+        self.log_path = log_path
+        self._argv = [
+            sys.executable, "-m", "scripts.vehicle_sim_cli", "--vehicle", vehicle,
+            "--seed", str(seed), "--offboard-port", str(offboard), "--gcs-port", str(gcs),
+            "--offboard-bind-port", str(offboard_bind), "--gcs-bind-port", str(gcs_bind),
+        ]  # fmt: skip
+        self._process: subprocess.Popen[bytes] | None = None
+
+    def __enter__(self) -> SimEndpoint:
+        self.log_path.parent.mkdir(parents=True, exist_ok=True)
+        with self.log_path.open("wb") as err:
+            self._process = subprocess.Popen(self._argv, stdout=subprocess.DEVNULL, stderr=err)
+        time.sleep(_STARTUP_S)
+        code = self._process.poll()
+        if code is not None:
+            raise EndpointError(f"vehicle-sim exited at once with code {code}; see {self.log_path}")
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.stop()
+
+    def stop(self) -> None:
+        """SIGINT, wait up to a deadline, then SIGKILL; idempotent."""
+        process, self._process = self._process, None
+        if process is None or process.poll() is not None:
+            return
+        process.send_signal(signal.SIGINT)
+        try:
+            process.wait(timeout=_STOP_TIMEOUT_S)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait(timeout=_STOP_TIMEOUT_S)

@@ -1,0 +1,141 @@
+"""Paper 000's experiment: random trajectories flown nominal, the residual learned offline,
+then flown augmented, per inducing-point selection at equal m.
+
+Nominal flights use seeds 0..R-1 per trajectory, augmented flights seeds R..2R-1: the
+augmented flights are held out from the model's training data (and fly other gusts).
+
+With the default learned model (first_order_lag, time constants identified from the nominal
+flights, then the GP), an ablation flies the identified lag alone (no GP) on the augmented
+seeds too, so the report separates what the identified structure and the GP each bring.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from concurrent.futures import Executor
+from dataclasses import dataclass, replace
+
+from companion.nmpc_planner import NmpcSettings
+from experiments.study.config import StudyConfig
+from experiments.study.fitting import fit_residual
+from experiments.study.jobs import FlightJob, FlightSummary, run_flight_job, warm_up_planner
+from gp.training import TrainingResult
+from planners.bspline import BSplineReference
+from planners.trajectory_generator import TrajectorySpec, generate_trajectories
+
+NOMINAL = "nominal"
+IDENTIFIED_LAG = "identified_lag"
+
+
+@dataclass(frozen=True, eq=False)
+class Paper000Result:
+    """Flights per planner ("nominal", each selection, "identified_lag" if flown) and the
+    fitted models."""
+
+    references: list[BSplineReference]
+    flights: dict[str, list[FlightSummary]]
+    fits: dict[str, TrainingResult]
+
+
+def study_trajectories(config: StudyConfig) -> list[BSplineReference]:
+    """The seeded random trajectories of the experiment."""
+    spec = TrajectorySpec(length_range_m=config.length_range_m, max_speed_mps=config.max_speed_mps)
+    return generate_trajectories(config.n_trajectories, config.trajectory_seed, spec)
+
+
+def run_paper000(
+    config: StudyConfig, pool: Executor, progress: Callable[[str], None]
+) -> Paper000Result:
+    """Fly, fit and fly again; flights run on ``pool``, fits one per selection on it too."""
+    refs = study_trajectories(config)
+    jobs = [
+        FlightJob(i, ref, NOMINAL, seed, config.vehicle, config.nmpc)
+        for i, ref in enumerate(refs)
+        for seed in range(config.repeats)
+    ]
+    flights = {NOMINAL: _fly_all(jobs, pool, "nominal", progress)}
+    logs = [f.log for f in flights[NOMINAL]]
+    progress(f"fitting {len(config.selections)} residual models on {len(logs)} nominal flights")
+    futures = {
+        sel: pool.submit(
+            fit_residual,
+            logs,
+            sel,
+            config.nmpc.period_s,
+            learned_model=config.learned_model,
+            features=config.features,
+            m=config.m,
+            restarts=config.gp_restarts,
+        )
+        for sel in config.selections
+    }
+    fits = {sel: fut.result() for sel, fut in futures.items()}
+    for sel, fit in fits.items():
+        nom, aug = fit.metrics["nominal_rmse_mps"], fit.metrics["augmented_rmse_mps"]
+        progress(f"fit {sel}: held-out rows nominal {_fmt(nom)} -> augmented {_fmt(aug)} m/s")
+    if config.compile_augmented:
+        progress("compiling the augmented planners (once per model, cached on disk)")
+        models = [fits[sel].model for sel in config.selections]
+        list(pool.map(warm_up_planner, [config.nmpc] * len(models), models))
+    aug_jobs = [
+        FlightJob(
+            i,
+            ref,
+            sel,
+            config.repeats + seed,
+            config.vehicle,
+            config.nmpc,
+            fits[sel].model,
+            config.compile_augmented,
+        )
+        for sel in config.selections
+        for i, ref in enumerate(refs)
+        for seed in range(config.repeats)
+    ]
+    lag = identified_lag_settings(config, fits[config.selections[0]])
+    if lag is not None:
+        aug_jobs += [
+            FlightJob(
+                i,
+                ref,
+                IDENTIFIED_LAG,
+                config.repeats + seed,
+                config.vehicle,
+                lag,
+                compile_functions=False,
+            )
+            for i, ref in enumerate(refs)
+            for seed in range(config.repeats)
+        ]
+    for summary in _fly_all(aug_jobs, pool, "augmented", progress):
+        flights.setdefault(summary.planner, []).append(summary)
+    return Paper000Result(refs, flights, fits)
+
+
+def identified_lag_settings(config: StudyConfig, fit: TrainingResult) -> NmpcSettings | None:
+    """The nominal NMPC on the fit's identified first_order_lag (no GP), or None when the
+    learned model is not an identified lag."""
+    features = fit.model.features
+    if features.nominal_model != "first_order_lag":
+        return None
+    return replace(
+        config.nmpc, nominal_model=features.nominal_model, nominal_params=features.nominal_params
+    )
+
+
+def _fly_all(
+    jobs: list[FlightJob], pool: Executor, what: str, progress: Callable[[str], None]
+) -> list[FlightSummary]:
+    out = []
+    for n, summary in enumerate(pool.map(run_flight_job, jobs), start=1):
+        progress(
+            f"{what} flight {n}/{len(jobs)}: trajectory {summary.trajectory} {summary.planner} "
+            f"seed {summary.seed}: {summary.status}, tracking {summary.tracking_rmse_m:.3f} m, "
+            f"residual {summary.residual_rmse_mps:.4f} m/s"
+        )
+        out.append(summary)
+    return out
+
+
+def _fmt(values: list[float]) -> str:
+    return "/".join(f"{v:.4f}" for v in values)

@@ -1,0 +1,68 @@
+"""Paper 004's view: trial-to-trial learning on one repeated path.
+
+Trial 1 flies the nominal NMPC; after every trial the residual model is refitted on all trials
+so far and the next trial flies augmented with it (a new seed each trial). The tracking error
+per trial shows whether experience pays off, as in paper 004, Fig. 10.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from experiments.study.config import StudyConfig
+from experiments.study.fitting import fit_residual
+from experiments.study.jobs import FlightJob, FlightSummary, run_flight_job
+from planners.bspline import BSplineReference
+from planners.trajectory_generator import TrajectorySpec, generate_trajectories
+
+TRIAL_PATH_SEED_OFFSET = 1000  # the repeated path is not one of paper 000's trajectories
+
+
+@dataclass(frozen=True, eq=False)
+class TrialsResult:
+    """The repeated path and one flight per trial (trial 1 nominal)."""
+
+    reference: BSplineReference
+    selection: str
+    trials: list[FlightSummary]
+
+
+def run_trials(config: StudyConfig, progress: Callable[[str], None]) -> TrialsResult:
+    """Fly ``config.n_trials`` trials in this process (each refit needs the previous trial)."""
+    spec = TrajectorySpec(length_range_m=config.length_range_m, max_speed_mps=config.max_speed_mps)
+    seed = config.trajectory_seed + TRIAL_PATH_SEED_OFFSET
+    reference = generate_trajectories(1, seed, spec)[0]
+    selection = config.selections[0]
+    trials: list[FlightSummary] = []
+    model = None
+    for trial in range(1, config.n_trials + 1):
+        planner = "nominal" if model is None else selection
+        job = FlightJob(
+            0,
+            reference,
+            planner,
+            trial,
+            config.vehicle,
+            config.nmpc,
+            model,
+            compile_functions=model is None,
+        )
+        summary = run_flight_job(job)
+        trials.append(summary)
+        progress(
+            f"trial {trial}/{config.n_trials} ({planner}): tracking "
+            f"{summary.tracking_rmse_m:.3f} m, residual {summary.residual_rmse_mps:.4f} m/s"
+        )
+        if trial < config.n_trials:
+            fit = fit_residual(
+                [t.log for t in trials],
+                selection,
+                config.nmpc.period_s,
+                learned_model=config.learned_model,
+                features=config.features,
+                m=config.m,
+                restarts=config.gp_restarts,
+            )
+            model = fit.model
+    return TrialsResult(reference, selection, trials)

@@ -1,0 +1,105 @@
+"""The study's Markdown report (pure: returns text)."""
+
+from __future__ import annotations
+
+from experiments.study.config import StudyConfig
+from experiments.study.figures import PlannerFigures
+from experiments.study.paper000 import IDENTIFIED_LAG, NOMINAL, Paper000Result
+from experiments.study.paper004 import TrialsResult
+
+
+def figures_table(figs: dict[str, PlannerFigures]) -> str:
+    """One row per planner: residual, tracking, solve times, completed flights."""
+    nominal = figs[NOMINAL]
+    lines = [
+        "| planner | flights (completed) | residual RMSE [m/s] | gain | tracking RMSE [m] | gain "
+        "| solve median [ms] | solve p99 [ms] |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for f in figs.values():
+        lines.append(
+            f"| {f.planner} | {f.flights} ({f.completed}) | {f.residual_rmse_mps:.4f} "
+            f"| {nominal.residual_rmse_mps / f.residual_rmse_mps:.2f}x | {f.tracking_rmse_m:.4f} "
+            f"| {nominal.tracking_rmse_m / f.tracking_rmse_m:.2f}x | {f.solve_median_ms:.2f} "
+            f"| {f.solve_p99_ms:.2f} |"
+        )
+    return "\n".join(lines)
+
+
+def render_report(
+    config: StudyConfig,
+    result: Paper000Result,
+    figs: dict[str, PlannerFigures],
+    trials: TrialsResult,
+    images: dict[str, list[str]],
+    elapsed_s: float,
+) -> str:
+    """report.md text; ``images`` maps a section ("paths", "residuals", "trials") to PNG names."""
+    nmpc = config.nmpc
+    model = nmpc.nominal_model + "".join(f", {k}={v:g}" for k, v in nmpc.nominal_params)
+    lines = [
+        "# Residual-learning study",
+        "",
+        f"Vehicle `{config.vehicle}`; NMPC on `{model}` (N={nmpc.horizon_steps}, "
+        f"dt={nmpc.dt_s:g} s, loop {1 / nmpc.period_s:g} Hz, command limit "
+        f"{nmpc.speed_limit_mps:g} m/s). Learned model: `{config.learned_model}` "
+        f"{_identified(result)}plus a sparse GP on features `{config.features}`, m={config.m} "
+        f"per output. Lockstep in process, {config.workers} worker processes, "
+        f"{elapsed_s:.0f} s.",
+        "",
+        "## Paper 000: random trajectories, nominal vs augmented",
+        "",
+        f"{config.n_trajectories} trajectories ({config.length_range_m[0]:g}-"
+        f"{config.length_range_m[1]:g} m, {config.max_speed_mps:g} m/s), each flown "
+        f"{config.repeats}x nominal (seeds 0-{config.repeats - 1}); one residual model per "
+        "inducing selection fitted on all nominal flights; each trajectory flown "
+        f"{config.repeats}x augmented per selection on other seeds (held-out flights)"
+        + (
+            f"; `{IDENTIFIED_LAG}` flies the identified lag without the GP on the same seeds "
+            "(what the GP adds is the difference)."
+            if IDENTIFIED_LAG in figs
+            else "."
+        ),
+        "",
+        "Residual: one-step velocity error of the model that flew, "
+        "v_meas(t+dt) - pred_vel(t), RMSE over the three axes; tracking: distance to the "
+        "reference position; both over the OFFBOARD (following) rows, pooled over flights.",
+        "",
+        figures_table(figs),
+        "",
+        "Held-out rows of each fit (fit-gp's evaluation, per axis n/e/d, m/s):",
+        "",
+    ]
+    for sel, fit in result.fits.items():
+        nom = ", ".join(f"{v:.4f}" for v in fit.metrics["nominal_rmse_mps"])
+        aug = ", ".join(f"{v:.4f}" for v in fit.metrics["augmented_rmse_mps"])
+        lines.append(f"- `{sel}`: nominal [{nom}] -> augmented [{aug}]")
+    lines += ["", *[f"![{p}]({p})" for p in images["paths"]], ""]
+    lines += ["Residual vs velocity (held-out rows), GP mean and inducing points:", ""]
+    lines += [f"![{p}]({p})" for p in images["residuals"]]
+    lines += [
+        "",
+        "## Paper 004: trial after trial on one path",
+        "",
+        f"Trial 1 nominal; after each trial the `{trials.selection}` model is refitted on all "
+        "trials so far and flies the next trial (a new seed each time).",
+        "",
+        "| trial | planner | tracking RMSE [m] | residual RMSE [m/s] |",
+        "|---|---|---|---|",
+    ]
+    for k, t in enumerate(trials.trials, start=1):
+        lines.append(f"| {k} | {t.planner} | {t.tracking_rmse_m:.4f} | {t.residual_rmse_mps:.4f} |")
+    lines += ["", *[f"![{p}]({p})" for p in images["trials"]], ""]
+    return "\n".join(lines)
+
+
+def _identified(result: Paper000Result) -> str:
+    """ "with time constants identified from the nominal flights (...) " or ""."""
+    fit = next(iter(result.fits.values()))
+    lag = fit.model.training.get("identified_lag")
+    if lag is None:
+        return ""
+    return (
+        f"with time constants identified from the nominal flights (tau_s={lag['tau_s']:.3f} s, "
+        f"tau_d_s={lag['tau_d_s']:.3f} s) "
+    )

@@ -1,0 +1,64 @@
+"""Run the whole study and write ``report.md`` with its PNGs and model files.
+
+Flights are spread over ``config.workers`` processes; every flight is lockstep and seeded, so
+the figures (all but the wall-clock solve times) are the same on every run and machine.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from collections.abc import Callable
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
+from multiprocessing import get_context
+from pathlib import Path
+
+from experiments.study.config import StudyConfig
+from experiments.study.figures import PlannerFigures, all_planner_figures, headline_figures
+from experiments.study.paper000 import Paper000Result, run_paper000
+from experiments.study.paper004 import TrialsResult, run_trials
+from experiments.study.plots import plot_paths, plot_residual_fits, plot_trials
+from experiments.study.report import render_report
+from gp.model_io import save_model
+
+
+@dataclass(frozen=True, eq=False)
+class StudyResult:
+    """Everything the study measured, and where the report went."""
+
+    paper000: Paper000Result
+    figures: dict[str, PlannerFigures]
+    headline: dict[str, float]
+    trials: TrialsResult
+    report_path: Path
+
+
+def worker_progress(message: str) -> None:
+    """Progress from a worker process (stderr; picklable, unlike a closure)."""
+    print(f"study [worker] {message}", file=sys.stderr, flush=True)
+
+
+def run_study(config: StudyConfig, progress: Callable[[str], None]) -> StudyResult:
+    """Fly paper 000's experiment and paper 004's trials, write the report."""
+    start = time.perf_counter()
+    out = config.out_dir
+    out.mkdir(parents=True, exist_ok=True)
+    with ProcessPoolExecutor(config.workers, mp_context=get_context("spawn")) as pool:
+        trials_future = pool.submit(run_trials, config, worker_progress)
+        result = run_paper000(config, pool, progress)
+        progress("waiting for the trial-to-trial flights")
+        trials = trials_future.result()
+    for sel, fit in result.fits.items():
+        save_model(out / f"gp_{sel}", fit.model)
+    images = {
+        "paths": [plot_paths(result, out / "paths.png").name],
+        "residuals": [p.name for p in plot_residual_fits(result, out)],
+        "trials": [plot_trials(trials, out / "trials.png").name],
+    }
+    figs = all_planner_figures(result)
+    text = render_report(config, result, figs, trials, images, time.perf_counter() - start)
+    report = out / "report.md"
+    report.write_text(text)
+    progress(f"wrote {report}")
+    return StudyResult(result, figs, headline_figures(result), trials, report)

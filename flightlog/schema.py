@@ -1,0 +1,299 @@
+"""Flight log schema v1: the interchange between flying and learning.
+
+One row per control step, CSV with a header, plus a JSON sidecar ``<log>.json`` holding
+metadata (source, vehicle preset, ``mass_kg``, rates, schema version). Units are SI and frames
+are local NED / body FRD, as the column names say.
+
+This module is the leaf every other part may import; it has no dependency of its own beyond
+NumPy. Ground truth of simulated effects is never written here: a log holds only what a real
+vehicle could have measured.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+SCHEMA_VERSION = 1
+
+REQUIRED_COLUMNS: tuple[str, ...] = (
+    "t_s",
+    "pos_n_m", "pos_e_m", "pos_d_m",
+    "vel_n_mps", "vel_e_mps", "vel_d_mps",
+    "q_w", "q_x", "q_y", "q_z",
+    "cmd_vel_n_mps", "cmd_vel_e_mps", "cmd_vel_d_mps", "cmd_yaw_rate_radps",
+)  # fmt: skip
+
+OPTIONAL_NUMERIC_COLUMNS: tuple[str, ...] = (
+    "acc_n_mps2", "acc_e_mps2", "acc_d_mps2",
+    "rate_x_radps", "rate_y_radps", "rate_z_radps",
+    "thrust_n", "thrust_norm", "battery_v", "armed",
+    "pred_vel_n_mps", "pred_vel_e_mps", "pred_vel_d_mps",
+    "pred_pos_n_m", "pred_pos_e_m", "pred_pos_d_m",
+    "ref_pos_n_m", "ref_pos_e_m", "ref_pos_d_m",
+    "solve_time_s", "planner_ok",
+)  # fmt: skip
+
+TEXT_COLUMNS: tuple[str, ...] = ("mode",)
+
+SIDECAR_SUFFIX = ".json"
+
+
+class FlightLogError(ValueError):
+    """A flight log that cannot be used; the message names the file, row and column."""
+
+
+@dataclass(frozen=True)
+class FlightLog:
+    """A validated flight log held in memory.
+
+    Attributes:
+        columns: column name -> array of shape (n_rows,); float64 for numeric columns,
+            str for text columns (``mode``).
+        metadata: the sidecar's content (``schema_version``, ``source``, ``mass_kg``, ...).
+        path: where it was read from, if anywhere (used in error messages).
+    """
+
+    columns: Mapping[str, np.ndarray]
+    metadata: Mapping[str, object] = field(default_factory=dict)
+    path: Path | None = None
+
+    @property
+    def n_rows(self) -> int:
+        return len(self.columns["t_s"])
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        try:
+            return self.columns[name]
+        except KeyError:
+            raise KeyError(
+                f"{self._where()}: no column {name!r}; present: {', '.join(self.columns)}"
+            ) from None
+
+    def has(self, *names: str) -> bool:
+        """True if every named column is present."""
+        return all(n in self.columns for n in names)
+
+    def stack(self, *names: str) -> np.ndarray:
+        """Columns side by side, shape (n_rows, len(names))."""
+        return np.column_stack([self[n] for n in names])
+
+    def slice(self, start: int, stop: int) -> FlightLog:
+        """Rows [start, stop) as a new log with the same metadata."""
+        cols = {k: v[start:stop] for k, v in self.columns.items()}
+        return FlightLog(cols, self.metadata, self.path)
+
+    def _where(self) -> str:
+        return str(self.path) if self.path is not None else "<in-memory log>"
+
+
+class FlightLogRecorder:
+    """Collects one row per control step and builds a validated :class:`FlightLog`.
+
+    Every row must carry the same keys as the first one; all required columns must be there.
+    """
+
+    def __init__(self, metadata: Mapping[str, object] | None = None) -> None:
+        self._rows: list[dict[str, float | str]] = []
+        self._keys: tuple[str, ...] | None = None
+        self.metadata: dict[str, object] = dict(metadata or {})
+
+    def __len__(self) -> int:
+        return len(self._rows)
+
+    def append(self, row: Mapping[str, float | str]) -> None:
+        keys = tuple(row)
+        if self._keys is None:
+            missing = [c for c in REQUIRED_COLUMNS if c not in row]
+            if missing:
+                raise FlightLogError(f"flight log row is missing required columns {missing}")
+            unknown = [k for k in keys if k not in _KNOWN_COLUMNS]
+            if unknown:
+                raise FlightLogError(
+                    f"flight log row has unknown columns {unknown}; schema v1 knows "
+                    f"{', '.join(_KNOWN_COLUMNS)}"
+                )
+            self._keys = keys
+        elif set(keys) != set(self._keys):
+            raise FlightLogError(
+                f"flight log row {len(self._rows)} has columns {sorted(keys)}, "
+                f"expected {sorted(self._keys)} as in the first row"
+            )
+        self._rows.append(dict(row))
+
+    def to_log(self) -> FlightLog:
+        if not self._rows:
+            raise FlightLogError("flight log is empty: record at least one row before saving")
+        assert self._keys is not None
+        cols: dict[str, np.ndarray] = {}
+        for k in self._keys:
+            values = [r[k] for r in self._rows]
+            cols[k] = np.asarray(values, dtype=str if k in TEXT_COLUMNS else np.float64)
+        log = FlightLog(cols, {"schema_version": SCHEMA_VERSION, **self.metadata})
+        validate_flight_log(log)
+        return log
+
+
+_KNOWN_COLUMNS = REQUIRED_COLUMNS + OPTIONAL_NUMERIC_COLUMNS + TEXT_COLUMNS
+
+
+def sidecar_path(log_path: str | Path) -> Path:
+    """The metadata sidecar of a log: ``flight.csv`` -> ``flight.csv.json``."""
+    p = Path(log_path)
+    return p.with_name(p.name + SIDECAR_SUFFIX)
+
+
+def write_flight_log(path: str | Path, log: FlightLog) -> Path:
+    """Write ``log`` as CSV at ``path`` and its metadata beside it; returns the CSV path."""
+    path = Path(path)
+    validate_flight_log(log)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    names = list(log.columns)
+    with path.open("w", newline="") as fh:
+        writer = csv.writer(fh)
+        writer.writerow(names)
+        arrays = [log.columns[n] for n in names]
+        for i in range(log.n_rows):
+            writer.writerow([_format(a[i]) for a in arrays])
+    meta = {"schema_version": SCHEMA_VERSION, **dict(log.metadata)}
+    sidecar_path(path).write_text(json.dumps(meta, indent=2, sort_keys=True) + "\n")
+    return path
+
+
+def read_flight_log(path: str | Path, max_gap_s: float | None = None) -> FlightLog:
+    """Read and validate a schema-v1 CSV log (and its sidecar, if present).
+
+    Args:
+        path: the CSV file.
+        max_gap_s: if given, a time step larger than this is an error (use
+            :func:`split_at_gaps` instead to keep the data).
+
+    Raises:
+        FlightLogError: one line naming the file, row (1-based data row) and column.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FlightLogError(f"{path}: no such flight log; pass the path of a schema-v1 CSV file")
+    try:
+        with path.open(newline="") as fh:
+            reader = csv.reader(fh)
+            header = next(reader, None)
+            if not header:
+                raise FlightLogError(
+                    f"{path}: empty file, expected a CSV header with {REQUIRED_COLUMNS[0]}, ..."
+                )
+            header = [h.strip() for h in header]
+            rows = list(reader)
+    except UnicodeDecodeError as exc:
+        raise FlightLogError(
+            f"{path}: not a text CSV file ({exc.reason}); is it a ULog? use the ULog reader"
+        ) from None
+    missing = [c for c in REQUIRED_COLUMNS if c not in header]
+    if missing:
+        raise FlightLogError(
+            f"{path}: missing required column(s) {', '.join(missing)}; schema v1 needs "
+            f"{', '.join(REQUIRED_COLUMNS)}"
+        )
+    if not rows:
+        raise FlightLogError(f"{path}: header but no data rows")
+    cols: dict[str, np.ndarray] = {}
+    for j, name in enumerate(header):
+        is_text = name in TEXT_COLUMNS
+        values: list[object] = []
+        for i, row in enumerate(rows):
+            if len(row) != len(header):
+                raise FlightLogError(
+                    f"{path}: row {i + 1} has {len(row)} fields, header has {len(header)}; "
+                    "the file is truncated or corrupt"
+                )
+            cell = row[j].strip()
+            if is_text:
+                values.append(cell)
+                continue
+            try:
+                values.append(float(cell))
+            except ValueError:
+                raise FlightLogError(
+                    f"{path}: row {i + 1}, column {name}: {cell!r} is not a number"
+                ) from None
+        cols[name] = np.asarray(values, dtype=str if is_text else np.float64)
+    meta: dict[str, object] = {}
+    side = sidecar_path(path)
+    if side.is_file():
+        try:
+            meta = json.loads(side.read_text())
+        except json.JSONDecodeError as exc:
+            raise FlightLogError(
+                f"{side}: sidecar is not valid JSON ({exc.msg} at line {exc.lineno})"
+            ) from None
+        version = meta.get("schema_version", SCHEMA_VERSION)
+        if version != SCHEMA_VERSION:
+            raise FlightLogError(
+                f"{side}: schema_version {version!r}, this reader understands {SCHEMA_VERSION}"
+            )
+    log = FlightLog(cols, meta, path)
+    validate_flight_log(log, max_gap_s=max_gap_s)
+    return log
+
+
+def validate_flight_log(log: FlightLog, max_gap_s: float | None = None) -> None:
+    """Check required columns, finiteness and strictly increasing time.
+
+    Raises:
+        FlightLogError: naming the file, the first bad row (1-based) and the column.
+    """
+    where = log._where()
+    missing = [c for c in REQUIRED_COLUMNS if c not in log.columns]
+    if missing:
+        raise FlightLogError(f"{where}: missing required column(s) {', '.join(missing)}")
+    n = log.n_rows
+    for name, values in log.columns.items():
+        if len(values) != n:
+            raise FlightLogError(f"{where}: column {name} has {len(values)} rows, t_s has {n}")
+        if name in TEXT_COLUMNS:
+            continue
+        bad = np.flatnonzero(~np.isfinite(values))
+        if bad.size:
+            i = int(bad[0])
+            raise FlightLogError(
+                f"{where}: row {i + 1}, column {name}: {values[i]} is not finite; "
+                "drop or repair the row (NaN/inf are not allowed in schema v1)"
+            )
+    dt = np.diff(log.columns["t_s"])
+    back = np.flatnonzero(dt <= 0.0)
+    if back.size:
+        i = int(back[0]) + 1
+        raise FlightLogError(
+            f"{where}: row {i + 1}, column t_s: time {log.columns['t_s'][i]} does not increase "
+            f"(previous {log.columns['t_s'][i - 1]}); sort the rows or split the log"
+        )
+    if max_gap_s is not None:
+        gaps = np.flatnonzero(dt > max_gap_s)
+        if gaps.size:
+            i = int(gaps[0]) + 1
+            raise FlightLogError(
+                f"{where}: row {i + 1}, column t_s: gap of {dt[i - 1]:.3f} s exceeds "
+                f"{max_gap_s} s; split the log at gaps (split_at_gaps)"
+            )
+
+
+def split_at_gaps(log: FlightLog, max_gap_s: float) -> list[FlightLog]:
+    """Split a log into segments with no time step larger than ``max_gap_s``."""
+    dt = np.diff(log.columns["t_s"])
+    cuts = [0, *(np.flatnonzero(dt > max_gap_s) + 1).tolist(), log.n_rows]
+    return [log.slice(a, b) for a, b in zip(cuts[:-1], cuts[1:], strict=True) if b > a]
+
+
+def _format(value: object) -> str:
+    if isinstance(value, (str, np.str_)):
+        return str(value)
+    v = float(value)
+    if math.isfinite(v) and v == int(v) and abs(v) < 1e15:
+        return str(int(v))
+    return repr(v)

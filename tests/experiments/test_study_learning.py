@@ -1,0 +1,89 @@
+"""The learning loop for real (slow): fit from a nominal flight, fly augmented; the whole study
+in its smoke version writes its report."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from companion.nmpc_planner import NmpcSettings, load_nmpc
+from experiments.study.fitting import fit_residual, regular_rows
+from experiments.study.flights import FlightSpec, fly
+from experiments.study.metrics import residual_rmse_mps, tracking_rmse_m
+from flightlog.schema import FlightLog
+from gp.model_io import load_model, save_model
+from planners.trajectory_generator import TrajectorySpec, generate_trajectories
+from scripts.study import main as study_main
+
+# Paper 000's nominal planner: the kinematic NMPC, with headroom above the 1.5 m/s reference.
+KINEMATIC = NmpcSettings(2.5, compile_functions=False)
+
+
+@pytest.mark.slow
+def test_model_learned_from_one_nominal_flight_tracks_better_on_the_next(tmp_path):
+    path = generate_trajectories(1, seed=3, spec=TrajectorySpec(length_range_m=(15.0, 18.0)))[0]
+    first = fly(FlightSpec("first", path, "iris_study", 0), KINEMATIC).log
+    fit = fit_residual([first], "low_speed", KINEMATIC.period_s, m=20, restarts=1)
+    features = fit.model.features
+    assert features.nominal_model == "first_order_lag"
+    assert 0.3 < dict(features.nominal_params)["tau_s"] < 1.5  # identified, not given
+    model_file = save_model(tmp_path / "model", fit.model)
+    assert load_nmpc(KINEMATIC, model_file).augmented
+    nominal = fly(FlightSpec("nominal", path, "iris_study", 1), KINEMATIC).log
+    augmented = fly(
+        FlightSpec("augmented", path, "iris_study", 1), KINEMATIC, load_model(model_file)
+    )
+    assert augmented.outcome.status == "completed"
+    assert residual_rmse_mps(augmented.log) < 0.25 * residual_rmse_mps(nominal)
+    assert tracking_rmse_m(augmented.log) < 0.7 * tracking_rmse_m(nominal)
+
+
+def test_regular_rows_drops_catch_up_ticks_only():
+    t = np.array([0.0, 0.02, 0.021, 0.04, 0.06, 0.0605, 0.08])
+    log = FlightLog({"t_s": t, "x": np.arange(t.size, dtype=float)})
+    kept = regular_rows(log, 0.02)
+    np.testing.assert_array_equal(kept["t_s"], [0.0, 0.02, 0.04, 0.06, 0.08])
+    np.testing.assert_array_equal(kept["x"], [0, 1, 3, 4, 6])
+
+
+@pytest.mark.slow
+def test_quick_study_runs_end_to_end_and_writes_report_and_plots(tmp_path, capsys):
+    out = tmp_path / "study"
+    assert study_main(["--quick", "--out", str(out), "--workers", "2"]) == 0
+    stdout = capsys.readouterr().out
+    for name in (
+        "residual_rmse_nominal",
+        "residual_rmse_low_speed",
+        "residual_rmse_cluster",
+        "tracking_rmse_nominal_m",
+        "tracking_rmse_augmented_m",
+    ):
+        assert f"{name} = " in stdout
+    report = (out / "report.md").read_text()
+    assert "| nominal |" in report and "| low_speed |" in report and "| cluster |" in report
+    assert "| identified_lag |" in report and "identified from the nominal flights" in report
+    assert "## Paper 004" in report
+    pngs = {p.name for p in out.glob("*.png")}
+    assert {"paths.png", "trials.png", "gp_low_speed_residual_n.png"} <= pngs
+    for png in pngs:
+        assert f"]({png})" in report
+    assert (out / "gp_low_speed.json").is_file() and (out / "gp_cluster.json").is_file()
+
+
+def test_study_refuses_bad_input_in_one_line(tmp_path, capsys):
+    code = study_main(["--quick", "--out", str(tmp_path), "--vehicle", "no_such_vehicle"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "no_such_vehicle" in err[0]
+    code = study_main(
+        [
+            "--quick",
+            "--out",
+            str(tmp_path),
+            "--learned-model",
+            "kinematic_4dof",
+            "--features",
+            "state_input",
+        ]
+    )
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and "cannot feed" in err[-1]
