@@ -13,7 +13,7 @@ from planners.reference import Reference
 def reference_of(mission: Mission) -> Reference:
     """Waypoints -> constant-speed straight legs; bspline -> the cubic B-spline through the
     points, starting and ending at rest, timed so that its speed stays within the mission's
-    limit (paper 000's references).
+    limit ([Kulathunga23]'s references).
 
     Raises:
         MissionError: when the reference cannot be built from the mission's points.

@@ -1,9 +1,9 @@
-"""The NMPC as the companion flies it: paper 000's planner, nominal or with a learned residual.
+"""The NMPC as the companion flies it: [Kulathunga23]'s planner, nominal or with a learned residual.
 
-The planner model is a nominal model from :mod:`planners.nominal_models`: paper 000's 4-DOF
+The planner model is a nominal model from :mod:`planners.nominal_models`: [Kulathunga23]'s 4-DOF
 kinematic model (velocity and yaw-rate commands; the default) or the first-order velocity lag
-(an a-priori model in the sense of paper 004). Augmented, a residual model file from
-``fit-gp`` adds its mean g(z) [m/s^2] as in paper 000, eq. 1; the file names the nominal model
+(an a-priori model in the sense of [Ostafew16]). Augmented, a residual model file from
+``fit-gp`` adds its mean g(z) [m/s^2] as in [Kulathunga23], eq. 1; the file names the nominal model
 and features it was trained on, and the planner is built for exactly those. The reference is
 time-parametrised and the NMPC's input reference is its velocity (feed-forward), so the nominal
 planner already tracks well and what is left is the residual.
@@ -49,7 +49,7 @@ class NmpcSettings:
         nominal_model, nominal_params: the nominal model when flying without a residual model
             (with one, the model file decides); kinematic_4dof's residual_dt_s defaults to
             ``period_s``.
-        horizon_steps, dt_s: NMPC horizon N and interval [s] (paper 000: 20 x 0.1 s).
+        horizon_steps, dt_s: NMPC horizon N and interval [s] ([Kulathunga23]: 20 x 0.1 s).
         yaw_rate_limit_radps: bound on the yaw-rate command [rad/s].
         max_iterations: SQP iterations per plan (None: the solver's default, 10 with early
             stop; 1 is the real-time iteration scheme).

@@ -21,9 +21,9 @@ def make_planner(
     (the mission's horizontal command limit);
     ValueError listing the names for an unknown one.
 
-    pd: paper 000's PD regulator, v = Kp e - Kd vel (horizontal 1.2 / 0.25, vertical
+    pd: [Kulathunga23]'s PD regulator, v = Kp e - Kd vel (horizontal 1.2 / 0.25, vertical
     0.9 / 0.25).
-    nmpc: paper 000's NMPC on the kinematic model (20 x 0.1 s, velocity feed-forward),
+    nmpc: [Kulathunga23]'s NMPC on the kinematic model (20 x 0.1 s, velocity feed-forward),
     nominal, or augmented with the residual model file ``gp_model`` (from fit-gp, measured at
     ``rate_hz``). ``time_budget_s`` [s] defaults to one control period.
 

@@ -1,4 +1,4 @@
-"""Diagnosis: what does our simulation get wrong? (DESIGN.md section 8).
+"""Diagnosis: what does our simulation get wrong? (docs/design.md section 8).
 
 Given measured flight logs and the simulation config that claims to describe the vehicle, the
 diagnosis computes the force residual the config does not explain, fits one candidate model per

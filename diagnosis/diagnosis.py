@@ -1,4 +1,4 @@
-"""The whole diagnosis (DESIGN.md section 8) as one pure function of logs and config.
+"""The whole diagnosis (docs/design.md section 8) as one pure function of logs and config.
 
 1. Identifiability checks drop causes the data cannot support (:mod:`.identifiability`).
 2. Airframe causes: forward selection on the force residual (:mod:`.selection`).

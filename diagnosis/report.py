@@ -1,6 +1,6 @@
 """Write the diagnosis out: report.json (schema diagnosis/1), report.md with plots, extended config.
 
-The JSON follows DESIGN.md section 8 exactly, plus one additional key ``closed_loop``: held-out
+The JSON follows docs/design.md section 8 exactly, plus one additional key ``closed_loop``: held-out
 closed-loop tracking velocity RMSE of the config and of the extended config, and their ratio.
 Causes that the data cannot identify appear in the ranking with confidence 0 and say in their
 evidence what flight would make them so.

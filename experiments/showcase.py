@@ -1,7 +1,7 @@
 """`make showcase`: fly the square mission with two planners, in calm air and in wind, and plot.
 
 The companion flies ``missions/square.toml`` (a 10 m square at 2 m/s, twice around) over the
-in-process link (lockstep, deterministic), once with paper 000's PD regulator and once with the
+in-process link (lockstep, deterministic), once with [Kulathunga23]'s PD regulator and once with the
 NMPC (CasADi, kinematic model, reference feed-forward); each on the nominal iris and on an
 iris in a 4 m/s wind acting through rotor drag, an effect neither planner's model knows.
 The table and ``out/showcase/square.png`` show what the planner buys and what the wind costs.

@@ -8,5 +8,5 @@ Public entry points:
     gp.training.train_residual_model: the library behind ``fit-gp``.
     gp.model_io.load_model / save_model / ResidualModel: model files; ResidualModel
         .casadi_function() is the NMPC's residual g(z).
-    gp.local_gp.LocalGP: paper 004's sliding local GP over experience bins.
+    gp.local_gp.LocalGP: [Ostafew16]'s sliding local GP over experience bins.
 """

@@ -1,4 +1,4 @@
-"""Residual datasets from flight logs (paper 000, eq. 5).
+"""Residual datasets from flight logs ([Kulathunga23], eq. 5).
 
 For each control step k of a clean segment, with dt_k = t[k+1] - t[k]:
 

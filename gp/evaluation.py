@@ -1,4 +1,4 @@
-"""Held-out evaluation as in paper 000 (Table 2, Fig. 5).
+"""Held-out evaluation as in [Kulathunga23] (Table 2, Fig. 5).
 
 Per axis, with residuals y [m/s^2], their time base dt [s] and the model's mean g [m/s^2]:
     nominal error   = RMSE(y * dt)         [m/s]  (the nominal model alone)

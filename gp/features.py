@@ -4,10 +4,10 @@ A :class:`FeatureDefinition` is recorded in every model file; the NMPC builds it
 exactly this order, and loading a model against another definition is an error.
 
 Built-in sets (outputs are always the NED velocity-rate residuals in m/s^2):
-    velocity: paper 000. z = measured velocity (vel_n, vel_e, vel_d) [m/s].
+    velocity: [Kulathunga23]. z = measured velocity (vel_n, vel_e, vel_d) [m/s].
     state_input: measured velocity and the command: (vel_ned [m/s], cmd_vel_ned [m/s],
         cmd_yaw_rate [rad/s]), 7 features.
-    history: paper 004's a_k = (x_k, v_{k-1}, u_k, u_{k-1}) for a velocity-commanded
+    history: [Ostafew16]'s a_k = (x_k, v_{k-1}, u_k, u_{k-1}) for a velocity-commanded
         multirotor: the velocity state now and one step ago, the command now and one step ago
         (vel_ned[k], vel_ned[k-1], cmd_vel_ned[k], cmd_vel_ned[k-1]), 12 features in m/s.
 In the NMPC, "vel" is the velocity the (augmented) model predicts for the vehicle.

@@ -1,7 +1,7 @@
 """Inducing-point selection: where a sparse GP places its m support points.
 
 Strategies:
-    low_speed: paper 000. Points are denser where the vehicle flies slowly, because a planner
+    low_speed: [Kulathunga23]. Points are denser where the vehicle flies slowly, because a planner
         in clutter flies mostly there. The target density is the optimal-quantiser density of
         the speed-weighted data distribution, q(z) ~ (p(z) w(|v(z)|))^(d / (d + 2)), with the
         Cauchy weight w(s) = 1 / (1 + (s / speed_scale_mps)^2) that halves at speed_scale_mps.
@@ -34,7 +34,7 @@ class InducingConfig:
 
     Attributes:
         strategy: one of ``STRATEGIES``.
-        m: number of inducing points (paper 000 uses 30).
+        m: number of inducing points ([Kulathunga23] uses 30).
         speed_columns: input columns holding velocity components [m/s] whose norm is the speed
             used by ``low_speed``; None uses all columns.
         speed_scale_mps: speed at which the ``low_speed`` weight has halved [m/s].

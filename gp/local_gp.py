@@ -1,4 +1,4 @@
-"""Sliding local GP over experience bins (paper 004, section 4.3): constant-time online learning.
+"""Sliding local GP over experience bins ([Ostafew16], section 4.3): constant-time online learning.
 
 Experiences (query a_k, observed disturbance g_k) are stored in bins keyed by path vertex i and
 commanded-speed bin l = floor(speed / speed_bin_mps). A bin keeps its newest ``bin_capacity``
@@ -27,7 +27,7 @@ from gp.validation import check_inputs
 
 @dataclass(frozen=True)
 class ExperienceBinsConfig:
-    """Bin geometry and capacity (paper 004's v_bin, c_bin, c_vertex, c_velocity).
+    """Bin geometry and capacity ([Ostafew16]'s v_bin, c_bin, c_vertex, c_velocity).
 
     Attributes:
         speed_bin_mps: width of a commanded-speed bin [m/s].

@@ -41,7 +41,7 @@ class NmpcConfig:
         input_weights: diagonal of R, length nu; None gives 1 for every input.
         state_min, state_max: bounds on x_1..x_N, length nx each (use +-inf to leave free);
             None leaves all states free.
-        input_max: symmetric input bound, -input_max <= u <= input_max (paper 000's v_max),
+        input_max: symmetric input bound, -input_max <= u <= input_max ([Kulathunga23]'s v_max),
             length nu; None leaves inputs free.
         n_obstacles: N_o, obstacle slots per node.
         safe_distance_m: d_o, clearance kept from every obstacle surface [m].
@@ -110,7 +110,7 @@ def obstacle_distance(pos: ca.SX, slot: ca.SX) -> ca.SX:
 
 
 class NmpcFormulation:
-    """The NLP of paper 000 eq. 2-4 for one model, residual and configuration.
+    """The NLP of [Kulathunga23] eq. 2-4 for one model, residual and configuration.
 
     Attributes:
         model, config, residual: as given.

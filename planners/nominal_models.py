@@ -1,18 +1,18 @@
 """Nominal motion models, defined once in CasADi and usable as NumPy functions.
 
 Each model is continuous time, ``x_dot = f(x, u)``, discretised with RK4. A learned residual
-plugs in as ``x_dot = f(x, u) + B_z g(z)`` (paper 000, eq. 1): ``g`` returns a 3-vector of
+plugs in as ``x_dot = f(x, u) + B_z g(z)`` ([Kulathunga23], eq. 1): ``g`` returns a 3-vector of
 velocity-rate residuals in m/s^2 (NED), and ``residual_map`` (B_z) says how it enters the state.
 
 Models:
-    kinematic_4dof: paper 000's planner model. State (pos_n, pos_e, pos_d [m], yaw [rad]);
+    kinematic_4dof: [Kulathunga23]'s planner model. State (pos_n, pos_e, pos_d [m], yaw [rad]);
         input (vel_n, vel_e, vel_d [m/s], yaw_rate [rad/s]). The vehicle is assumed to fly the
         commanded velocity; a residual y [m/s^2] corrects that velocity by ``y * residual_dt_s``,
         exactly as the residual was measured: y = (v_actual - v_cmd) / dt.
     first_order_lag: adds the velocity to the state, v_dot = (v_cmd - v) / tau per axis (tau_s
         horizontal, tau_d_s vertical: PX4 tunes the two loops apart); a residual adds to v_dot.
         State (pos[3], vel[3], yaw), same input.
-    unicycle: paper 004's ground robot. State (x_n, x_e [m], heading [rad]); input (speed [m/s],
+    unicycle: [Ostafew16]'s ground robot. State (x_n, x_e [m], heading [rad]); input (speed [m/s],
         turn rate [rad/s]); a residual (3-vector) adds to the state rates directly.
 """
 
@@ -94,7 +94,7 @@ class NominalModel:
     def predicted_velocity_np(self, x: np.ndarray, u: np.ndarray, dt_s: float) -> np.ndarray:
         """Velocity [m/s] the model predicts ``dt_s`` after state x under input u, shape (n, 3).
 
-        This is v_bar in paper 000's residual y = (v_actual - v_bar) / dt.
+        This is v_bar in [Kulathunga23]'s residual y = (v_actual - v_bar) / dt.
         """
         x_next = self.step_np(x, u, dt_s)
         return _batch_call(self.velocity_of, x_next, u, self.nx, self.nu)

@@ -19,7 +19,7 @@ FeatureMap = Callable[[ca.SX, ca.SX], ca.SX]
 
 @dataclass(frozen=True)
 class ResidualTerm:
-    """g(z(x, u)) for eq. 1 of paper 000: x_dot = f(x, u) + B_z g(z).
+    """g(z(x, u)) for eq. 1 of [Kulathunga23]: x_dot = f(x, u) + B_z g(z).
 
     Attributes:
         fn: CasADi Function z[nz] -> (g[3], ...) in m/s^2 (NED).
@@ -39,7 +39,7 @@ class ResidualTerm:
 
     @classmethod
     def of_velocity(cls, fn: ca.Function, model: NominalModel) -> ResidualTerm:
-        """The common case (paper 000): z = the model's velocity [m/s] (``model.velocity_of``).
+        """The common case ([Kulathunga23]): z = the model's velocity [m/s] (``model.velocity_of``).
 
         For the kinematic model that is the commanded velocity u[:3].
         """

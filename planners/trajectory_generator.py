@@ -1,8 +1,8 @@
-"""Seeded random 3-D reference trajectories like paper 000's real-world experiment.
+"""Seeded random 3-D reference trajectories like [Kulathunga23]'s real-world experiment.
 
 Each trajectory is a :class:`BSplineReference` through a random walk of waypoints (bounded
 heading changes, small altitude changes), scaled about its start so that its length is drawn
-uniformly from ``length_range_m`` (paper 000: twenty trajectories of 40-60 m, 1.5 m/s).
+uniformly from ``length_range_m`` ([Kulathunga23]: twenty trajectories of 40-60 m, 1.5 m/s).
 """
 
 from __future__ import annotations

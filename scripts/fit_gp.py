@@ -10,7 +10,7 @@ time constants are identified from the logs first (least squares, gp.lag_identif
 the GP learns what the identified lag leaves; the model file records them.
 
 Writes MODEL.json + MODEL.npz and MODEL_residual_{n,e,d}.png, prints the held-out nominal and
-augmented RMSE per axis (paper 000, Table 2) on stdout; progress goes to stderr. Exit code 0 on
+augmented RMSE per axis ([Kulathunga23], Table 2) on stdout; progress goes to stderr. Exit code 0 on
 success, 2 with a one-line reason on bad input.
 """
 

@@ -1,10 +1,10 @@
-"""`study`: paper 000's residual-learning experiment and paper 004's trials, in simulation.
+"""`study`: [Kulathunga23]'s residual-learning experiment and [Ostafew16]'s trials, in simulation.
 
     study [--out out/study] [--trajectories 20] [--repeats 3] [--trials 6] [--m 30]
           [--workers 2] [--vehicle iris_study] [--learned-model first_order_lag|kinematic_4dof]
           [--features state_input|velocity] [--seed 0] [--compile] [--quick]
 
-The nominal planner is paper 000's kinematic NMPC. The learned model is, by default, a
+The nominal planner is [Kulathunga23]'s kinematic NMPC. The learned model is, by default, a
 first-order velocity lag whose time constants are identified from the nominal flights plus a
 sparse GP on what is left; ``--learned-model kinematic_4dof --features velocity`` is paper
 000's setup (the GP alone).

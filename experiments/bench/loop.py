@@ -9,7 +9,7 @@ Figures:
     loop_deadline_miss_fraction   deadline misses / ticks of a whole mission flown at 50 Hz
         with the augmented NMPC (compiled) against the simulator paced by the wall clock
 The figures come from a reduced study (4 trajectories, one flight each per planner, m = 30);
-``study`` runs paper 000's full experiment. ``quick=True`` runs the study's smoke version and
+``study`` runs [Kulathunga23]'s full experiment. ``quick=True`` runs the study's smoke version and
 a short paced flight with the uncompiled planner (under a minute; its deadline figure is then
 only a smoke value).
 """

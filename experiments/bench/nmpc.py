@@ -1,6 +1,6 @@
 """NMPC benchmark (`bench --only nmpc`): fast solver path vs IPOPT on one set of problems.
 
-Problems: paper 000's planner (4-DOF kinematic model, N = 20, dt = 0.1 s, 10 obstacle slots
+Problems: [Kulathunga23]'s planner (4-DOF kinematic model, N = 20, dt = 0.1 s, 10 obstacle slots
 per node, d_o = 0.5 m) with a GP-like residual of the velocity: an SE-kernel mean
 sum_i alpha_i k(v, Z_i) with 30 seeded inducing points Z_i and 3 outputs (the form the gp
 package exports). A closed loop flown by the fast planner on the residual-augmented plant,

@@ -19,19 +19,19 @@ class StudyConfig:
         out_dir: where report.md, the PNGs and the model files go.
         vehicle: simulator preset or config file (default: the study vehicle, see
             vehicle_sim/presets/iris_study.toml).
-        n_trajectories: random trajectories of paper 000's experiment.
+        n_trajectories: random trajectories of [Kulathunga23]'s experiment.
         length_range_m: their length range [m]; max_speed_mps: their speed limit [m/s].
         repeats: flights per trajectory and planner (nominal seeds 0.., augmented after them).
         selections: inducing-point selections compared at equal ``m``.
         m: inducing points per output.
-        n_trials: paper 004 view: trials on one repeated path (1 nominal, then augmented with a
+        n_trials: [Ostafew16] view: trials on one repeated path (1 nominal, then augmented with a
             model refitted on all trials so far).
         trajectory_seed: seed of the trajectory generator.
         workers: processes flying in parallel.
-        nmpc: the nominal planner (paper 000: the kinematic model; command limit, loop period).
+        nmpc: the nominal planner ([Kulathunga23]: the kinematic model; command limit, loop period).
         learned_model: the nominal model under the learned residual: "first_order_lag" (its
             time constants identified from the flights, then the GP on what is left; see
-            gp.lag_identification) or "kinematic_4dof" (paper 000's GP alone).
+            gp.lag_identification) or "kinematic_4dof" ([Kulathunga23]'s GP alone).
         features: GP feature set ("state_input" needs first_order_lag; "velocity" is paper
             000's).
         gp_restarts: hyperparameter restarts per fit.

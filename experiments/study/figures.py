@@ -54,7 +54,7 @@ def all_planner_figures(result: Paper000Result) -> dict[str, PlannerFigures]:
 
 def headline_figures(result: Paper000Result) -> dict[str, float]:
     """The bench figures: residual RMSE nominal / per selection [m/s], tracking RMSE nominal
-    and augmented (the first selection, paper 000's low_speed) [m]; with the identified-lag
+    and augmented (the first selection, [Kulathunga23]'s low_speed) [m]; with the identified-lag
     ablation also its residual and tracking RMSE (what the GP adds is the difference)."""
     figs = all_planner_figures(result)
     selections = list(result.fits)

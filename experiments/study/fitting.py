@@ -30,7 +30,7 @@ def fit_residual(
 
     ``learned_model`` is the nominal model under the residual: "first_order_lag" has its
     time constants identified from the logs first (the model file records them);
-    "kinematic_4dof" is paper 000's (its residual time base is one control period).
+    "kinematic_4dof" is [Kulathunga23]'s (its residual time base is one control period).
     """
     params = {"residual_dt_s": period_s} if learned_model == "kinematic_4dof" else {}
     config = TrainingConfig(

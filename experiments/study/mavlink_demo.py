@@ -1,7 +1,7 @@
 """The learning loop over MAVLink, end to end: what `make demo` runs.
 
 A `vehicle-sim` endpoint (the study vehicle) is started as a child process; the companion flies
-the mission with the nominal NMPC (paper 000's kinematic model) over MAVSDK; the model is
+the mission with the nominal NMPC ([Kulathunga23]'s kinematic model) over MAVSDK; the model is
 learned from that log with fit-gp's library function: the velocity loop's lag identified by
 least squares, then a sparse GP (low_speed inducing points) on what is left; a fresh endpoint
 is started and the companion flies the mission again with the augmented NMPC. The two flights
@@ -179,7 +179,7 @@ def _report(
         "",
         f"Mission `{config.mission_path.name}`, vehicle `{config.vehicle}` behind a `vehicle-sim` "
         f"MAVLink endpoint, companion over MAVSDK at {config.rate_hz:g} Hz with the NMPC: first "
-        f"nominal (paper 000's kinematic model), then augmented with `{model_path.name}`: "
+        f"nominal ([Kulathunga23]'s kinematic model), then augmented with `{model_path.name}`: "
         f"{learned} a sparse GP on `{features.name}` features, fitted from the first flight.",
         "",
         comparison_table(figures),

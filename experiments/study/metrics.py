@@ -3,7 +3,7 @@
 Only the following phase counts: rows in OFFBOARD mode (after the setpoint stream, until the
 vehicle is switched to HOLD for landing).
 
-Residual (paper 000, Table 2): for consecutive following rows k, k+1,
+Residual ([Kulathunga23], Table 2): for consecutive following rows k, k+1,
     r_k = v_measured(t[k+1]) - pred_vel(t[k])        [m/s, NED]
 where pred_vel is the velocity the planner's own model predicted one control period after the
 command it sent (the command itself for the nominal kinematic model). Its RMSE is

@@ -2,7 +2,7 @@
 
 Trial 1 flies the nominal NMPC; after every trial the residual model is refitted on all trials
 so far and the next trial flies augmented with it (a new seed each trial). The tracking error
-per trial shows whether experience pays off, as in paper 004, Fig. 10.
+per trial shows whether experience pays off, as in [Ostafew16], Fig. 10.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ from experiments.study.jobs import FlightJob, FlightSummary, run_flight_job
 from planners.bspline import BSplineReference
 from planners.trajectory_generator import TrajectorySpec, generate_trajectories
 
-TRIAL_PATH_SEED_OFFSET = 1000  # the repeated path is not one of paper 000's trajectories
+TRIAL_PATH_SEED_OFFSET = 1000  # the repeated path is not one of [Kulathunga23]'s trajectories
 
 
 @dataclass(frozen=True, eq=False)

@@ -56,7 +56,7 @@ def plot_residual_fits(result: Paper000Result, out_dir: Path) -> list[Path]:
 
 
 def plot_trials(trials: TrialsResult, path: Path) -> Path:
-    """Tracking and residual RMSE per trial on the repeated path (paper 004, Fig. 10)."""
+    """Tracking and residual RMSE per trial on the repeated path ([Ostafew16], Fig. 10)."""
     k = np.arange(1, len(trials.trials) + 1)
     fig = Figure(figsize=(10.0, 4.0))
     ax1 = fig.add_subplot(1, 2, 1)

@@ -40,7 +40,7 @@ def worker_progress(message: str) -> None:
 
 
 def run_study(config: StudyConfig, progress: Callable[[str], None]) -> StudyResult:
-    """Fly paper 000's experiment and paper 004's trials, write the report."""
+    """Fly [Kulathunga23]'s experiment and [Ostafew16]'s trials, write the report."""
     start = time.perf_counter()
     out = config.out_dir
     out.mkdir(parents=True, exist_ok=True)

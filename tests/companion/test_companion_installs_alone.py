@@ -1,4 +1,4 @@
-"""The companion runs on a companion computer without the simulator (DESIGN section 2).
+"""The companion runs on a companion computer without the simulator (docs/design.md section 2).
 
 Importing every companion module that flies a real vehicle must not load ``vehicle_sim``,
 ``numba`` or ``jsbsim`` (the ``[sim]`` extra), nor the experiments or the diagnosis above it.

@@ -9,7 +9,8 @@ from companion.px4_modes import PX4_MAIN_SUB, custom_mode_of, mode_name_of
 from companion.pymavlink_link import pymavlink_device
 from companion.waypoint_reference import WaypointReference
 
-# PX4 custom_mode values as PROTOCOL.md lists them (checked against PX4's px4_custom_mode.h).
+# PX4 custom_mode values as docs/mavlink_protocol.md lists them (checked against PX4's
+# px4_custom_mode.h).
 PROTOCOL_CUSTOM_MODES = {
     "POSCTL": 196608, "HOLD": 50593792, "TAKEOFF": 33816576, "LAND": 100925440,
     "RTL": 84148224, "MISSION": 67371008, "OFFBOARD": 393216,

@@ -1,4 +1,4 @@
-"""The named effects (DESIGN.md section 4), one class each, and their registry.
+"""The named effects (docs/design.md section 4), one class each, and their registry.
 
 Build one from code (``RotorDrag(k_n_per_mps=(0.4, 0.4, 0.1))``) or from a config mapping
 (:func:`make_effect`, ``[effects.<name>]`` in TOML), then :func:`pack_effects` them into the

@@ -1,6 +1,6 @@
 """What every effect is: a frozen dataclass of documented, validated parameters.
 
-An effect class declares ``name`` (from the fixed vocabulary of DESIGN.md section 4),
+An effect class declares ``name`` (from the fixed vocabulary of docs/design.md section 4),
 ``PARAMS`` (one :class:`ParamSpec` per field, with unit, default and valid range) and
 ``pack(ep)``, which writes its parameters into the packed vector of :mod:`.layout`.
 Construction from code (``RotorDrag(k_n_per_mps=(0.3, 0.3, 0.1))``) and from a config mapping

@@ -1,7 +1,8 @@
 """JSBSim's F450 quadcopter as a plant: normalised motor commands in, our state conventions out.
 
 This is an edge around a C++ library (it owns an ``FGFDMExec``): it does no file I/O and keeps
-JSBSim's console output away from the user unless ``verbose``. Conventions (DESIGN.md section 3):
+JSBSim's console output away from the user unless ``verbose``. Conventions (docs/design.md
+section 3):
 local NED position relative to a fixed origin, NED velocity, quaternion (w, x, y, z) body(FRD)-to-
 NED, FRD body rates, SI units. The origin is the point where the centre of gravity sits when the
 vehicle just touches the ground below its initial position (the gear then compresses ~2 mm, so

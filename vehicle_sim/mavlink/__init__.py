@@ -1,4 +1,4 @@
-"""MAVLink endpoint of the simulator: speaks MAVLink 2 over UDP like PX4 SITL (PROTOCOL.md).
+"""MAVLink endpoint of the simulator: MAVLink 2 over UDP like PX4 SITL (docs/mavlink_protocol.md).
 
 Start it in-process with ``MavlinkEndpoint(sim, EndpointConfig(...))`` (a context manager), or
 from the command line with ``vehicle-sim``.

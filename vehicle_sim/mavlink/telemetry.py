@@ -267,4 +267,4 @@ DEFAULT_RATES_HZ: dict[int, float] = {
     mavlink2.MAVLINK_MSG_ID_GPS_RAW_INT: 1.0,
     mavlink2.MAVLINK_MSG_ID_BATTERY_STATUS: 1.0,
 }
-"""Nominal stream rates [Hz] of simulated time (PROTOCOL.md); heartbeat also >= 1 Hz wall."""
+"""Nominal stream rates [Hz] of simulated time (docs/mavlink_protocol.md); heartbeat >= 1 Hz."""
