@@ -30,6 +30,8 @@ import math
 import numpy as np
 from numba import njit
 
+from vehicle_sim.physics import POS, QUAT, RATES, VEL
+
 SP_POS, SP_VEL, SP_YAW, SP_YAW_RATE = 0, 3, 6, 7
 SP_VMAX_XY, SP_VMAX_UP, SP_VMAX_DN, SP_TILT = 8, 9, 10, 11
 SP_IDLE, SP_ARMED, SP_ACC_MAX = 12, 13, 14
@@ -77,7 +79,7 @@ def quat_mul(a0, a1, a2, a3, b0, b1, b2, b3):
 @njit(cache=True)
 def yaw_of(x):
     """Yaw [rad] of the attitude in state ``x``."""
-    qw, qx, qy, qz = x[6], x[7], x[8], x[9]
+    qw, qx, qy, qz = x[QUAT], x[QUAT + 1], x[QUAT + 2], x[QUAT + 3]
     return math.atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
 
 
@@ -92,7 +94,7 @@ def reset_controller(x, cs):
     for j in range(9):
         cs[j] = 0.0
     for j in range(3):
-        cs[CS_PREV_RATES + j] = x[10 + j]
+        cs[CS_PREV_RATES + j] = x[RATES + j]
         cs[CS_VEL_SP + j] = 0.0
         cs[CS_THR_SP + j] = 0.0
     cs[CS_YAW_SP] = yaw_of(x)
@@ -107,7 +109,7 @@ def velocity_control(x, acc, sp, cs, cp, dt, thr):
         vsp[i] = v if math.isfinite(v) else 0.0
         if math.isfinite(sp[SP_POS + i]):
             kp = cp[C_POS_P_Z] if i == 2 else cp[C_POS_P_XY]
-            vsp[i] += kp * (sp[SP_POS + i] - x[i])
+            vsp[i] += kp * (sp[SP_POS + i] - x[POS + i])
     vxy = math.sqrt(vsp[0] * vsp[0] + vsp[1] * vsp[1])
     if vxy > sp[SP_VMAX_XY]:
         vsp[0] *= sp[SP_VMAX_XY] / vxy
@@ -131,7 +133,7 @@ def velocity_control(x, acc, sp, cs, cp, dt, thr):
     acc_sp = np.empty(3)
     for i in range(3):
         cs[CS_VEL_SP + i] = vsp[i]
-        err[i] = vsp[i] - x[3 + i]
+        err[i] = vsp[i] - x[VEL + i]
         kp = cp[C_VEL_P_Z] if i == 2 else cp[C_VEL_P_XY]
         kd = cp[C_VEL_D_Z] if i == 2 else cp[C_VEL_D_XY]
         acc_sp[i] = kp * err[i] + cs[CS_VEL_INT + i] - kd * acc[i] + acc_ff[i]
@@ -190,7 +192,7 @@ def attitude_rate_setpoint(x, thr, sp, cs, cp, dt, rsp):
     bx0, bx1, bx2 = bx0 / n, bx1 / n, bx2 / n
     by0, by1, by2 = bz1 * bx2 - bz2 * bx1, bz2 * bx0 - bz0 * bx2, bz0 * bx1 - bz1 * bx0
     d0, d1, d2, d3 = _quat_from_columns(bx0, bx1, bx2, by0, by1, by2, bz0, bz1, bz2)
-    qw, qx, qy, qz = x[6], x[7], x[8], x[9]
+    qw, qx, qy, qz = x[QUAT], x[QUAT + 1], x[QUAT + 2], x[QUAT + 3]
     # current body z axis in NED
     ez0 = 2.0 * (qx * qz + qw * qy)
     ez1 = 2.0 * (qy * qz - qw * qx)
@@ -252,7 +254,7 @@ def _quat_from_columns(a0, a1, a2, b0, b1, b2, c0, c1, c2):
 def rate_control(x, rsp, cs, cp, dt, torque):
     """Body-rate PID (D on the measured rate) -> normalised torque commands ``torque`` (3,)."""
     for i in range(3):
-        rate = x[10 + i]
+        rate = x[RATES + i]
         err = rsp[i] - rate
         d_rate = (rate - cs[CS_PREV_RATES + i]) / dt
         cs[CS_PREV_RATES + i] = rate
