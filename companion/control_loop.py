@@ -70,7 +70,8 @@ def run_fixed_rate(
 ) -> LoopResult:
     """Run ``policy`` at ``rate_hz`` on ``link`` until ``until(state, t_s)`` or ``timeout_s``.
 
-    Every tick sends exactly one velocity command and hands a :class:`Tick` to ``on_tick``.
+    Every tick reads the state, stops if ``until`` holds (sending nothing more), else sends
+    exactly one velocity command and hands a :class:`Tick` to ``on_tick``.
     The first tick runs at once; no tick runs at or after ``timeout_s`` (so consecutive runs
     never put two ticks at the same time).
     Exceptions from the link or ``on_tick`` propagate (the runner then brings the vehicle to
@@ -89,13 +90,13 @@ def run_fixed_rate(
     while True:
         t_s = clock.now_s()
         state = link.read_state()
+        if until(state, t_s):  # checked before sending: a handover gets no further setpoint
+            return LoopResult("done", ticks, misses, state)
         decision = policy.decide(state, t_s)
         link.send_velocity(decision.command)
         on_tick(Tick(t_s, state, decision))
         ticks += 1
         counters.ticks += 1
-        if until(state, t_s):
-            return LoopResult("done", ticks, misses, state)
         t_due_s += period_s
         now_s = clock.now_s()
         if now_s > t_due_s:

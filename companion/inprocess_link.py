@@ -94,6 +94,9 @@ class InProcessLink:
     def start_offboard(self) -> CommandOutcome:
         return _outcome(self._sim.set_mode(FlightMode.OFFBOARD))
 
+    def stop_streaming(self) -> None:
+        """Nothing streams in process: the simulator holds no periodic sender."""
+
     def hold(self) -> CommandOutcome:
         return _outcome(self._sim.set_mode(FlightMode.HOLD))
 

@@ -168,6 +168,11 @@ class Link(Protocol):
         """Switch to OFFBOARD; the caller must have streamed setpoints first."""
         ...
 
+    def stop_streaming(self) -> None:
+        """Stop sending setpoints and command nothing: the vehicle is handed over to whoever
+        switched it out of OFFBOARD (a pilot or a ground station)."""
+        ...
+
     def hold(self) -> CommandOutcome:
         """Stop streaming setpoints and switch to HOLD (PX4 "Hold"/loiter)."""
         ...

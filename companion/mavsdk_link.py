@@ -160,6 +160,12 @@ class MavsdkLink:
     def start_offboard(self) -> CommandOutcome:
         return _call(self._require(self._offboard).start)
 
+    def stop_streaming(self) -> None:
+        """MAVSDK's offboard plugin re-sends the last setpoint only while the vehicle reports
+        OFFBOARD (it stops by itself on a heartbeat in another mode); ``offboard.stop()``
+        would command HOLD, so it is not called: nothing else is sent from here on."""
+        self._offboard = None
+
     def hold(self) -> CommandOutcome:
         """Stop offboard (MAVSDK stops re-sending, PX4 goes to HOLD); else plain HOLD."""
         self._yaw_target_rad = None

@@ -168,6 +168,9 @@ class PymavlinkLink:
     def start_offboard(self) -> CommandOutcome:
         return self._set_mode("OFFBOARD")
 
+    def stop_streaming(self) -> None:
+        self._setpoint = None
+
     def hold(self) -> CommandOutcome:
         self._setpoint = None
         return self._set_mode("HOLD")

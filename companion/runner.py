@@ -1,9 +1,14 @@
 """The mission sequence: takeoff, stream, offboard, follow, hold, land - with a safe exit.
 
-``fly_mission`` never leaves the vehicle with a stale setpoint: whatever ends the flight early
-(a refused command, a timeout, a lost link, Ctrl-C) it sends a zero-velocity setpoint, leaves
-OFFBOARD for HOLD, commands LAND and waits (with a deadline) for the vehicle to disarm.
-The outcome is returned, never raised; Ctrl-C is reported as status "interrupted".
+``fly_mission`` never leaves the vehicle with a stale setpoint: whatever the companion itself
+detects that ends the flight early (a refused command, a timeout, a lost link, Ctrl-C,
+SIGTERM) makes it send a zero-velocity setpoint, leave OFFBOARD for HOLD, command LAND and wait
+(with a deadline) for the vehicle to disarm.
+
+It never fights a pilot: when the vehicle leaves OFFBOARD because someone else (an RC pilot,
+a ground station) chose another mode, the companion stops streaming at once, commands no mode
+and ends with status "handed_over" ("pilot took control in POSCTL at t=12.3 s; mission
+abandoned"), as a PX4 offboard application must. The outcome is returned, never raised.
 """
 
 from __future__ import annotations
@@ -22,7 +27,13 @@ from companion.planner_policy import PlannerPolicy
 from companion.waiting import command_until_accepted, describe, wait_for
 from planners.reference import Planner, Reference
 
-FlightStatus = Literal["completed", "goal_not_reached", "failed", "interrupted"]
+FlightStatus = Literal[
+    "completed", "goal_not_reached", "failed", "interrupted", "terminated", "handed_over"
+]
+
+
+class Terminated(KeyboardInterrupt):
+    """The process was asked to stop (SIGTERM): handled like Ctrl-C, reported as SIGTERM."""
 
 
 @dataclass(frozen=True)
@@ -36,8 +47,9 @@ class RunnerConfig:
         land_timeout_s: deadlines of each phase [s].
         settle_timeout_s: time allowed after the reference ends to arrive at the goal [s].
         arrive_speed_mps: speed below which the vehicle counts as stopped at the goal [m/s].
-        offboard_grace_s: time after the switch before a non-OFFBOARD mode ends the follow
-            phase (telemetry may lag a mode change by one heartbeat) [s].
+        offboard_grace_s: time allowed after the switch for telemetry to report OFFBOARD
+            (it may lag a mode change by one heartbeat); once OFFBOARD was reported, any other
+            mode is a takeover at once [s].
         vertical_limit_up_mps, vertical_limit_down_mps: command limits [m/s].
     """
 
@@ -65,8 +77,10 @@ class FlightOutcome:
 
     Attributes:
         status: "completed" (goal reached, landed, disarmed), "goal_not_reached" (followed
-            until the deadline, landed), "failed" (a phase failed; safe stop done) or
-            "interrupted" (Ctrl-C; safe stop done).
+            until the deadline, landed), "failed" (a phase failed; safe stop done),
+            "interrupted" (Ctrl-C; safe stop done), "terminated" (SIGTERM; safe stop done) or
+            "handed_over" (someone else switched the vehicle out of OFFBOARD; the companion
+            stopped streaming and commanded nothing).
         detail: one line saying what happened.
         goal_error_m: distance to the goal when following ended [m], None if never followed.
         landed_error_m: horizontal distance from the goal after landing [m], or None.
@@ -120,17 +134,26 @@ def fly_mission(
         progress("offboard; following the reference")
         last = _follow(link, planner, reference, mission, config, counters, on_tick, progress)
         goal_error_m = float(np.linalg.norm(last.state.pos_ned_m - goal))
-        if last.stop_reason == "done":
+        if last.stop_reason == "handed_over":
+            link.stop_streaming()
+            airborne = False  # the vehicle is the pilot's now: no safe stop, no command
+            status, detail = "handed_over", last.detail
+            progress(f"{detail}; streaming stopped, no command sent")
+        elif last.stop_reason == "done":
             status, detail = "completed", f"reached the goal ({goal_error_m:.2f} m)"
         else:
             status = "goal_not_reached"
             detail = f"{last.detail}; {goal_error_m:.2f} m from the goal"
-        progress(f"following ended: {detail}; holding")
-        _require(link.hold(), "hold")
-        _require(link.land(), "land")
-        progress("landing")
-        wait_for(link, lambda s: not s.armed, config.land_timeout_s, "landing and disarm")
-        airborne = False
+        if airborne:
+            progress(f"following ended: {detail}; holding")
+            _require(link.hold(), "hold")
+            _require(link.land(), "land")
+            progress("landing")
+            wait_for(link, lambda s: not s.armed, config.land_timeout_s, "landing and disarm")
+            airborne = False
+    except Terminated:
+        status, detail = "terminated", "terminated by SIGTERM"
+        progress(f"{detail}: holding and landing")
     except KeyboardInterrupt:
         status, detail = "interrupted", "interrupted by Ctrl-C"
         progress(f"{detail}: holding and landing")
@@ -142,6 +165,8 @@ def fly_mission(
             _safe_stop(link, config, progress)
     final = _final_state(link)
     disarmed = final is not None and not final.armed
+    if status == "handed_over":
+        disarmed = False  # not ours to say: the pilot flies it
     if status == "completed" and not disarmed:
         status, detail = "failed", f"{detail}, but the vehicle was not seen to disarm"
     landed_error_m = None
@@ -189,7 +214,7 @@ def _start_offboard(
 @dataclass(frozen=True)
 class _FollowEnd:
     state: LinkState
-    stop_reason: Literal["done", "timeout", "left_offboard"]
+    stop_reason: Literal["done", "timeout", "handed_over"]
     detail: str
 
 
@@ -221,16 +246,24 @@ def _follow(
         on_tick=on_tick,
         counters=counters,
     )
-    if monitor.left_offboard_for is not None:
-        detail = f"vehicle left OFFBOARD for {monitor.left_offboard_for}"
-        return _FollowEnd(result.last_state, "left_offboard", detail)
+    if monitor.taken_over is not None:
+        mode, t_s, seen = monitor.taken_over
+        if seen:
+            detail = f"pilot took control in {mode} at t={t_s:.1f} s; mission abandoned"
+        else:
+            detail = (
+                f"the vehicle never reported OFFBOARD (it reports {mode} after {t_s:.1f} s); "
+                "mission abandoned"
+            )
+        return _FollowEnd(result.last_state, "handed_over", detail)
     if result.stop_reason == "timeout":
         return _FollowEnd(result.last_state, "timeout", "follow deadline passed")
     return _FollowEnd(result.last_state, "done", "")
 
 
 class _FollowMonitor:
-    """Decides when following is over (arrived, or the vehicle left OFFBOARD); reports."""
+    """Decides when following is over (arrived, or someone took the vehicle out of OFFBOARD,
+    or it never reported OFFBOARD); reports progress."""
 
     def __init__(
         self,
@@ -248,12 +281,15 @@ class _FollowMonitor:
         self._config = config
         self._progress = progress
         self._next_report_s = t0_s
-        self.left_offboard_for: str | None = None
+        self._seen_offboard = False
+        self.taken_over: tuple[str, float, bool] | None = None
 
     def finished(self, state: LinkState, t_s: float) -> bool:
         elapsed_s = t_s - self._t0_s
-        if elapsed_s > self._config.offboard_grace_s and state.mode != "OFFBOARD":
-            self.left_offboard_for = state.mode
+        if state.mode == "OFFBOARD":
+            self._seen_offboard = True
+        elif self._seen_offboard or elapsed_s > self._config.offboard_grace_s:
+            self.taken_over = (state.mode, elapsed_s, self._seen_offboard)
             return True
         distance_m = float(np.linalg.norm(state.pos_ned_m - self._goal_ned_m))
         if t_s >= self._next_report_s:

@@ -6,8 +6,10 @@
 
 Progress goes to stderr. Exit codes: 0 mission completed (goal reached, landed, disarmed);
 1 flight failed or goal not reached (the vehicle was brought to HOLD and LAND); 2 bad input
-(mission file, option); 130 interrupted by Ctrl-C or SIGTERM (the vehicle was sent a zero
-velocity, HOLD and LAND, and the companion waited for it to disarm).
+(mission file, option); 3 handed over: someone else (a pilot, a ground station) switched the
+vehicle out of OFFBOARD, so the companion stopped streaming and commanded nothing; 130
+interrupted by Ctrl-C, 143 terminated by SIGTERM (in both the vehicle was sent a zero velocity,
+HOLD and LAND, and the companion waited for it to disarm).
 """
 
 from __future__ import annotations
@@ -26,12 +28,14 @@ from companion.app import (
     run_companion,
 )
 from companion.planner_registry import PLANNER_NAMES
-from companion.runner import RunnerConfig
+from companion.runner import RunnerConfig, Terminated
 
 EXIT_COMPLETED = 0
 EXIT_FAILED = 1
 EXIT_BAD_INPUT = 2
+EXIT_HANDED_OVER = 3
 EXIT_INTERRUPTED = 130
+EXIT_TERMINATED = 143  # 128 + SIGTERM, as shells report it
 
 
 def parse_args(argv: list[str] | None) -> CompanionConfig:
@@ -40,7 +44,8 @@ def parse_args(argv: list[str] | None) -> CompanionConfig:
         prog="companion",
         description="Fly a mission file over MAVLink (MAVSDK or pymavlink) or in process.",
         epilog="Exit codes: 0 completed, 1 failed or goal not reached, 2 bad input, "
-        "130 interrupted (vehicle sent HOLD and LAND).",
+        "3 handed over to a pilot (nothing commanded), 130 Ctrl-C and 143 SIGTERM (vehicle "
+        "sent HOLD and LAND).",
     )
     parser.add_argument("mission", type=Path, help="mission file (TOML)")
     parser.add_argument("--link", choices=LINK_KINDS, default="mavsdk", help="how to reach it")
@@ -83,7 +88,7 @@ def _metres(value: float | None) -> str:
 
 
 def _sigterm_as_interrupt(_signum: int, _frame: FrameType | None) -> None:
-    raise KeyboardInterrupt
+    raise Terminated
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -94,12 +99,15 @@ def main(argv: list[str] | None = None) -> int:
     except CompanionInputError as exc:
         print(f"companion: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:
         _progress("interrupted again during the safe stop; the vehicle was commanded to land")
-        return EXIT_INTERRUPTED
+        return EXIT_TERMINATED if isinstance(exc, Terminated) else EXIT_INTERRUPTED
     finally:
         signal.signal(signal.SIGTERM, previous)
     outcome = result.outcome
+    if outcome.status == "handed_over":
+        print(f"companion: {outcome.detail}", file=sys.stderr, flush=True)
+        return EXIT_HANDED_OVER
     _progress(
         f"{outcome.status}: {outcome.detail}; landed {_metres(outcome.landed_error_m)} from the "
         f"goal; {outcome.deadline_misses} deadline misses in {outcome.ticks} steps"
@@ -108,6 +116,8 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_COMPLETED
     if outcome.status == "interrupted":
         return EXIT_INTERRUPTED
+    if outcome.status == "terminated":
+        return EXIT_TERMINATED
     return EXIT_FAILED
 
 

@@ -148,7 +148,17 @@ class StderrReader:
 
 
 @pytest.mark.slow
-def test_ctrl_c_in_the_air_holds_then_lands_and_exits_130(vehicle_port, tmp_path: Path) -> None:
+@pytest.mark.parametrize(
+    ("sig", "code_expected", "said", "status"),
+    [
+        (signal.SIGINT, 130, "interrupted by Ctrl-C", "interrupted"),
+        (signal.SIGTERM, 143, "terminated by SIGTERM", "terminated"),
+    ],
+    ids=["SIGINT", "SIGTERM"],
+)
+def test_ctrl_c_or_sigterm_in_the_air_holds_then_lands_and_exits_128_plus_signal(
+    vehicle_port, tmp_path: Path, sig: int, code_expected: int, said: str, status: str
+) -> None:
     vehicle, port = vehicle_port
     log_path = tmp_path / "flight.csv"
     cmd = [
@@ -162,14 +172,14 @@ def test_ctrl_c_in_the_air_holds_then_lands_and_exits_130(vehicle_port, tmp_path
         time.sleep(2.0)  # flying north at about 3 m/s
         north_at_interrupt_m = float(vehicle.state.pos_ned_m[0])
         assert vehicle.state.armed and -vehicle.state.pos_ned_m[2] > 2.0
-        proc.send_signal(signal.SIGINT)
+        proc.send_signal(sig)
         code = proc.wait(timeout=60.0)
     finally:
         if proc.poll() is None:
             proc.kill()
     text = stderr.text()
-    assert code == 130, text
-    assert "interrupted by Ctrl-C: holding and landing" in text
+    assert code == code_expected, text
+    assert f"{said}: holding and landing" in text
     hold_at = text.index("safe stop: hold accepted")
     assert hold_at < text.index("safe stop: land accepted") < text.index("safe stop: landed and")
     assert "safe stop: landed and disarmed" in text
@@ -179,7 +189,7 @@ def test_ctrl_c_in_the_air_holds_then_lands_and_exits_130(vehicle_port, tmp_path
     assert north_at_interrupt_m > 1.0
     assert abs(float(final.pos_ned_m[0]) - north_at_interrupt_m) < 2.5
     log = read_flight_log(log_path)
-    assert log.metadata["outcome"] == "interrupted"
+    assert log.metadata["outcome"] == status
 
 
 class TurnInPlace:

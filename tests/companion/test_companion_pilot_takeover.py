@@ -1,0 +1,182 @@
+"""The companion never fights a pilot: a mode change it did not ask for hands the vehicle over.
+
+Mid-mission, "the pilot" (in process: the simulator's own mode switch; over MAVLink: a second,
+GCS-like pymavlink client on its own link) switches the vehicle out of OFFBOARD. The companion
+must stop streaming, command nothing (checked on the endpoint's received-message counters over
+MAVLink), end with status "handed_over" and the one-line reason, and the vehicle must do what
+the pilot chose.
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+import time
+
+import numpy as np
+import pytest
+
+from companion.inprocess_link import InProcessLink
+from companion.link import VelocityCommand
+from companion.mavsdk_link import MavsdkLink
+from companion.mission import load_mission
+from companion.mission_reference import reference_of
+from companion.planner_registry import make_planner
+from companion.pymavlink_link import PymavlinkLink
+from companion.runner import FlightOutcome, RunnerConfig, fly_mission
+from tests.companion.test_companion_mission_on_every_link import LINE, free_udp_port
+from vehicle_sim import FlightMode, Simulator, load_sim_config
+from vehicle_sim.mavlink import EndpointConfig, LinkConfig, MavlinkEndpoint
+
+os.environ.setdefault("MAVLINK20", "1")
+from pymavlink import mavutil  # noqa: E402
+
+TAKEOVER_AFTER_S = 3.0  # of following, then the pilot switches
+PILOT_MODES = ("POSCTL", "HOLD", "LAND")
+
+
+class CountingInProcessLink(InProcessLink):
+    """The real in-process link, counting what the companion sends after a given moment."""
+
+    def __init__(self, sim: Simulator) -> None:
+        super().__init__(sim)
+        self.counting = False
+        self.sent_after: list[str] = []
+
+    def send_velocity(self, command: VelocityCommand) -> None:
+        if self.counting:
+            self.sent_after.append("setpoint")
+        super().send_velocity(command)
+
+    def hold(self):
+        if self.counting:
+            self.sent_after.append("hold")
+        return super().hold()
+
+    def land(self):
+        if self.counting:
+            self.sent_after.append("land")
+        return super().land()
+
+
+@pytest.mark.parametrize("mode", PILOT_MODES)
+def test_pilot_takeover_in_process_hands_over_and_commands_nothing(mode: str) -> None:
+    sim = Simulator(load_sim_config("iris"), seed=5)
+    link = CountingInProcessLink(sim)
+    mission = load_mission(LINE)
+    following_since: list[float] = []
+
+    def pilot(tick) -> None:
+        if tick.state.mode != "OFFBOARD" or link.counting:
+            return
+        following_since.append(tick.t_s)
+        if tick.t_s - following_since[0] >= TAKEOVER_AFTER_S:
+            assert sim.set_mode(FlightMode[mode]).accepted
+            link.counting = True
+
+    outcome = fly_mission(
+        link,
+        make_planner("pd", 3.0),
+        reference_of(mission),
+        mission,
+        RunnerConfig(),
+        pilot,
+        lambda _m: None,
+    )
+    assert outcome.status == "handed_over", outcome.detail
+    assert outcome.detail.startswith(f"pilot took control in {mode} at t=")
+    assert outcome.detail.endswith("; mission abandoned")
+    assert link.sent_after == []
+    assert sim.state.mode is FlightMode[mode]
+
+
+def _pilot_switches(port: int, mode: str, endpoint: MavlinkEndpoint, marks: dict) -> None:
+    """A GCS on its own link: waits for OFFBOARD plus a while, then commands ``mode``."""
+    gcs = mavutil.mavlink_connection(f"udpout:127.0.0.1:{port}", source_system=245)
+    try:
+        deadline = time.monotonic() + 90.0
+        offboard_since = None
+        while time.monotonic() < deadline:
+            gcs.mav.heartbeat_send(6, 8, 0, 0, 0)
+            if endpoint.state.mode is FlightMode.OFFBOARD:
+                offboard_since = offboard_since or time.monotonic()
+                if time.monotonic() - offboard_since >= TAKEOVER_AFTER_S:
+                    break
+            time.sleep(0.1)
+        custom = FlightMode[mode].value
+        main_mode, sub_mode = (custom >> 16) & 0xFF, (custom >> 24) & 0xFF
+        for _ in range(20):  # until the endpoint reports the pilot's mode
+            gcs.mav.command_long_send(
+                1,
+                1,
+                mavutil.mavlink.MAV_CMD_DO_SET_MODE,
+                0,
+                mavutil.mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
+                main_mode,
+                sub_mode,
+                0,
+                0,
+                0,
+                0,
+            )
+            time.sleep(0.2)
+            if endpoint.state.mode is FlightMode[mode]:
+                break
+        marks["after_switch"] = endpoint.stats
+        marks["switched_at"] = time.monotonic()
+    finally:
+        gcs.close()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("kind", "mode"), [("pymavlink", "POSCTL"), ("mavsdk", "LAND")])
+def test_pilot_takeover_over_mavlink_no_command_after_the_mode_change(kind: str, mode: str) -> None:
+    companion_port = free_udp_port()
+    links = (LinkConfig("offboard", remote=("127.0.0.1", companion_port)), LinkConfig("gcs"))
+    endpoint = MavlinkEndpoint(
+        Simulator(load_sim_config("iris"), seed=7), EndpointConfig(links=links)
+    ).start()
+    gcs_port = endpoint.local_ports["gcs"]
+    url = f"udpin://127.0.0.1:{companion_port}"
+    link = MavsdkLink(url) if kind == "mavsdk" else PymavlinkLink(url)
+    mission = load_mission(LINE)
+    marks: dict = {}
+    pilot = threading.Thread(target=_pilot_switches, args=(gcs_port, mode, endpoint, marks))
+    pilot.start()
+    outcome: FlightOutcome | None = None
+    try:
+        outcome = fly_mission(
+            link,
+            make_planner("pd", 3.0),
+            reference_of(mission),
+            mission,
+            RunnerConfig(),
+            lambda _tick: None,
+            lambda _m: None,
+        )
+        returned_at = time.monotonic()
+        pilot.join(10.0)
+        at_return = endpoint.stats
+        pos_at_return = endpoint.state.pos_ned_m.copy()
+        time.sleep(2.0)  # anything still streaming would show now
+        later = endpoint.stats
+        final = endpoint.state
+    finally:
+        link.close()
+        endpoint.stop()
+    assert outcome is not None and outcome.status == "handed_over", outcome
+    assert outcome.detail.startswith(f"pilot took control in {mode} at t=")
+    switch = marks["after_switch"]
+    # No command at all after the pilot's: the pilot's own DO_SET_MODE retries are its only ones.
+    assert later.commands_received == switch.commands_received
+    # Setpoints stop once telemetry shows the new mode (one heartbeat at most), then none.
+    heard_within_s = returned_at - marks["switched_at"]
+    assert heard_within_s < 2.0
+    assert later.setpoints_accepted + later.setpoints_rejected == (
+        at_return.setpoints_accepted + at_return.setpoints_rejected
+    )
+    assert final.mode is FlightMode[mode]
+    if mode == "LAND":
+        assert final.pos_ned_m[2] > pos_at_return[2] - 0.05  # descending (NED: down is +)
+    else:
+        assert float(np.linalg.norm(final.pos_ned_m[:2] - pos_at_return[:2])) < 1.0
