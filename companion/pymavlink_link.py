@@ -27,10 +27,19 @@ from companion.px4_modes import PX4_MAIN_SUB, mode_name_of
 
 _MAV = mavutil.mavlink
 MAVLink_message = _MAV.MAVLink_message
-_VELOCITY_YAW_RATE_MASK = 1479  # ignore position, acceleration, force and yaw; use yaw rate
+# Use velocity and yaw rate; ignore position, acceleration (and force) and yaw.
+_VELOCITY_YAW_RATE_MASK = (
+    _MAV.POSITION_TARGET_TYPEMASK_X_IGNORE
+    | _MAV.POSITION_TARGET_TYPEMASK_Y_IGNORE
+    | _MAV.POSITION_TARGET_TYPEMASK_Z_IGNORE
+    | _MAV.POSITION_TARGET_TYPEMASK_AX_IGNORE
+    | _MAV.POSITION_TARGET_TYPEMASK_AY_IGNORE
+    | _MAV.POSITION_TARGET_TYPEMASK_AZ_IGNORE
+    | _MAV.POSITION_TARGET_TYPEMASK_YAW_IGNORE
+)
 _HEARTBEAT_LOST_S = 3.0
-_MSG_LOCAL_POSITION_NED = 32
-_MSG_ATTITUDE_QUATERNION = 31
+_MSG_LOCAL_POSITION_NED = _MAV.MAVLINK_MSG_ID_LOCAL_POSITION_NED
+_MSG_ATTITUDE_QUATERNION = _MAV.MAVLINK_MSG_ID_ATTITUDE_QUATERNION
 
 
 def pymavlink_device(url: str) -> str:

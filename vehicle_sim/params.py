@@ -1,6 +1,8 @@
-"""PX4-named parameters of the simulated flight controller, with PX4's defaults.
+"""PX4-named parameters of the simulated flight controller, with PX4's types, defaults, bounds.
 
-Values are floats in PX4's own units (angles in degrees where PX4 uses degrees). The order of
+Values are held as floats in PX4's own units (angles in degrees where PX4 uses degrees); INT32
+parameters hold whole numbers. A setting outside PX4's bounds or of the wrong kind is refused,
+as PX4 refuses it. The order of
 :meth:`Px4Params.names` is stable (alphabetical, as PX4 lists them), so it can serve as the
 PARAM_VALUE index.
 """
@@ -9,58 +11,114 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 
 from vehicle_sim import flight_control as fc
 
-# name -> (default, what it is, with unit)
-PX4_DEFAULTS: dict[str, tuple[float, str]] = {
-    "COM_DISARM_LAND": (2.0, "disarm this long after landing [s], <= 0 disables"),
-    "COM_DISARM_PRFLT": (10.0, "disarm this long after arming without takeoff [s], <= 0 disables"),
-    "COM_OBL_RC_ACT": (0.0, "offboard-loss action: 0-3, 5 hold, 4 land"),
-    "COM_OF_LOSS_T": (1.0, "offboard setpoint timeout [s]"),
-    "MC_PITCHRATE_D": (0.003, "pitch rate D [1/(rad/s^2)]"),
-    "MC_PITCHRATE_I": (0.2, "pitch rate I"),
-    "MC_PITCHRATE_MAX": (220.0, "max pitch rate [deg/s]"),
-    "MC_PITCHRATE_P": (0.15, "pitch rate P"),
-    "MC_PITCH_P": (6.5, "pitch attitude P [1/s]"),
-    "MC_PR_INT_LIM": (0.3, "pitch rate integrator limit"),
-    "MC_ROLLRATE_D": (0.003, "roll rate D"),
-    "MC_ROLLRATE_I": (0.2, "roll rate I"),
-    "MC_ROLLRATE_MAX": (220.0, "max roll rate [deg/s]"),
-    "MC_ROLLRATE_P": (0.15, "roll rate P"),
-    "MC_ROLL_P": (6.5, "roll attitude P [1/s]"),
-    "MC_RR_INT_LIM": (0.3, "roll rate integrator limit"),
-    "MC_YAWRATE_D": (0.0, "yaw rate D"),
-    "MC_YAWRATE_I": (0.1, "yaw rate I"),
-    "MC_YAWRATE_MAX": (200.0, "max yaw rate [deg/s]"),
-    "MC_YAWRATE_P": (0.2, "yaw rate P"),
-    "MC_YR_INT_LIM": (0.3, "yaw rate integrator limit"),
-    "MC_YAW_P": (2.8, "yaw attitude P [1/s]"),
-    "MC_YAW_WEIGHT": (0.4, "yaw weight in the attitude error"),
-    "MIS_TAKEOFF_ALT": (2.5, "takeoff altitude above home [m]"),
-    "MPC_ACC_HOR": (3.0, "velocity setpoint slew in auto modes [m/s^2]"),
-    "MPC_LAND_SPEED": (0.7, "landing descent speed [m/s]"),
-    "MPC_THR_HOVER": (0.5, "hover thrust, normalised (set from the preset)"),
-    "MPC_THR_MAX": (1.0, "max collective thrust, normalised"),
-    "MPC_THR_MIN": (0.12, "min collective thrust in flight, normalised"),
-    "MPC_TILTMAX_AIR": (45.0, "max tilt [deg]"),
-    "MPC_TKO_SPEED": (1.5, "takeoff climb speed [m/s]"),
-    "MPC_XY_CRUISE": (5.0, "horizontal speed in auto modes [m/s]"),
-    "MPC_XY_P": (0.95, "horizontal position P [1/s]"),
-    "MPC_XY_VEL_D_ACC": (0.2, "horizontal velocity D [1]"),
-    "MPC_XY_VEL_I_ACC": (0.4, "horizontal velocity I [1/s]"),
-    "MPC_XY_VEL_MAX": (12.0, "max horizontal speed [m/s]"),
-    "MPC_XY_VEL_P_ACC": (1.8, "horizontal velocity P [1/s]"),
-    "MPC_Z_P": (1.0, "vertical position P [1/s]"),
-    "MPC_Z_VEL_D_ACC": (0.0, "vertical velocity D [1]"),
-    "MPC_Z_VEL_I_ACC": (2.0, "vertical velocity I [1/s]"),
-    "MPC_Z_VEL_MAX_DN": (1.5, "max descent speed [m/s]"),
-    "MPC_Z_VEL_MAX_UP": (3.0, "max climb speed [m/s]"),
-    "MPC_Z_VEL_P_ACC": (4.0, "vertical velocity P [1/s]"),
-    "MPC_Z_V_AUTO_DN": (1.5, "descent speed in auto modes [m/s]"),
-    "MPC_Z_V_AUTO_UP": (3.0, "climb speed in auto modes [m/s]"),
+ParamType = Literal["FLOAT", "INT32"]
+
+
+@dataclass(frozen=True)
+class Px4ParamSpec:
+    """One PX4 parameter as PX4's parameter metadata defines it ([PX4-params]).
+
+    Attributes:
+        default: PX4's default, in PX4's units.
+        doc: what it is, with its unit.
+        lo, hi: PX4's inclusive bounds (infinite where PX4 gives none).
+        type: "FLOAT" (MAV_PARAM_TYPE_REAL32) or "INT32" (MAV_PARAM_TYPE_INT32).
+    """
+
+    default: float
+    doc: str
+    lo: float = -math.inf
+    hi: float = math.inf
+    type: ParamType = "FLOAT"
+
+    def check(self, name: str, value: float) -> None:
+        """ValueError naming the rule when ``value`` is not a valid setting."""
+        if not math.isfinite(value):
+            raise ValueError(f"parameter {name}: {value!r} is not finite; give a finite number")
+        if self.type == "INT32" and value != int(value):
+            raise ValueError(f"parameter {name} is INT32; {value!r} is not a whole number")
+        if not self.lo <= value <= self.hi:
+            raise ValueError(
+                f"parameter {name}: {value:g} is outside PX4's range [{self.lo:g}, {self.hi:g}]"
+            )
+
+
+_F = Px4ParamSpec
+
+
+def _i(default: int, doc: str, lo: float, hi: float) -> Px4ParamSpec:
+    return Px4ParamSpec(float(default), doc, lo, hi, "INT32")
+
+
+# PX4's names, types, defaults and bounds (PX4 v1.14 parameter metadata, [PX4-params]); the
+# modules defining them: commander (COM_*), navigator (NAV_*, MIS_*, RTL_*), mc_pos_control
+# (MPC_*), mc_att_control (MC_*_P, MC_*RATE_MAX), mc_rate_control (MC_*RATE_*), battery (BAT*),
+# mavlink (MAV_*), and the airframe system (SYS_*).
+PX4_PARAMS: dict[str, Px4ParamSpec] = {
+    "BAT1_N_CELLS": _i(4, "cells in series of battery 1 (the simulated pack)", 0, 16),
+    "BAT_CRIT_THR": _F(0.07, "critical battery level, fraction of capacity", 0.05, 0.5),
+    "BAT_EMERGEN_THR": _F(0.05, "emergency battery level, fraction of capacity", 0.03, 0.5),
+    "BAT_LOW_THR": _F(0.15, "low battery level, fraction of capacity", 0.12, 0.5),
+    "COM_DISARM_LAND": _F(2.0, "disarm this long after landing [s], <= 0 disables", -1.0, 20.0),
+    "COM_DISARM_PRFLT": _F(10.0, "disarm after arming without takeoff [s], <= 0 off", -1.0, 20.0),
+    "COM_DL_LOSS_T": _i(10, "data-link loss time threshold [s]", 5, 300),
+    "COM_FAIL_ACT_T": _F(5.0, "hold this long before a failsafe action [s]", 0.0, 25.0),
+    "COM_OBL_RC_ACT": _i(0, "offboard-loss action: 0-3, 5 hold, 4 land", 0, 7),
+    "COM_OF_LOSS_T": _F(1.0, "offboard setpoint timeout [s]", 0.0, 60.0),
+    "COM_RC_IN_MODE": _i(3, "manual control input: 0 RC, 1 joystick, 2-3 either, 4 none", 0, 4),
+    "MAV_SYS_ID": _i(1, "MAVLink system id", 1, 250),
+    "MC_PITCHRATE_D": _F(0.003, "pitch rate D [1/(rad/s^2)]", 0.0),
+    "MC_PITCHRATE_I": _F(0.2, "pitch rate I", 0.0),
+    "MC_PITCHRATE_MAX": _F(220.0, "max pitch rate [deg/s]", 0.0, 1800.0),
+    "MC_PITCHRATE_P": _F(0.15, "pitch rate P", 0.01, 0.6),
+    "MC_PITCH_P": _F(6.5, "pitch attitude P [1/s]", 0.0, 12.0),
+    "MC_PR_INT_LIM": _F(0.3, "pitch rate integrator limit", 0.0),
+    "MC_ROLLRATE_D": _F(0.003, "roll rate D", 0.0),
+    "MC_ROLLRATE_I": _F(0.2, "roll rate I", 0.0),
+    "MC_ROLLRATE_MAX": _F(220.0, "max roll rate [deg/s]", 0.0, 1800.0),
+    "MC_ROLLRATE_P": _F(0.15, "roll rate P", 0.01, 0.5),
+    "MC_ROLL_P": _F(6.5, "roll attitude P [1/s]", 0.0, 12.0),
+    "MC_RR_INT_LIM": _F(0.3, "roll rate integrator limit", 0.0),
+    "MC_YAWRATE_D": _F(0.0, "yaw rate D", 0.0),
+    "MC_YAWRATE_I": _F(0.1, "yaw rate I", 0.0),
+    "MC_YAWRATE_MAX": _F(200.0, "max yaw rate [deg/s]", 0.0, 1800.0),
+    "MC_YAWRATE_P": _F(0.2, "yaw rate P", 0.0, 0.6),
+    "MC_YR_INT_LIM": _F(0.3, "yaw rate integrator limit", 0.0),
+    "MC_YAW_P": _F(2.8, "yaw attitude P [1/s]", 0.0, 5.0),
+    "MC_YAW_WEIGHT": _F(0.4, "yaw weight in the attitude error", 0.0, 1.0),
+    "MIS_TAKEOFF_ALT": _F(2.5, "takeoff altitude above home [m]", 0.0),
+    "MPC_ACC_HOR": _F(3.0, "velocity setpoint slew in auto modes [m/s^2]", 2.0, 15.0),
+    "MPC_LAND_SPEED": _F(0.7, "landing descent speed [m/s]", 0.6),
+    "MPC_THR_HOVER": _F(0.5, "hover thrust, normalised (set from the preset)", 0.1, 0.8),
+    "MPC_THR_MAX": _F(1.0, "max collective thrust, normalised", 0.0, 1.0),
+    "MPC_THR_MIN": _F(0.12, "min collective thrust in flight, normalised", 0.05, 0.5),
+    "MPC_TILTMAX_AIR": _F(45.0, "max tilt [deg]", 20.0, 89.0),
+    "MPC_TKO_SPEED": _F(1.5, "takeoff climb speed [m/s]", 1.0, 5.0),
+    "MPC_XY_CRUISE": _F(5.0, "horizontal speed in auto modes [m/s]", 3.0, 20.0),
+    "MPC_XY_P": _F(0.95, "horizontal position P [1/s]", 0.0, 2.0),
+    "MPC_XY_VEL_D_ACC": _F(0.2, "horizontal velocity D [1]", 0.1, 2.0),
+    "MPC_XY_VEL_I_ACC": _F(0.4, "horizontal velocity I [1/s]", 0.0, 60.0),
+    "MPC_XY_VEL_MAX": _F(12.0, "max horizontal speed [m/s]", 0.0, 20.0),
+    "MPC_XY_VEL_P_ACC": _F(1.8, "horizontal velocity P [1/s]", 1.2, 5.0),
+    "MPC_Z_P": _F(1.0, "vertical position P [1/s]", 0.0, 1.5),
+    "MPC_Z_VEL_D_ACC": _F(0.0, "vertical velocity D [1]", 0.0, 2.0),
+    "MPC_Z_VEL_I_ACC": _F(2.0, "vertical velocity I [1/s]", 0.2, 3.0),
+    "MPC_Z_VEL_MAX_DN": _F(1.5, "max descent speed [m/s]", 0.5, 4.0),
+    "MPC_Z_VEL_MAX_UP": _F(3.0, "max climb speed [m/s]", 0.5, 8.0),
+    "MPC_Z_VEL_P_ACC": _F(4.0, "vertical velocity P [1/s]", 2.0, 15.0),
+    "MPC_Z_V_AUTO_DN": _F(1.5, "descent speed in auto modes [m/s]", 0.5, 4.0),
+    "MPC_Z_V_AUTO_UP": _F(3.0, "climb speed in auto modes [m/s]", 0.5, 8.0),
+    "NAV_DLL_ACT": _i(0, "data-link loss action: 0 off, 1 hold, 2 RTL, 3 land, 5-6", 0, 6),
+    "RTL_RETURN_ALT": _F(60.0, "return altitude above home in RTL [m]", 0.0, 150.0),
+    "SYS_AUTOCONFIG": _i(0, "reset parameters on next boot: 0 keep, 1-2 reset", 0, 2),
+    "SYS_AUTOSTART": _i(4001, "airframe id (4001: generic quadcopter)", 0, 9999999),
 }
 
 IDLE_THRUST_NORM = 0.05  # motor thrust while armed on the ground (PX4 idle spin)
@@ -70,7 +128,7 @@ class Px4Params:
     """The parameter set of one simulated vehicle."""
 
     def __init__(self, overrides: Mapping[str, float] | None = None) -> None:
-        self._values = {name: default for name, (default, _) in PX4_DEFAULTS.items()}
+        self._values = {name: spec.default for name, spec in PX4_PARAMS.items()}
         self.version = 0  # increments on every set, so users of derived vectors can refresh
         for name, value in (overrides or {}).items():
             self.set(name, value)
@@ -87,13 +145,18 @@ class Px4Params:
                 f"unknown parameter {name!r}; known: {', '.join(self.names())}"
             ) from None
 
-    def set(self, name: str, value: float) -> None:
-        """Set one parameter; unknown names and non-finite values raise ValueError."""
+    def spec(self, name: str) -> Px4ParamSpec:
+        """The parameter's PX4 type, default and bounds."""
         self.get(name)
-        if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)):
-            raise ValueError(f"parameter {name}: expected a float, got {value!r}")
-        if not math.isfinite(float(value)):
-            raise ValueError(f"parameter {name}: {value!r} is not finite; give a finite float")
+        return PX4_PARAMS[name]
+
+    def set(self, name: str, value: float) -> None:
+        """Set one parameter; unknown names, non-numbers, non-finite values, fractions for an
+        INT32 parameter and values outside PX4's bounds raise ValueError (nothing changes)."""
+        spec = self.spec(name)
+        if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+            raise ValueError(f"parameter {name}: expected a number, got {value!r}")
+        spec.check(name, float(value))
         self._values[name] = float(value)
         self.version += 1
 

@@ -177,6 +177,10 @@ class Simulator:
         """Set a PX4 parameter (takes effect at the next step)."""
         self._params.set(name, value)
 
+    def param_type(self, name: str) -> str:
+        """PX4's type of a parameter: "FLOAT" or "INT32"."""
+        return self._params.spec(name).type
+
     def param_names(self) -> tuple[str, ...]:
         """All parameter names in a stable order (the PARAM_VALUE index)."""
         return self._params.names()

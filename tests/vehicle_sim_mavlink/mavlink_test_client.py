@@ -15,6 +15,7 @@ from pymavlink import mavutil  # noqa: E402
 
 from vehicle_sim import Simulator, load_sim_config  # noqa: E402
 from vehicle_sim.mavlink import EndpointConfig, LinkConfig, MavlinkEndpoint  # noqa: E402
+from vehicle_sim.mavlink.params import float_as_int32, int32_as_float  # noqa: E402
 
 LOOPBACK = "127.0.0.1"
 MAV_RESULT_ACCEPTED = 0
@@ -157,10 +158,19 @@ class Client:
         )
 
     def set_param(self, name: str, value: float):
+        """PARAM_SET as REAL32; the PARAM_VALUE echo (None if none came)."""
         self.forget()
         with self.send_lock:
             self.mav.param_set_send(1, 1, name.encode(), value, 9)
         return self.recv("PARAM_VALUE", 3.0, lambda m: m.param_id == name)
+
+    def set_int_param(self, name: str, value: int) -> int | None:
+        """PARAM_SET as INT32, encoded bytewise as PX4 expects; the echoed integer value."""
+        self.forget()
+        with self.send_lock:
+            self.mav.param_set_send(1, 1, name.encode(), int32_as_float(value), 6)
+        echo = self.recv("PARAM_VALUE", 3.0, lambda m: m.param_id == name)
+        return None if echo is None else float_as_int32(echo.param_value)
 
     def send_velocity(
         self,

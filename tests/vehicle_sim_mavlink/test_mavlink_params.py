@@ -15,6 +15,9 @@ class Store:
     def __init__(self) -> None:
         self.values = {"COM_OBL_RC_ACT": 0.0, "COM_OF_LOSS_T": 1.0, "MIS_TAKEOFF_ALT": 2.5}
 
+    def param_type(self, name):
+        return "INT32" if name == "COM_OBL_RC_ACT" else "FLOAT"
+
     def param_names(self):
         return tuple(self.values)
 
@@ -34,7 +37,7 @@ def fields(msg):
 def test_request_list_sends_every_param_with_count_and_index():
     reply = params.request_list(Store())
     assert [fields(m) for m in reply.values] == [
-        ("COM_OBL_RC_ACT", 0.0, 9, 3, 0),
+        ("COM_OBL_RC_ACT", 0.0, 6, 3, 0),  # INT32 (bytewise: 0 is 0.0 either way)
         ("COM_OF_LOSS_T", 1.0, 9, 3, 1),
         ("MIS_TAKEOFF_ALT", 2.5, 9, 3, 2),
     ]
@@ -72,3 +75,25 @@ def test_rejected_set_echoes_the_old_value_and_says_why(value, problem):
     reply = params.param_set(store, "MIS_TAKEOFF_ALT", value, params.PARAM_TYPE_REAL32)
     assert reply.values[0].param_value == 2.5
     assert problem in reply.problem
+
+
+def test_int32_parameter_value_is_encoded_bytewise():
+    store = Store()
+    store.values["COM_OBL_RC_ACT"] = 4.0
+    msg = params.request_read(store, b"COM_OBL_RC_ACT", -1).values[0]
+    assert msg.param_type == params.PARAM_TYPE_INT32
+    assert params.float_as_int32(msg.param_value) == 4
+
+
+@pytest.mark.parametrize(
+    ("name", "sent_type"),
+    [("COM_OF_LOSS_T", params.PARAM_TYPE_INT32), ("COM_OBL_RC_ACT", params.PARAM_TYPE_REAL32)]
+    + [("COM_OF_LOSS_T", t) for t in (1, 2, 3, 4, 5, 7, 8, 10)],
+)
+def test_param_set_of_the_wrong_type_is_refused_and_not_applied(name, sent_type):
+    store = Store()
+    before = dict(store.values)
+    reply = params.param_set(store, name, params.int32_as_float(1), sent_type)
+    assert store.values == before
+    assert "refused" in reply.problem and "not applied" in reply.problem
+    assert reply.values[0].param_id == name

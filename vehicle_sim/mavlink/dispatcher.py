@@ -16,6 +16,7 @@ from pymavlink.dialects.v20 import common as mavlink2
 from vehicle_sim.mavlink import params, services
 from vehicle_sim.mavlink.codec import COMPONENT_ID, SYSTEM_ID
 from vehicle_sim.mavlink.commands import (
+    CMD_DO_SET_MODE,
     MAV_RESULT_FAILED,
     MAV_RESULT_UNSUPPORTED,
     MAV_SEVERITY_CRITICAL,
@@ -153,9 +154,11 @@ class Dispatcher:
             0.0,
             0.0,
         )
-        outcome = handle_command(176, p, CommandContext(self._sim, self._telemetry, scheduler))
+        outcome = handle_command(
+            CMD_DO_SET_MODE, p, CommandContext(self._sim, self._telemetry, scheduler)
+        )
         ack = _FACTORY.command_ack_encode(
-            command=176,
+            command=CMD_DO_SET_MODE,
             result=outcome.result,
             target_system=msg.get_srcSystem(),
             target_component=msg.get_srcComponent(),

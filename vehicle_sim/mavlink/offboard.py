@@ -11,17 +11,31 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from pymavlink.dialects.v20 import common as mavlink2
+
 from vehicle_sim.vehicle_types import VelocitySetpoint
 
-FRAME_LOCAL_NED = 1
-FRAME_BODY_NED = 8
+FRAME_LOCAL_NED = mavlink2.MAV_FRAME_LOCAL_NED
+FRAME_BODY_NED = mavlink2.MAV_FRAME_BODY_NED
 SUPPORTED_FRAMES: dict[int, str] = {FRAME_LOCAL_NED: "ned", FRAME_BODY_NED: "body"}
 
-IGNORE_POSITION = 0b111
-IGNORE_VELOCITY = 0b111 << 3
-IGNORE_ACCELERATION = 0b111 << 6
-IGNORE_YAW = 1 << 10
-IGNORE_YAW_RATE = 1 << 11
+IGNORE_POSITION = (
+    mavlink2.POSITION_TARGET_TYPEMASK_X_IGNORE
+    | mavlink2.POSITION_TARGET_TYPEMASK_Y_IGNORE
+    | mavlink2.POSITION_TARGET_TYPEMASK_Z_IGNORE
+)
+IGNORE_VELOCITY = (
+    mavlink2.POSITION_TARGET_TYPEMASK_VX_IGNORE
+    | mavlink2.POSITION_TARGET_TYPEMASK_VY_IGNORE
+    | mavlink2.POSITION_TARGET_TYPEMASK_VZ_IGNORE
+)
+IGNORE_ACCELERATION = (
+    mavlink2.POSITION_TARGET_TYPEMASK_AX_IGNORE
+    | mavlink2.POSITION_TARGET_TYPEMASK_AY_IGNORE
+    | mavlink2.POSITION_TARGET_TYPEMASK_AZ_IGNORE
+)
+IGNORE_YAW = mavlink2.POSITION_TARGET_TYPEMASK_YAW_IGNORE
+IGNORE_YAW_RATE = mavlink2.POSITION_TARGET_TYPEMASK_YAW_RATE_IGNORE
 
 MAX_SPEED_MPS = 100.0
 """Velocity components beyond this are absurd (PX4 limits flight to MPC_XY_VEL_MAX anyway)."""
