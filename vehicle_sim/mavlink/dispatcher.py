@@ -40,20 +40,19 @@ _FACTORY = mavlink2.MAVLink(None)
 
 @dataclass(frozen=True)
 class Outgoing:
-    """A message to send: to the sender of the request only, or to every peer of every link."""
+    """A message to send: to the sender of the request only, or to every peer of every link;
+    or a notice (severity, text) for every peer, which the endpoint sends as STATUSTEXT."""
 
-    msg: mavlink2.MAVLink_message
+    msg: mavlink2.MAVLink_message | None = None
     broadcast: bool = False
+    notice: Notice | None = None
 
 
-def _for_us(target_system: int, target_component: int | None = None) -> bool:
-    system_ok = target_system in (0, SYSTEM_ID)
-    return system_ok and (target_component is None or target_component in (0, COMPONENT_ID))
-
-
-def statustext(severity: int, text: str) -> mavlink2.MAVLink_message:
-    """A STATUSTEXT (text cut to the 50 characters MAVLink allows)."""
-    return _FACTORY.statustext_encode(severity=severity, text=text[:50].encode("ascii", "replace"))
+def _for_us(msg: mavlink2.MAVLink_message) -> bool:
+    """Addressed to this system (or all) and, where the message names one, this component."""
+    system_ok = msg.target_system in (0, SYSTEM_ID)
+    component = getattr(msg, "target_component", None)
+    return system_ok and (component is None or component in (0, COMPONENT_ID))
 
 
 class Dispatcher:
@@ -78,27 +77,36 @@ class Dispatcher:
         self._telemetry = telemetry
         self._stats = stats
         self._on_setpoint = on_setpoint
-        self._handlers: dict[str, Callable[..., list[Outgoing]]] = {
+        # Messages addressed to a system: checked once, in handle(), before their handler.
+        self._addressed: dict[str, Callable[..., list[Outgoing]]] = {
             "COMMAND_LONG": self._command_long,
             "COMMAND_INT": self._command_int,
             "SET_POSITION_TARGET_LOCAL_NED": self._setpoint,
             "PARAM_REQUEST_LIST": self._param_request_list,
             "PARAM_REQUEST_READ": self._param_request_read,
             "PARAM_SET": self._param_set,
-            "PING": self._ping,
-            "TIMESYNC": self._timesync,
             "MISSION_REQUEST_LIST": self._mission_request_list,
             "FILE_TRANSFER_PROTOCOL": self._ftp,
             "SET_MODE": self._set_mode_message,
+        }
+        # Services with their own addressing rules (a PING to 0 is a request to all).
+        self._services: dict[str, Callable[..., list[Outgoing]]] = {
+            "PING": self._ping,
+            "TIMESYNC": self._timesync,
         }
 
     def handle(
         self, msg: mavlink2.MAVLink_message, scheduler: RateScheduler, now_ns: int
     ) -> list[Outgoing]:
         """Handle one message from a link; returns what to send. Never raises."""
-        handler = self._handlers.get(msg.get_type())
+        handler = self._services.get(msg.get_type())
         if handler is None:
-            return []
+            handler = self._addressed.get(msg.get_type())
+            if handler is None:
+                return []
+            if not _for_us(msg):
+                self._stats.add("wrong_target")
+                return []
         try:
             return handler(msg, scheduler, now_ns)
         except Exception:  # a hostile message must never stop the endpoint
@@ -116,9 +124,6 @@ class Dispatcher:
         return self._command(msg, msg.command, p, scheduler)
 
     def _command(self, msg, command: int, p, scheduler: RateScheduler) -> list[Outgoing]:
-        if not _for_us(msg.target_system, msg.target_component):
-            self._stats.add("wrong_target")
-            return []
         self._stats.add("commands_received")
         ctx = CommandContext(self._sim, self._telemetry, scheduler)
         try:
@@ -141,9 +146,6 @@ class Dispatcher:
 
     def _set_mode_message(self, msg, scheduler, _now_ns) -> list[Outgoing]:
         """Legacy SET_MODE message: handled like DO_SET_MODE, answered with a COMMAND_ACK."""
-        if not _for_us(msg.target_system):
-            self._stats.add("wrong_target")
-            return []
         custom = int(msg.custom_mode)
         p = (
             float(msg.base_mode),
@@ -168,9 +170,6 @@ class Dispatcher:
     # -- offboard -----------------------------------------------------------------------------
 
     def _setpoint(self, msg, _scheduler, _now_ns) -> list[Outgoing]:
-        if not _for_us(msg.target_system, msg.target_component):
-            self._stats.add("wrong_target")
-            return []
         result = parse_setpoint(
             msg.coordinate_frame, msg.type_mask, (msg.vx, msg.vy, msg.vz), msg.yaw, msg.yaw_rate
         )
@@ -198,22 +197,13 @@ class Dispatcher:
         return out
 
     def _param_request_list(self, msg, _scheduler, _now_ns) -> list[Outgoing]:
-        if not _for_us(msg.target_system, msg.target_component):
-            self._stats.add("wrong_target")
-            return []
         return self._param_reply(params.request_list(self._sim), broadcast=False)
 
     def _param_request_read(self, msg, _scheduler, _now_ns) -> list[Outgoing]:
-        if not _for_us(msg.target_system, msg.target_component):
-            self._stats.add("wrong_target")
-            return []
         reply = params.request_read(self._sim, msg.param_id, msg.param_index)
         return self._param_reply(reply, broadcast=False)
 
     def _param_set(self, msg, _scheduler, _now_ns) -> list[Outgoing]:
-        if not _for_us(msg.target_system, msg.target_component):
-            self._stats.add("wrong_target")
-            return []
         reply = params.param_set(self._sim, msg.param_id, msg.param_value, msg.param_type)
         return self._param_reply(reply, broadcast=True)
 
@@ -228,16 +218,10 @@ class Dispatcher:
         return [] if reply is None else [Outgoing(reply)]
 
     def _mission_request_list(self, msg, _scheduler, _now_ns) -> list[Outgoing]:
-        if not _for_us(msg.target_system, msg.target_component):
-            self._stats.add("wrong_target")
-            return []
         return [Outgoing(services.mission_count_reply(msg))]
 
     def _ftp(self, msg, _scheduler, _now_ns) -> list[Outgoing]:
-        if not _for_us(msg.target_system, msg.target_component):
-            self._stats.add("wrong_target")
-            return []
         return [Outgoing(services.ftp_nak_reply(msg))]
 
     def _notices(self, notices: tuple[Notice, ...]) -> list[Outgoing]:
-        return [Outgoing(statustext(sev, text), broadcast=True) for sev, text in notices]
+        return [Outgoing(notice=notice, broadcast=True) for notice in notices]

@@ -26,9 +26,10 @@ from typing import TYPE_CHECKING
 from pymavlink.dialects.v20 import common as mavlink2
 
 from vehicle_sim.mavlink.config import EndpointConfig
-from vehicle_sim.mavlink.dispatcher import Dispatcher, Outgoing, statustext
+from vehicle_sim.mavlink.dispatcher import Dispatcher, Outgoing
 from vehicle_sim.mavlink.link import Address, UdpLink
 from vehicle_sim.mavlink.stats import EndpointStats, StatsCounter
+from vehicle_sim.mavlink.statustext import CHUNK_ID_MAX, NoticeLimiter, statustext_chunks
 from vehicle_sim.mavlink.telemetry import (
     TELEMETRY_BUILDERS,
     TelemetryContext,
@@ -46,9 +47,10 @@ MAX_DATAGRAMS_PER_PASS = 256
 MAX_SIM_PER_PASS_S = 0.05
 """Simulated time stepped per loop pass at most [s of sim time at speed 1]."""
 NOTICE_REPEAT_S = 1.0
-"""The same STATUSTEXT text is sent at most once per this wall-clock time [s]."""
+"""A STATUSTEXT of one kind (see statustext.notice_kind) goes out at most once per this wall-clock
+time [s]."""
 NOTICE_MEMORY = 256
-"""Distinct recent STATUSTEXT texts remembered for the rate limit."""
+"""Distinct recent STATUSTEXT kinds remembered for the rate limit."""
 TRACE_LENGTH = 4096
 HEARTBEAT_ID = mavlink2.MAVLINK_MSG_ID_HEARTBEAT
 
@@ -93,7 +95,8 @@ class MavlinkEndpoint:
         self._received_s = 0.0
         self._pending: list[tuple[int, float]] = []
         self._trace: deque[SetpointActuation] = deque(maxlen=TRACE_LENGTH)
-        self._notice_sent_s: dict[str, float] = {}
+        self._notice_limiter = NoticeLimiter(NOTICE_REPEAT_S, NOTICE_MEMORY)
+        self._chunk_id = 0
         self._heartbeat_wall_s: dict[str, float] = {}
 
     # -- lifecycle ----------------------------------------------------------------------------
@@ -258,25 +261,22 @@ class MavlinkEndpoint:
 
     def _send_outgoing(self, link: UdpLink, addr: Address, outgoing: list[Outgoing]) -> None:
         for item in outgoing:
-            if item.broadcast and item.msg.get_type() == "STATUSTEXT":
-                self._notice(item.msg.severity, _text(item.msg.text))
+            if item.notice is not None:
+                self._notice(*item.notice)
             elif item.broadcast:
                 self._broadcast(item.msg)
             else:
                 self._send(link, link.codec.encode(item.msg), addr)
 
     def _notice(self, severity: int, text: str) -> None:
-        now_s = time.perf_counter()
-        if now_s - self._notice_sent_s.get(text, -math.inf) < NOTICE_REPEAT_S:
+        """Broadcast a STATUSTEXT (chunked if long) unless one of its kind went out lately."""
+        if not self._notice_limiter.allow(text, time.perf_counter()):
             self._stats.add("notices_suppressed")
             return
-        if len(self._notice_sent_s) >= NOTICE_MEMORY:  # hostile input makes endless texts
-            self._notice_sent_s = {
-                t: s for t, s in self._notice_sent_s.items() if now_s - s < NOTICE_REPEAT_S
-            }
-        self._notice_sent_s[text] = now_s
         self._stats.add("notices_sent")
-        self._broadcast(statustext(severity, text))
+        self._chunk_id = self._chunk_id % CHUNK_ID_MAX + 1
+        for msg in statustext_chunks(severity, text, self._chunk_id):
+            self._broadcast(msg)
 
     def _broadcast(self, msg: mavlink2.MAVLink_message) -> None:
         for link in self._links:
@@ -302,7 +302,3 @@ class MavlinkEndpoint:
         for time_boot_ms, received_s in self._pending:
             self._trace.append(SetpointActuation(time_boot_ms, received_s, actuated_s))
         self._pending.clear()
-
-
-def _text(raw: str | bytes) -> str:
-    return raw.decode("ascii", "replace") if isinstance(raw, bytes) else raw
