@@ -27,10 +27,8 @@ from vehicle_sim.commander import ActiveSetpoint, Commander, CommandResult
 from vehicle_sim.config import GRAVITY_MPS2, SimConfig
 from vehicle_sim.params import Px4Params
 from vehicle_sim.truth_log import truth_row
-from vehicle_sim.vehicle_types import FlightMode, VehicleState, VelocitySetpoint
+from vehicle_sim.vehicle_types import FlightMode, VehicleState, VelocitySetpoint, check_setpoint
 
-MAX_SETPOINT_SPEED_MPS = 100.0
-MAX_SETPOINT_YAW_RATE_RADPS = 50.0
 NOISE_BLOCK_ROWS = 4096
 
 
@@ -150,7 +148,7 @@ class Simulator:
         Raises:
             ValueError: non-finite or absurd values, or an unknown frame; nothing changes then.
         """
-        _check_setpoint(sp)
+        check_setpoint(sp)
         self._commander.on_setpoint(self.t_s)
         if self._delay_steps == 0:
             self._active = self._to_ned(sp)
@@ -271,7 +269,7 @@ class Simulator:
             vel = tuple(float(v) for v in self._cs[fc.CS_VEL_SP : fc.CS_VEL_SP + 3])
             yaw_rate = float(self._sp[fc.SP_YAW_RATE])
         else:
-            _check_setpoint(cmd)
+            check_setpoint(cmd)
             active = self._to_ned(cmd)
             vel, yaw_rate = active.vel_ned_mps, active.yaw_rate_radps
         return truth_row(self.state, vel, yaw_rate)
@@ -333,28 +331,3 @@ class Simulator:
             self._noise = np.ascontiguousarray(np.vstack([rest, block]))
             self._noise_pos = 0
         return self._noise[self._noise_pos : self._noise_pos + n]
-
-
-def _check_setpoint(sp: VelocitySetpoint) -> None:
-    if not isinstance(sp, VelocitySetpoint):
-        raise ValueError(f"expected a VelocitySetpoint, got {type(sp).__name__}")
-    if sp.frame not in ("ned", "body"):
-        raise ValueError(f"setpoint frame {sp.frame!r} unknown; use 'ned' or 'body'")
-    try:
-        vel = [float(v) for v in sp.vel_mps]
-        yaw_rate = float(sp.yaw_rate_radps)
-        yaw = None if sp.yaw_rad is None else float(sp.yaw_rad)
-    except (TypeError, ValueError):
-        raise ValueError(f"setpoint {sp!r} has non-numeric fields; give floats") from None
-    if len(vel) != 3 or not all(math.isfinite(v) and abs(v) <= MAX_SETPOINT_SPEED_MPS for v in vel):
-        raise ValueError(
-            f"setpoint velocity {sp.vel_mps!r} rejected: need 3 finite values within "
-            f"+-{MAX_SETPOINT_SPEED_MPS} m/s"
-        )
-    if not (math.isfinite(yaw_rate) and abs(yaw_rate) <= MAX_SETPOINT_YAW_RATE_RADPS):
-        raise ValueError(
-            f"setpoint yaw rate {sp.yaw_rate_radps!r} rejected: need a finite value within "
-            f"+-{MAX_SETPOINT_YAW_RATE_RADPS} rad/s"
-        )
-    if yaw is not None and not (math.isfinite(yaw) and abs(yaw) <= 4 * math.pi):
-        raise ValueError(f"setpoint yaw {sp.yaw_rad!r} rejected: need a finite angle in rad")

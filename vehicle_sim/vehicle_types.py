@@ -7,6 +7,7 @@ These are what the in-process API returns and what the MAVLink endpoint translat
 from __future__ import annotations
 
 import enum
+import math
 from dataclasses import dataclass
 from typing import Literal
 
@@ -63,6 +64,45 @@ class VelocitySetpoint:
     yaw_rate_radps: float = 0.0
     yaw_rad: float | None = None
     frame: SetpointFrame = "ned"
+
+
+MAX_SETPOINT_SPEED_MPS = 100.0
+"""Velocity components beyond this are absurd (PX4 limits flight to MPC_XY_VEL_MAX anyway)."""
+MAX_SETPOINT_YAW_RATE_RADPS = 50.0
+"""Yaw rates beyond this are absurd for a multirotor (PX4's MC_YAWRATE_MAX is at most 1800
+deg/s, about 31 rad/s)."""
+MAX_SETPOINT_YAW_RAD = 4.0 * math.pi
+"""Yaw angles beyond two turns either way are not headings."""
+
+
+def check_setpoint(sp: VelocitySetpoint) -> None:
+    """The one home of the vehicle's setpoint rules (the simulator API and the MAVLink offboard
+    parser both use it): ValueError saying what is wrong and what is valid."""
+    if not isinstance(sp, VelocitySetpoint):
+        raise ValueError(f"expected a VelocitySetpoint, got {type(sp).__name__}")
+    if sp.frame not in ("ned", "body"):
+        raise ValueError(f"setpoint frame {sp.frame!r} unknown; use 'ned' or 'body'")
+    try:
+        vel = [float(v) for v in sp.vel_mps]
+        yaw_rate = float(sp.yaw_rate_radps)
+        yaw = None if sp.yaw_rad is None else float(sp.yaw_rad)
+    except (TypeError, ValueError):
+        raise ValueError(f"setpoint {sp!r} has non-numeric fields; give floats") from None
+    if len(vel) != 3 or not all(math.isfinite(v) and abs(v) <= MAX_SETPOINT_SPEED_MPS for v in vel):
+        raise ValueError(
+            f"invalid velocity setpoint {sp.vel_mps!r} rejected: need 3 finite values within "
+            f"+-{MAX_SETPOINT_SPEED_MPS:g} m/s"
+        )
+    if not (math.isfinite(yaw_rate) and abs(yaw_rate) <= MAX_SETPOINT_YAW_RATE_RADPS):
+        raise ValueError(
+            f"invalid yaw rate setpoint {sp.yaw_rate_radps!r} rejected: need a finite value "
+            f"within +-{MAX_SETPOINT_YAW_RATE_RADPS:g} rad/s"
+        )
+    if yaw is not None and not (math.isfinite(yaw) and abs(yaw) <= MAX_SETPOINT_YAW_RAD):
+        raise ValueError(
+            f"invalid yaw setpoint {sp.yaw_rad!r} rejected: need a finite angle within "
+            f"+-{MAX_SETPOINT_YAW_RAD:.1f} rad"
+        )
 
 
 @dataclass(frozen=True)

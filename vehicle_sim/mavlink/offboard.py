@@ -3,17 +3,17 @@
 type_mask bits (1 = ignore): 0-2 position, 3-5 velocity, 6-8 acceleration, 9 force, 10 yaw,
 11 yaw rate. Frames: 1 LOCAL_NED (as given), 8 BODY_NED (velocity in body axes, rotated by yaw).
 Only velocity setpoints (optionally with yaw or yaw rate) are flown; anything else is rejected
-with a reason a STATUSTEXT can carry. Pure: no I/O.
+with a reason a STATUSTEXT can carry. The value limits are the vehicle's one set of setpoint
+rules, :func:`vehicle_sim.vehicle_types.check_setpoint`. Pure: no I/O.
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import common as mavlink2
 
-from vehicle_sim.vehicle_types import VelocitySetpoint
+from vehicle_sim.vehicle_types import VelocitySetpoint, check_setpoint
 
 FRAME_LOCAL_NED = mavlink2.MAV_FRAME_LOCAL_NED
 FRAME_BODY_NED = mavlink2.MAV_FRAME_BODY_NED
@@ -36,13 +36,6 @@ IGNORE_ACCELERATION = (
 )
 IGNORE_YAW = mavlink2.POSITION_TARGET_TYPEMASK_YAW_IGNORE
 IGNORE_YAW_RATE = mavlink2.POSITION_TARGET_TYPEMASK_YAW_RATE_IGNORE
-
-MAX_SPEED_MPS = 100.0
-"""Velocity components beyond this are absurd (PX4 limits flight to MPC_XY_VEL_MAX anyway)."""
-MAX_YAW_RATE_RADPS = 20.0
-"""Yaw rates beyond this are absurd for a multirotor."""
-MAX_ABS_YAW_RAD = 4.0 * math.pi
-"""Yaw angles beyond two turns either way are not headings."""
 
 
 @dataclass(frozen=True)
@@ -74,21 +67,16 @@ def parse_setpoint(
         type_mask & IGNORE_ACCELERATION
     ) != IGNORE_ACCELERATION:
         return SetpointResult(None, "Offboard: position/accel setpoints unsupported")
-    if not all(math.isfinite(v) and abs(v) <= MAX_SPEED_MPS for v in vel_mps):
-        return SetpointResult(None, "Offboard: invalid velocity setpoint rejected")
     use_yaw = not type_mask & IGNORE_YAW
     use_yaw_rate = not type_mask & IGNORE_YAW_RATE
-    if use_yaw and not (math.isfinite(yaw_rad) and abs(yaw_rad) <= MAX_ABS_YAW_RAD):
-        return SetpointResult(None, "Offboard: invalid yaw setpoint rejected")
-    if use_yaw_rate and not (
-        math.isfinite(yaw_rate_radps) and abs(yaw_rate_radps) <= MAX_YAW_RATE_RADPS
-    ):
-        return SetpointResult(None, "Offboard: invalid yaw rate setpoint rejected")
-    return SetpointResult(
-        VelocitySetpoint(
-            vel_mps=(float(vel_mps[0]), float(vel_mps[1]), float(vel_mps[2])),
-            yaw_rate_radps=float(yaw_rate_radps) if use_yaw_rate else 0.0,
-            yaw_rad=float(yaw_rad) if use_yaw else None,
-            frame=SUPPORTED_FRAMES[coordinate_frame],  # type: ignore[arg-type]
-        )
+    setpoint = VelocitySetpoint(
+        vel_mps=tuple(float(v) for v in vel_mps),  # type: ignore[arg-type]
+        yaw_rate_radps=float(yaw_rate_radps) if use_yaw_rate else 0.0,
+        yaw_rad=float(yaw_rad) if use_yaw else None,
+        frame=SUPPORTED_FRAMES[coordinate_frame],  # type: ignore[arg-type]
     )
+    try:
+        check_setpoint(setpoint)
+    except ValueError as exc:
+        return SetpointResult(None, f"Offboard: {exc}")
+    return SetpointResult(setpoint)
