@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from typing import Any, NamedTuple
 
 import casadi as ca
 import numpy as np
@@ -25,6 +26,31 @@ from planners.nmpc_formulation import NmpcFormulation
 from planners.solver_output import SolverOutput
 
 _BUCKET = 8  # obstacle rows come in blocks of this many (padded), one QP size per block
+
+
+class _Linearisation(NamedTuple):
+    """The QP data of one Gauss-Newton SQP iteration at the current iterate (CasADi DM each).
+
+    hess, grad: Gauss-Newton Hessian and gradient of the cost in the inputs; a_x, lba_x, uba_x:
+    state-bound rows (sensitivity and bounds relative to the linearised trajectory); g_h, lba_h:
+    obstacle rows (Jacobian, lower bound; a padding row last); lbx, ubx: input bounds relative
+    to the iterate; x_lin: the trajectory the inputs produce; sens: d x_lin / d u.
+    """
+
+    hess: Any
+    grad: Any
+    a_x: Any
+    lba_x: Any
+    uba_x: Any
+    g_h: Any
+    lba_h: Any
+    lbx: Any
+    ubx: Any
+    x_lin: Any
+    sens: Any
+
+
+_SPARSE_OUTPUTS = ("g_h",)  # only a few obstacle rows are picked per iteration: keep it sparse
 
 
 @dataclass(frozen=True)
@@ -213,21 +239,26 @@ class GaussNewtonSqp:
                     grads_h.append(ca.horzcat(ca.SX(1, nx * (k - 1)), gx, ca.SX(1, nx * (n - k))))
                     lb_h.append(-hv - gx @ c_blk[k])
         u = ca.vec(us)
-        outs = [
-            hess,
-            grad,
-            sens[self._xrows, :],
-            self._x_lo - x_lin[self._xrows],
-            self._x_hi - x_lin[self._xrows],
-            ca.vertcat(*grads_h, ca.SX(1, nx * n)),
-            ca.vertcat(*lb_h, -ca.inf),
-            ca.DM(np.tile(f.u_min, n)) - u,
-            ca.DM(np.tile(f.u_max, n)) - u,
-            x_lin,
-            sens,
+        outs = _Linearisation(
+            hess=hess,
+            grad=grad,
+            a_x=sens[self._xrows, :],
+            lba_x=self._x_lo - x_lin[self._xrows],
+            uba_x=self._x_hi - x_lin[self._xrows],
+            g_h=ca.vertcat(*grads_h, ca.SX(1, nx * n)),
+            lba_h=ca.vertcat(*lb_h, -ca.inf),
+            lbx=ca.DM(np.tile(f.u_min, n)) - u,
+            ubx=ca.DM(np.tile(f.u_max, n)) - u,
+            x_lin=x_lin,
+            sens=sens,
+        )
+        dense = [
+            out if name in _SPARSE_OUTPUTS else ca.densify(out)
+            for name, out in zip(_Linearisation._fields, outs, strict=True)
         ]
-        outs = [o if i == 5 else ca.densify(o) for i, o in enumerate(outs)]
-        return ca.Function("gn_sqp_linearisation", [w, p], outs)
+        return ca.Function(
+            "gn_sqp_linearisation", [w, p], dense, ["w", "p"], list(_Linearisation._fields)
+        )
 
     def solve(
         self, w0: np.ndarray, p: np.ndarray, time_budget_s: float, cold_start: bool = False
@@ -244,26 +275,26 @@ class GaussNewtonSqp:
         x_now = p[: self._nx]
         iterations = max(opts.max_iterations, opts.cold_start_iterations if cold_start else 1)
         for it in range(1, iterations + 1):
-            hess, grad, a_x, lba_x, uba_x, g_h, lba_h, lbx, ubx, x_lin, sens = self._lin(w, p)
+            lin = _Linearisation(*self._lin(w, p))
             # Only obstacle rows whose linearised clearance is small can become active.
-            clearance = -lba_h.full().ravel()[: self._pad_row]
+            clearance = -lin.lba_h.full().ravel()[: self._pad_row]
             near = np.flatnonzero(clearance < opts.screen_distance_m)
             if near.size > self._buckets[-1]:
                 near = near[np.argsort(clearance[near])[: self._buckets[-1]]]
             bucket = next(b for b in self._buckets if b >= near.size)
             rows = [int(i) for i in near] + [self._pad_row] * (bucket - near.size)
             w_next, step, violation = self._steps[bucket](
-                hess,
-                grad,
-                a_x,
-                lba_x,
-                uba_x,
-                g_h[rows, :],
-                lba_h[rows],
-                lbx,
-                ubx,
-                x_lin,
-                sens,
+                lin.hess,
+                lin.grad,
+                lin.a_x,
+                lin.lba_x,
+                lin.uba_x,
+                lin.g_h[rows, :],
+                lin.lba_h[rows],
+                lin.lbx,
+                lin.ubx,
+                lin.x_lin,
+                lin.sens,
                 w,
                 x_now,
             )
