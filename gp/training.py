@@ -19,6 +19,7 @@ from gp.inducing import InducingConfig
 from gp.lag_identification import LagIdentification, identify_velocity_lag
 from gp.model_io import ResidualModel
 from gp.sparse_gp import SparseGP
+from planners.nominal_models import make_model
 
 
 @dataclass(frozen=True)
@@ -114,11 +115,12 @@ def resolve_features(
     (identified; the identification is returned too, else None)."""
     params = dict(config.nominal_params)
     identified = None
-    if config.nominal == "kinematic_4dof" and "residual_dt_s" not in params:
+    from_logs = set(make_model(config.nominal).params_from_logs) - set(params)
+    if "residual_dt_s" in from_logs:
         steps = np.concatenate([np.diff(log["t_s"]) for log in logs])
         if steps.size:
             params["residual_dt_s"] = round(float(np.median(steps)), 6)
-    if config.nominal == "first_order_lag" and "tau_s" not in params:
+    if "tau_s" in from_logs:
         identified = identify_velocity_lag(logs, config.modes)
         params = {**identified.nominal_params(), **params}
     return feature_definition(config.features, config.nominal, **params), identified

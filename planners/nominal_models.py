@@ -35,6 +35,9 @@ class NominalModel:
         residual_map: B_z, shape (nx, 3): how a residual g(z) in m/s^2 enters x_dot.
         velocity_of: CasADi Function (x, u) -> the velocity [m/s] the model says the vehicle has
             (the command itself for the kinematic model, the velocity state for the lag model).
+        params_from_logs: the model's parameters that flight logs decide when a user does not
+            give them (the residual's time base from the log rate; a velocity lag's time
+            constants by identification, see gp.lag_identification).
     """
 
     name: str
@@ -43,6 +46,13 @@ class NominalModel:
     f: ca.Function
     residual_map: np.ndarray
     velocity_of: ca.Function
+    params_from_logs: tuple[str, ...] = ()
+
+    @property
+    def velocity_in_state(self) -> bool:
+        """True when the model carries the vehicle's velocity as state (a velocity-loop model),
+        False when it assumes the commanded velocity is flown at once."""
+        return "vel_n_mps" in self.state_names
 
     @property
     def nx(self) -> int:
@@ -130,6 +140,7 @@ def kinematic_4dof(residual_dt_s: float = 0.05) -> NominalModel:
         f,
         b,
         vel,
+        params_from_logs=("residual_dt_s",),
     )
 
 
@@ -156,6 +167,7 @@ def first_order_lag(tau_s: float = 0.3, tau_d_s: float | None = None) -> Nominal
         f,
         b,
         vel,
+        params_from_logs=("tau_s", "tau_d_s"),
     )
 
 

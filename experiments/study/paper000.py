@@ -21,6 +21,7 @@ from experiments.study.fitting import fit_residual
 from experiments.study.jobs import FlightJob, FlightSummary, run_flight_job, warm_up_planner
 from gp.training import TrainingResult
 from planners.bspline import BSplineReference
+from planners.nominal_models import make_model
 from planners.trajectory_generator import TrajectorySpec, generate_trajectories
 
 NOMINAL = "nominal"
@@ -116,7 +117,7 @@ def identified_lag_settings(config: StudyConfig, fit: TrainingResult) -> NmpcSet
     """The nominal NMPC on the fit's identified first_order_lag (no GP), or None when the
     learned model is not an identified lag."""
     features = fit.model.features
-    if features.nominal_model != "first_order_lag":
+    if not make_model(features.nominal_model).velocity_in_state:
         return None
     return replace(
         config.nmpc, nominal_model=features.nominal_model, nominal_params=features.nominal_params
