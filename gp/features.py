@@ -18,6 +18,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 
+import casadi as ca
+
 from planners.nominal_models import MODELS, NominalModel, make_model
 
 RESIDUAL_OUTPUTS: tuple[str, ...] = ("res_acc_n_mps2", "res_acc_e_mps2", "res_acc_d_mps2")
@@ -73,6 +75,30 @@ class FeatureDefinition:
     def nominal(self) -> NominalModel:
         """The nominal model instance."""
         return make_model(self.nominal_model, **dict(self.nominal_params))
+
+    def check_feedable(self, model: NominalModel) -> None:
+        """ValueError unless a planner on ``model`` can build these features along its horizon:
+        no lagged signals (the horizon has no past), and the measured velocity and the command
+        as separate signals only when the model carries a velocity state (the kinematic model
+        flies the command, so the two would be one and the same)."""
+        columns = {c for c, _ in self.inputs}
+        if self.max_lag > 0 or (
+            columns & set(_VEL) and columns & set(_CMD) and not model.velocity_in_state
+        ):
+            raise ValueError(
+                f"the NMPC cannot feed features {self.name!r} from {model.name}'s state; use "
+                "'velocity', or 'state_input' with first_order_lag"
+            )
+
+    def symbolic(self, model: NominalModel, x: ca.SX, u: ca.SX) -> ca.SX:
+        """The feature vector z(x, u), in input order, from a planner's state ``x`` and input
+        ``u`` (the same definition the datasets read from logs; see :meth:`check_feedable`)."""
+        self.check_feedable(model)
+        velocity = model.velocity_of(x, u)
+        signal = {c: velocity[i] for i, c in enumerate(_VEL)}
+        signal |= {c: u[i] for i, c in enumerate(_CMD)}
+        signal["cmd_yaw_rate_radps"] = u[3]
+        return ca.vertcat(*(signal[c] for c, _ in self.inputs))
 
     def to_dict(self) -> dict[str, object]:
         return {
