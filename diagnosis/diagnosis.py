@@ -67,7 +67,7 @@ class DiagnosisConfig:
     persistence_s: float = 1.0
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Diagnosis:
     """Outcome of :func:`diagnose`.
 
@@ -180,17 +180,17 @@ def diagnose(
         ]
     )
     return Diagnosis(
-        tuple(ranked),
-        tuple(verdict),
-        added,
-        baseline,
-        extended,
-        tracking,
-        not_ident,
-        data,
-        base,
-        effects,
-        battery,
+        causes=tuple(ranked),
+        verdict=tuple(verdict),
+        added_effects=added,
+        baseline=baseline,
+        extended=extended,
+        closed_loop=tracking,
+        not_identifiable=not_ident,
+        force=data,
+        base_effects=base,
+        final_effects=effects,
+        battery=battery,
     )
 
 
