@@ -13,11 +13,13 @@ from typing import Literal, get_args
 
 from companion.flight_recorder import FlightRecorder
 from companion.link import Link
+from companion.live_flight_log import LiveFlightLog
 from companion.mission import Mission, load_mission
 from companion.mission_reference import reference_of
 from companion.planner_registry import make_planner
 from companion.runner import FlightOutcome, RunnerConfig, fly_mission
-from flightlog.schema import write_flight_log
+from flightlog.atomic_output import OutputError
+from flightlog.schema import sidecar_path
 
 LinkKind = Literal["mavsdk", "pymavlink", "inprocess"]
 LINK_KINDS: tuple[str, ...] = get_args(LinkKind)
@@ -89,8 +91,15 @@ def run_companion(config: CompanionConfig, progress: Callable[[str], None]) -> C
         link = open_link(config)
     except ValueError as exc:  # MissionError, SimConfigError, unknown planner or URL
         raise CompanionInputError(str(exc)) from None
+    try:
+        live = LiveFlightLog(config.log_path, _log_metadata(config, mission, link))
+    except OutputError as exc:  # refused before take-off, not after landing
+        link.close()
+        raise CompanionInputError(f"--log {exc}") from None
     recorder = FlightRecorder(
-        period_s=1.0 / config.runner.rate_hz, wall_clock_columns=config.link != "inprocess"
+        period_s=1.0 / config.runner.rate_hz,
+        wall_clock_columns=config.link != "inprocess",
+        on_row=live.append,
     )
     outcome: FlightOutcome | None = None
     try:
@@ -99,7 +108,7 @@ def run_companion(config: CompanionConfig, progress: Callable[[str], None]) -> C
         )
     finally:
         link.close()
-        log_path = _write_log(config, mission, link, recorder, outcome, progress)
+        log_path = _write_log(config, mission, link, recorder, outcome, live, progress)
     return CompanionResult(outcome, log_path)
 
 
@@ -118,18 +127,8 @@ def open_link(config: CompanionConfig) -> Link:
     return InProcessLink.from_vehicle(config.vehicle, config.seed)
 
 
-def _write_log(
-    config: CompanionConfig,
-    mission: Mission,
-    link: Link,
-    recorder: FlightRecorder,
-    outcome: FlightOutcome | None,
-    progress: Callable[[str], None],
-) -> Path | None:
-    if len(recorder) == 0:
-        progress("no control steps flown; no flight log written")
-        return None
-    metadata = {
+def _log_metadata(config: CompanionConfig, mission: Mission, link: Link) -> dict[str, object]:
+    return {
         "source": LOG_SOURCE,
         "companion_log_version": LOG_VERSION,
         "mission": mission.name,
@@ -138,6 +137,25 @@ def _write_log(
         "rate_hz": config.runner.rate_hz,
         **link.metadata(),
     }
+
+
+def _write_log(
+    config: CompanionConfig,
+    mission: Mission,
+    link: Link,
+    recorder: FlightRecorder,
+    outcome: FlightOutcome | None,
+    live: LiveFlightLog,
+    progress: Callable[[str], None],
+) -> Path | None:
+    """Replace the live log by the full one; None (and no files) when nothing was flown."""
+    if len(recorder) == 0:
+        live.close()
+        live.path.unlink(missing_ok=True)
+        sidecar_path(live.path).unlink(missing_ok=True)
+        progress("no control steps flown; no flight log written")
+        return None
+    metadata = _log_metadata(config, mission, link)
     if outcome is not None:
         metadata |= {
             "outcome": outcome.status,
@@ -146,6 +164,6 @@ def _write_log(
             "loop_ticks": outcome.ticks,
             "loop_deadline_misses": outcome.deadline_misses,
         }
-    path = write_flight_log(config.log_path, recorder.to_log(metadata))
+    path = live.finish(recorder.to_log(metadata))
     progress(f"flight log: {path} ({len(recorder)} rows)")
     return path

@@ -9,7 +9,7 @@ row has them, so a log never mixes filled and missing values.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -46,11 +46,18 @@ class FlightRecorder:
         period_s: the loop period [s], used for the nominal one-step prediction.
         wall_clock_columns: log ``solve_time_s`` (a wall-clock measurement). Lockstep
             (in-process) flights leave it out, so that the same seed gives byte-identical logs.
+        on_row: called with every row as it is recorded (the live log writes it at once).
     """
 
-    def __init__(self, period_s: float, wall_clock_columns: bool = True) -> None:
+    def __init__(
+        self,
+        period_s: float,
+        wall_clock_columns: bool = True,
+        on_row: Callable[[Mapping[str, float | str | None]], None] | None = None,
+    ) -> None:
         self._period_s = period_s
         self._wall_clock_columns = wall_clock_columns
+        self._on_row = on_row
         self._rows: list[dict[str, float | str | None]] = []
         self.events: list[SafeCommandEvent] = []
 
@@ -70,6 +77,8 @@ class FlightRecorder:
         if not self._wall_clock_columns:
             del row["solve_time_s"]
         self._rows.append(row)
+        if self._on_row is not None:
+            self._on_row(row)
 
     def to_log(self, metadata: Mapping[str, object]) -> FlightLog:
         """The validated log; ``metadata`` goes to the sidecar, with the safe-command events."""

@@ -12,6 +12,7 @@ vehicle could have measured.
 from __future__ import annotations
 
 import csv
+import io
 import json
 import math
 from collections.abc import Mapping
@@ -19,6 +20,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+
+from flightlog.atomic_output import write_text_atomic
 
 SCHEMA_VERSION = 1
 
@@ -150,20 +153,28 @@ def sidecar_path(log_path: str | Path) -> Path:
 
 
 def write_flight_log(path: str | Path, log: FlightLog) -> Path:
-    """Write ``log`` as CSV at ``path`` and its metadata beside it; returns the CSV path."""
+    """Write ``log`` as CSV at ``path`` and its metadata beside it, each atomically (the
+    sidecar first); returns the CSV path. OutputError (one line) when it cannot be written."""
     path = Path(path)
     validate_flight_log(log)
-    path.parent.mkdir(parents=True, exist_ok=True)
     names = list(log.columns)
-    with path.open("w", newline="") as fh:
-        writer = csv.writer(fh)
-        writer.writerow(names)
-        arrays = [log.columns[n] for n in names]
-        for i in range(log.n_rows):
-            writer.writerow([_format(a[i]) for a in arrays])
-    meta = {"schema_version": SCHEMA_VERSION, **dict(log.metadata)}
-    sidecar_path(path).write_text(json.dumps(meta, indent=2, sort_keys=True) + "\n")
+    out = io.StringIO(newline="")
+    writer = csv.writer(out)
+    writer.writerow(names)
+    arrays = [log.columns[n] for n in names]
+    for i in range(log.n_rows):
+        writer.writerow([format_cell(a[i]) for a in arrays])
+    write_sidecar(path, log.metadata)
+    write_text_atomic(path, out.getvalue())
     return path
+
+
+def write_sidecar(log_path: str | Path, metadata: Mapping[str, object]) -> Path:
+    """Write a log's metadata sidecar atomically (with the schema version)."""
+    meta = {"schema_version": SCHEMA_VERSION, **dict(metadata)}
+    return write_text_atomic(
+        sidecar_path(log_path), json.dumps(meta, indent=2, sort_keys=True) + "\n"
+    )
 
 
 def read_flight_log(path: str | Path, max_gap_s: float | None = None) -> FlightLog:
@@ -290,7 +301,9 @@ def split_at_gaps(log: FlightLog, max_gap_s: float) -> list[FlightLog]:
     return [log.slice(a, b) for a, b in zip(cuts[:-1], cuts[1:], strict=True) if b > a]
 
 
-def _format(value: object) -> str:
+def format_cell(value: object) -> str:
+    """A value as the CSV cell schema v1 writes (integers without a decimal point, floats in
+    full precision, text as is)."""
     if isinstance(value, (str, np.str_)):
         return str(value)
     v = float(value)

@@ -281,3 +281,48 @@ def test_losing_the_vehicle_mid_flight_fails_the_mission_within_deadlines() -> N
     assert not outcome.disarmed
     assert any(m.startswith("safe stop: hold refused") for m in messages), messages
     assert time.monotonic() - started < 40.0
+
+
+@pytest.mark.slow
+def test_sigkill_mid_flight_leaves_a_readable_log_of_every_row_flown(
+    vehicle_port, tmp_path: Path
+) -> None:
+    vehicle, port = vehicle_port
+    log_path = tmp_path / "flight.csv"
+    cmd = [
+        sys.executable, "-m", "scripts.companion_cli", str(LINE), "--link", "pymavlink",
+        "--url", f"udpin://127.0.0.1:{port}", "--log", str(log_path),
+    ]  # fmt: skip
+    proc = subprocess.Popen(cmd, cwd=REPO, stderr=subprocess.PIPE, text=True)
+    stderr = StderrReader(proc)
+    try:
+        stderr.wait_for("following the reference", timeout_s=60.0)
+        time.sleep(2.0)
+        rows_seen = len(log_path.read_text().splitlines()) - 1
+        proc.kill()
+        proc.wait(timeout=10.0)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    log = read_flight_log(log_path)  # schema v1, validated: finite, strictly increasing time
+    assert log.n_rows >= rows_seen > 100
+    assert log.metadata["complete"] is False and log.metadata["source"] == "companion"
+    steps = np.diff(log["t_s"])
+    assert float(np.max(steps)) < 0.5  # no hole: every row flown up to the kill
+    assert "OFFBOARD" in set(log["mode"])
+
+
+def test_an_unwritable_log_is_refused_before_take_off(tmp_path: Path) -> None:
+    blocker = tmp_path / "not_a_folder"
+    blocker.write_text("a file where the log's folder should be\n")
+    proc = subprocess.run(
+        [
+            sys.executable, "-m", "scripts.companion_cli", str(LINE), "--link", "inprocess",
+            "--log", str(blocker / "flight.csv"),
+        ],
+        cwd=REPO, capture_output=True, text=True, timeout=120,
+    )  # fmt: skip
+    assert proc.returncode == 2, proc.stderr
+    lines = [line for line in proc.stderr.splitlines() if line.strip()]
+    assert len(lines) == 1 and "--log" in lines[0] and "folder" in lines[0], proc.stderr
+    assert "armed" not in proc.stderr

@@ -1,0 +1,65 @@
+"""The flight log as it is flown, so that no fault loses a row.
+
+Before take-off the sidecar is written (marked ``"complete": false``) and the CSV opened with
+the columns every row has: schema v1's required ones plus ``armed`` and ``mode``. Each control
+step appends one row and flushes it, so a SIGKILL, a lost link or a crash leaves a readable
+schema-v1 log of every row flown up to that moment. When the flight ends, the full log (with
+every optional column: acceleration, thrust, planner columns) replaces it atomically.
+"""
+
+from __future__ import annotations
+
+import csv
+from collections.abc import Mapping
+from pathlib import Path
+from typing import TextIO
+
+from flightlog.atomic_output import OutputError, check_writable_file, describe_os_error
+from flightlog.schema import (
+    REQUIRED_COLUMNS,
+    FlightLog,
+    format_cell,
+    write_flight_log,
+    write_sidecar,
+)
+
+STREAMED_COLUMNS: tuple[str, ...] = (*REQUIRED_COLUMNS, "armed", "mode")
+
+
+class LiveFlightLog:
+    """A schema-v1 log written row by row (see the module docstring).
+
+    Raises:
+        OutputError: the log cannot be written there (one line), at construction: before
+            anything flies.
+    """
+
+    def __init__(self, path: str | Path, metadata: Mapping[str, object]) -> None:
+        self.path = check_writable_file(path)
+        write_sidecar(self.path, {**metadata, "complete": False})
+        try:
+            self._fh: TextIO | None = self.path.open("w", newline="")
+        except OSError as exc:
+            raise OutputError(describe_os_error(self.path, exc)) from None
+        self._writer = csv.writer(self._fh)
+        self._writer.writerow(STREAMED_COLUMNS)
+        self._fh.flush()
+        self.rows = 0
+
+    def append(self, row: Mapping[str, float | str | None]) -> None:
+        """Write one row's streamed columns and flush it to the file."""
+        if self._fh is None:
+            return
+        self._writer.writerow([format_cell(row[c]) for c in STREAMED_COLUMNS])
+        self._fh.flush()
+        self.rows += 1
+
+    def finish(self, log: FlightLog) -> Path:
+        """Replace the streamed rows by the full log (atomically, sidecar first)."""
+        self.close()
+        return write_flight_log(self.path, log)
+
+    def close(self) -> None:
+        if self._fh is not None:
+            self._fh.close()
+            self._fh = None

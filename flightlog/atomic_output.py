@@ -1,0 +1,100 @@
+"""Outputs written atomically: a reader sees the old file (or folder) or the new one, never half.
+
+A file is written to a temporary sibling and renamed over the target (``os.replace`` is atomic
+on one filesystem); a folder of outputs (a report with its plots, a model with its figures) is
+filled in a temporary sibling folder and renamed into place as a whole, replacing an earlier
+one. Errors on the output side become :class:`OutputError` with one line naming the path and
+the fix, never a traceback.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+
+class OutputError(OSError):
+    """An output that cannot be written; one line naming the path and what to do."""
+
+
+def describe_os_error(path: Path, exc: OSError) -> str:
+    """One line for an OSError on ``path``, with the fix."""
+    reason = exc.strerror or str(exc)
+    if isinstance(exc, PermissionError):
+        return f"{path}: cannot write there ({reason}); choose a folder you can write to"
+    if isinstance(exc, (NotADirectoryError, FileExistsError)):
+        return f"{path}: a file stands where a folder is needed ({reason}); choose another path"
+    if isinstance(exc, IsADirectoryError):
+        return f"{path}: is a folder, a file is needed ({reason}); give a file name"
+    return f"{path}: cannot write ({reason})"
+
+
+def check_writable_file(path: str | Path) -> Path:
+    """Make the parent folder and prove a file can be created there (before any flight or
+    long computation); OutputError in one line otherwise."""
+    path = Path(path)
+    try:
+        if path.is_dir():
+            raise IsADirectoryError(21, "Is a directory")
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile(dir=path.parent, prefix=f".{path.name}.", delete=True):
+            pass
+    except OSError as exc:
+        raise OutputError(describe_os_error(path, exc)) from None
+    return path
+
+
+def write_text_atomic(path: str | Path, text: str) -> Path:
+    """Write ``text`` to ``path`` atomically (temporary sibling, then rename)."""
+    return write_bytes_atomic(path, text.encode())
+
+
+def write_bytes_atomic(path: str | Path, data: bytes) -> Path:
+    """Write ``data`` to ``path`` atomically (temporary sibling, then rename)."""
+    path = Path(path)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+        try:
+            with os.fdopen(fd, "wb") as fh:
+                fh.write(data)
+            os.replace(tmp, path)
+        except BaseException:
+            Path(tmp).unlink(missing_ok=True)
+            raise
+    except OSError as exc:
+        raise OutputError(describe_os_error(path, exc)) from None
+    return path
+
+
+@contextmanager
+def atomic_output_dir(path: str | Path) -> Iterator[Path]:
+    """Yield a temporary sibling folder to fill; on success it replaces ``path`` as a whole, on
+    any error it is removed and ``path`` is left as it was."""
+    path = Path(path)
+    try:
+        if path.exists() and not path.is_dir():
+            raise NotADirectoryError(20, "Not a directory")
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}."))
+    except OSError as exc:
+        raise OutputError(describe_os_error(path, exc)) from None
+    try:
+        yield tmp
+        old = None
+        if path.exists():
+            old = Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}.old."))
+            os.replace(path, old / "previous")
+        os.replace(tmp, path)
+        if old is not None:
+            shutil.rmtree(old, ignore_errors=True)
+    except OSError as exc:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise OutputError(describe_os_error(path, exc)) from None
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
