@@ -1,15 +1,18 @@
-"""Versioned residual-model files: ``MODEL.json`` (description) + ``MODEL.npz`` (arrays).
+"""Versioned residual-model files: one self-describing ``MODEL.npz``.
 
-The JSON records the format and its version, the model type, the feature definition (with the
-nominal model and its parameters), hyperparameters per output, the inducing-point choice, a
-training-data summary and the name of the array file. The arrays are the cached posterior.
+The file holds the cached posterior's arrays and a ``header`` entry: a JSON document recording
+the format and its version, the model type, the feature definition (with the nominal model and
+its parameters), hyperparameters per output, the inducing-point choice and a training-data
+summary. It is written atomically (a reader never sees half a model) and read without pickle.
 Loading checks the format version and, if the caller says which features it will feed, that
 they are the ones the model was trained on.
 """
 
 from __future__ import annotations
 
+import io
 import json
+import zipfile
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -17,6 +20,7 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
+from flightlog.atomic_output import write_bytes_atomic
 from gp.base import IndependentOutputGP
 from gp.casadi_export import posterior_function
 from gp.errors import ModelFileError
@@ -106,65 +110,97 @@ class ResidualModel:
         }
 
 
-def model_paths(path: str | Path) -> tuple[Path, Path]:
-    """(json, npz) paths of a model: ``out/model`` or ``out/model.json`` -> model.json/.npz."""
+MODEL_SUFFIX = ".npz"
+
+
+def model_path(path: str | Path) -> Path:
+    """The model file for ``path``: ``out/model``, ``out/model.npz`` -> ``out/model.npz``."""
     p = Path(path)
-    stem = p.with_suffix("") if p.suffix == ".json" else p
-    return stem.with_name(stem.name + ".json"), stem.with_name(stem.name + ".npz")
+    return p if p.suffix == MODEL_SUFFIX else p.with_name(p.name + MODEL_SUFFIX)
 
 
 def save_model(path: str | Path, model: ResidualModel) -> Path:
-    """Write the model's JSON and arrays; returns the JSON path."""
-    json_path, npz_path = model_paths(path)
-    json_path.parent.mkdir(parents=True, exist_ok=True)
-    doc = model.to_dict()
-    doc["arrays"] = npz_path.name
+    """Write the model as one file (atomically); returns its path.
+
+    Raises:
+        OutputError: the file cannot be written there (one line).
+    """
+    out = model_path(path)
+    buffer = io.BytesIO()
     np.savez(
-        npz_path,
+        buffer,
+        header=np.array(json.dumps(model.to_dict(), indent=2)),
         noise_variance=model.noise_variance,
         **{k: getattr(model.posterior, k) for k in _ARRAYS},
     )
-    json_path.write_text(json.dumps(doc, indent=2) + "\n")
-    return json_path
+    return write_bytes_atomic(out, buffer.getvalue())
+
+
+def read_model_header(path: str | Path) -> dict[str, object]:
+    """The JSON header of a model file (what it is, how it was trained).
+
+    Raises:
+        ModelFileError: one line saying what is wrong (missing, corrupt, not a model file).
+    """
+    return _read(model_path(path))[0]
+
+
+def _read(path: Path) -> tuple[dict[str, object], dict[str, np.ndarray]]:
+    if not path.is_file():
+        old = path.with_suffix(".json")
+        hint = (
+            f"; {old.name} is an older two-file model: refit it with fit-gp"
+            if old.is_file()
+            else "; train one with fit-gp"
+        )
+        raise ModelFileError(f"{path}: no such model file{hint}")
+    try:
+        with np.load(path, allow_pickle=False) as npz:
+            arrays = {k: npz[k] for k in npz.files}
+    except (ValueError, OSError, EOFError, zipfile.BadZipFile) as exc:
+        reason = "holds Python objects" if "pickle" in str(exc) else str(exc)
+        raise ModelFileError(
+            f"{path}: not a readable model file ({reason}); refit with fit-gp"
+        ) from None
+    if "header" not in arrays:
+        raise ModelFileError(f"{path}: no model header inside; refit with fit-gp")
+    try:
+        doc = json.loads(str(arrays.pop("header")))
+    except json.JSONDecodeError as exc:
+        raise ModelFileError(
+            f"{path}: model header is not valid JSON ({exc.msg}); refit with fit-gp"
+        ) from None
+    return doc, arrays
 
 
 def load_model(path: str | Path, expected: FeatureDefinition | None = None) -> ResidualModel:
     """Read a model file.
 
     Args:
-        path: the JSON file (or its path without suffix).
+        path: the model file (or its path without suffix).
         expected: the feature definition the caller will feed; a different one is an error.
 
     Raises:
         ModelFileError: one line saying what is wrong (missing, corrupt, version, features).
     """
-    json_path, _ = model_paths(path)
-    if not json_path.is_file():
-        raise ModelFileError(f"{json_path}: no such model file; train one with fit-gp")
-    try:
-        doc = json.loads(json_path.read_text())
-    except json.JSONDecodeError as exc:
-        raise ModelFileError(
-            f"{json_path}: not valid JSON ({exc.msg} at line {exc.lineno})"
-        ) from None
+    path = model_path(path)
+    doc, arrays = _read(path)
     if doc.get("format") != FORMAT or doc.get("format_version") != FORMAT_VERSION:
         raise ModelFileError(
-            f"{json_path}: format {doc.get('format')!r} version {doc.get('format_version')!r}, "
+            f"{path}: format {doc.get('format')!r} version {doc.get('format_version')!r}, "
             f"this reader understands {FORMAT!r} version {FORMAT_VERSION}; refit with fit-gp"
         )
     try:
         features = FeatureDefinition.from_dict(doc["feature_definition"])
-        npz_path = json_path.with_name(doc["arrays"])
-        with np.load(npz_path) as arrays:
-            posterior = Posterior(**{k: arrays[k] for k in _ARRAYS})
-            noise = arrays["noise_variance"]
-    except (KeyError, TypeError, ValueError, OSError) as exc:
+        posterior = Posterior(**{k: arrays[k] for k in _ARRAYS})
+        noise = arrays["noise_variance"]
+    except (KeyError, TypeError, ValueError) as exc:
         raise ModelFileError(
-            f"{json_path}: incomplete or corrupt model ({exc}); refit with fit-gp"
+            f"{path}: incomplete or corrupt model ({exc}); refit with fit-gp"
         ) from None
     if expected is not None and expected != features:
         raise ModelFileError(
-            f"{json_path}: trained on features {features.describe()}, but the caller expects "
+            f"{path}: trained on features {features.describe()}, but the caller expects "
             f"{expected.describe()}; refit with matching --features/--nominal or load another model"
         )
     return ResidualModel(

@@ -1,7 +1,7 @@
 """`companion`: fly a mission file over a Link and write a schema-v1 flight log.
 
     companion MISSION --link {mavsdk,pymavlink,inprocess} [--url udpin://127.0.0.1:14540]
-              [--planner pd|nmpc] [--gp-model MODEL.json] [--rate-hz 50]
+              [--planner pd|nmpc] [--gp-model MODEL.npz] [--rate-hz 50]
               [--log out/flight.csv] [--seed 0] [--vehicle iris]
 
 Progress goes to stderr. Exit codes: 0 mission completed (goal reached, landed, disarmed);

@@ -9,9 +9,9 @@ With ``--nominal first_order_lag`` and no ``--nominal-param tau_s=...``, the vel
 time constants are identified from the logs first (least squares, gp.lag_identification) and
 the GP learns what the identified lag leaves; the model file records them.
 
-Writes MODEL.json + MODEL.npz and MODEL_residual_{n,e,d}.png, prints the held-out nominal and
-augmented RMSE per axis ([Kulathunga23], Table 2) on stdout; progress goes to stderr. Exit code 0 on
-success, 2 with a one-line reason on bad input.
+Writes MODEL.npz (one self-describing file) and MODEL_residual_{n,e,d}.png, prints the
+held-out nominal and augmented RMSE per axis ([Kulathunga23], Table 2) on stdout; progress goes
+to stderr. Exit code 0 on success, 2 with a one-line reason on bad input.
 """
 
 from __future__ import annotations
@@ -22,11 +22,12 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from flightlog.atomic_output import OutputError
 from flightlog.schema import FlightLogError, read_flight_log
 from gp.errors import DatasetError, GPInputError, ModelFileError
 from gp.features import FEATURE_SETS
 from gp.inducing import STRATEGIES
-from gp.model_io import model_paths, save_model
+from gp.model_io import save_model
 from gp.plots import plot_residuals
 from gp.training import TrainingConfig, train_residual_model
 from planners.nominal_models import MODELS
@@ -53,7 +54,7 @@ def parse_args(argv: list[str] | None) -> FitGpConfig:
     """Parse the command line into a FitGpConfig (exits with code 2 on bad arguments)."""
     parser = _Parser(prog="fit-gp", description="Fit a sparse-GP residual model from flight logs.")
     parser.add_argument("logs", nargs="+", type=Path, help="schema-v1 flight log CSV files")
-    parser.add_argument("--out", required=True, type=Path, help="model path (MODEL.json/.npz)")
+    parser.add_argument("--out", required=True, type=Path, help="model file (MODEL.npz)")
     parser.add_argument("--features", default="velocity", choices=list(FEATURE_SETS))
     parser.add_argument("--nominal", default="kinematic_4dof", choices=list(MODELS))
     parser.add_argument(
@@ -122,13 +123,16 @@ def main(argv: list[str] | None = None) -> int:
             logs.append(read_flight_log(path))
             progress(f"read {path} ({logs[-1].n_rows} rows)")
         result = train_residual_model(logs, config.training, progress)
-        json_path = save_model(config.out, result.model)
-        progress(f"wrote {json_path} and {model_paths(config.out)[1]}")
+        model_file = save_model(config.out, result.model)
+        progress(f"wrote {model_file}")
         if config.plots:
-            for png in plot_residuals(result.model, result.test, json_path.with_suffix("")):
+            for png in plot_residuals(result.model, result.test, model_file.with_suffix("")):
                 progress(f"wrote {png}")
     except (FlightLogError, DatasetError, GPInputError, ModelFileError, ValueError) as exc:
         print(f"fit-gp: error: {exc}", file=sys.stderr)
+        return 2
+    except OutputError as exc:
+        print(f"fit-gp: error: --out {exc}", file=sys.stderr)
         return 2
     print("axis  nominal_rmse_mps  augmented_rmse_mps")
     for axis, nom, aug in zip(

@@ -69,7 +69,7 @@ def test_quick_study_runs_end_to_end_and_writes_report_and_plots(tmp_path, capsy
     assert {"paths.png", "trials.png", "gp_low_speed_residual_n.png"} <= pngs
     for png in pngs:
         assert f"]({png})" in report
-    assert (out / "gp_low_speed.json").is_file() and (out / "gp_cluster.json").is_file()
+    assert (out / "gp_low_speed.npz").is_file() and (out / "gp_cluster.npz").is_file()
 
 
 def test_study_refuses_bad_input_in_one_line(tmp_path, capsys):

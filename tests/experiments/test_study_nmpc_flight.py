@@ -73,7 +73,7 @@ def test_augmented_prediction_adds_the_learned_residual():
 @pytest.mark.parametrize(
     ("write", "message"),
     [
-        (lambda p: p.with_suffix(".json").write_text("{not json"), "not valid JSON"),
+        (lambda p: p.with_suffix(".npz").write_bytes(b"{not a model"), "not a readable model"),
         (lambda p: save_model(p, _tiny_model(residual_dt_s=0.05)), "every 0.02 s"),
         (lambda p: save_model(p, _tiny_model("history", residual_dt_s=0.02)), "cannot feed"),
         (lambda p: None, "no such model file"),
@@ -89,7 +89,7 @@ def test_bad_model_file_is_a_one_line_error_before_flight(tmp_path, write, messa
         link="inprocess",
         planner="nmpc",
         log_path=log_path,
-        gp_model=model_path.with_suffix(".json"),
+        gp_model=model_path.with_suffix(".npz"),
     )
     with pytest.raises(CompanionInputError, match=message) as err:
         run_companion(config, lambda message: None)
@@ -98,8 +98,8 @@ def test_bad_model_file_is_a_one_line_error_before_flight(tmp_path, write, messa
 
 
 def test_cli_refuses_a_corrupt_model_with_exit_code_2(tmp_path, capsys):
-    model = tmp_path / "model.json"
-    model.write_text(json.dumps({"format": "residual-gp", "format_version": 99}))
+    model = tmp_path / "model.npz"
+    np.savez(model, header=np.array(json.dumps({"format": "residual-gp", "format_version": 99})))
     code = companion_main(
         [
             str(LINE),

@@ -7,7 +7,7 @@ import pytest
 
 from gp.errors import ModelFileError
 from gp.features import feature_definition
-from gp.model_io import ResidualModel, load_model, model_paths, save_model
+from gp.model_io import ResidualModel, load_model, read_model_header, save_model
 
 
 def _model(small_model):
@@ -19,14 +19,16 @@ def _model(small_model):
 
 def test_round_trip_keeps_predictions_and_description(small_model, tmp_path):
     model = _model(small_model)
-    json_path = save_model(tmp_path / "residual", model)
-    assert json_path == tmp_path / "residual.json" and (tmp_path / "residual.npz").is_file()
-    loaded = load_model(json_path, expected=model.features)
+    path = save_model(tmp_path / "residual", model)
+    assert path == tmp_path / "residual.npz" and sorted(p.name for p in tmp_path.iterdir()) == [
+        "residual.npz"
+    ]
+    loaded = load_model(path, expected=model.features)
     X = np.random.default_rng(0).normal(size=(20, 3))
     np.testing.assert_array_equal(loaded.predict(X)[0], small_model.predict(X)[0])
     np.testing.assert_array_equal(loaded.predict(X)[1], small_model.predict(X)[1])
     assert loaded.features == model.features and loaded.model_type == "sgpr"
-    doc = json.loads(json_path.read_text())
+    doc = read_model_header(path)
     assert doc["format_version"] == 1
     assert doc["feature_definition"]["nominal_model"] == {
         "name": "kinematic_4dof",
@@ -52,21 +54,50 @@ def test_round_trip_keeps_predictions_and_description(small_model, tmp_path):
 def test_loading_against_another_feature_definition_is_an_error(
     small_model, tmp_path, expected, message
 ):
-    path = save_model(tmp_path / "m.json", _model(small_model))
+    path = save_model(tmp_path / "m", _model(small_model))
     with pytest.raises(ModelFileError, match=message) as info:
         load_model(path, expected=expected)
     assert "\n" not in str(info.value) and "refit" in str(info.value)
 
 
+def _rewrite(path, small_model, header=None, drop=None, extra=None):
+    """Write a model file by hand: a changed header, a dropped array or an extra entry."""
+    model = _model(small_model)
+    arrays = {k: getattr(model.posterior, k) for k in ("support", "lengthscales", "variance")}
+    arrays |= {k: getattr(model.posterior, k) for k in ("alpha", "var_factor", "y_offset")}
+    arrays["noise_variance"] = model.noise_variance
+    arrays["header"] = np.array(json.dumps(header if header is not None else model.to_dict()))
+    arrays.pop(drop, None)
+    np.savez(path, **arrays, **(extra or {}))
+
+
 def test_missing_wrong_version_and_corrupt_files_are_one_line_errors(small_model, tmp_path):
     with pytest.raises(ModelFileError, match="no such model file; train one with fit-gp"):
-        load_model(tmp_path / "absent.json")
-    path = save_model(tmp_path / "m.json", _model(small_model))
-    doc = json.loads(path.read_text())
-    path.write_text(json.dumps({**doc, "format_version": 99}))
+        load_model(tmp_path / "absent.npz")
+    path = tmp_path / "m.npz"
+    _rewrite(path, small_model, header={**_model(small_model).to_dict(), "format_version": 99})
     with pytest.raises(ModelFileError, match="version 99, this reader understands"):
         load_model(path)
-    path.write_text(json.dumps(doc))
-    model_paths(path)[1].unlink()
+    _rewrite(path, small_model, drop="alpha")
     with pytest.raises(ModelFileError, match="incomplete or corrupt model"):
         load_model(path)
+    path.write_bytes(b"PK\x03\x04 truncated")
+    with pytest.raises(ModelFileError, match="not a readable model file") as info:
+        load_model(path)
+    assert "\n" not in str(info.value)
+
+
+def test_a_model_file_holding_python_objects_is_refused_without_suggesting_pickle(
+    small_model, tmp_path
+):
+    path = tmp_path / "m.npz"
+    _rewrite(path, small_model, extra={"payload": np.array([{"x": 1}], dtype=object)})
+    with pytest.raises(ModelFileError, match="holds Python objects") as info:
+        load_model(path)
+    assert "allow_pickle" not in str(info.value)
+
+
+def test_an_older_two_file_model_gets_the_fix(tmp_path):
+    (tmp_path / "old.json").write_text("{}")
+    with pytest.raises(ModelFileError, match="older two-file model: refit it with fit-gp"):
+        load_model(tmp_path / "old")

@@ -44,7 +44,7 @@ def test_demo_flies_nominal_learns_and_flies_augmented_over_mavsdk(tmp_path, cap
         "gp_low_speed_residual_n.png",
         "nominal.csv",
         "augmented.csv",
-        "gp_low_speed.json",
+        "gp_low_speed.npz",
     ):
         assert (out / name).stat().st_size > 0
         if name.endswith(".png"):
