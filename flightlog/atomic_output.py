@@ -48,6 +48,21 @@ def check_writable_file(path: str | Path) -> Path:
     return path
 
 
+def check_writable_dir(path: str | Path) -> Path:
+    """Prove an output folder can be put at ``path`` (before any long computation): no file in
+    the way, and its parent writable. OutputError in one line otherwise."""
+    path = Path(path)
+    try:
+        if path.exists() and not path.is_dir():
+            raise NotADirectoryError(20, "Not a directory")
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryDirectory(dir=path.parent, prefix=f".{path.name}."):
+            pass
+    except OSError as exc:
+        raise OutputError(describe_os_error(path, exc)) from None
+    return path
+
+
 def write_text_atomic(path: str | Path, text: str) -> Path:
     """Write ``text`` to ``path`` atomically (temporary sibling, then rename)."""
     return write_bytes_atomic(path, text.encode())

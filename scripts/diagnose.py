@@ -20,6 +20,7 @@ from diagnosis.diagnosis import diagnose
 from diagnosis.extend_config import write_extended_config
 from diagnosis.forces import ForceDataError
 from diagnosis.report import write_report
+from flightlog.atomic_output import OutputError, atomic_output_dir, check_writable_dir
 from flightlog.schema import FlightLogError, read_flight_log
 from flightlog.ulog import read_ulog
 from vehicle_sim import SimConfigError, load_sim_config
@@ -64,6 +65,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"[{time.monotonic() - start:6.1f} s] {msg}", file=sys.stderr, flush=True)
 
     try:
+        check_writable_dir(args.out_dir)  # before minutes of work, not after
         sim_config = load_sim_config(args.sim_config)
         logs = [read_ulog(p) if p.suffix == ".ulg" else read_flight_log(p) for p in args.logs]
         progress(f"read {len(logs)} log(s), {sum(log.n_rows for log in logs)} rows")
@@ -71,11 +73,19 @@ def main(argv: list[str] | None = None) -> int:
     except (SimConfigError, FlightLogError, ForceDataError) as exc:
         print(f"diagnose: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    args.out_dir.mkdir(parents=True, exist_ok=True)
-    extended = write_extended_config(
-        args.sim_config, result.added_effects, args.out_dir / EXTENDED_CONFIG_NAME
-    )
-    write_report(result, args.out_dir, [p.name for p in args.logs], args.sim_config, extended)
+    except OutputError as exc:
+        print(f"diagnose: --out {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    try:
+        with atomic_output_dir(args.out_dir) as tmp:  # the report set appears whole, or not
+            extended = write_extended_config(
+                args.sim_config, result.added_effects, tmp / EXTENDED_CONFIG_NAME
+            )
+            names = [p.name for p in args.logs]
+            write_report(result, tmp, names, args.sim_config, args.out_dir / extended.name)
+    except OutputError as exc:
+        print(f"diagnose: --out {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     verdict = ", ".join(result.verdict) or "none"
     progress(f"verdict: {verdict}; gain {result.gain:.1f}x; report in {args.out_dir}")
     return EXIT_OK

@@ -25,6 +25,7 @@ from pathlib import Path
 from companion.nmpc_planner import MULTIROTOR_MODELS
 from experiments.study.config import STUDY_VEHICLE, StudyConfig
 from experiments.study.run import run_study
+from flightlog.atomic_output import OutputError, check_writable_dir
 from gp.features import FEATURE_SETS
 from vehicle_sim.effects.base import SimConfigError
 
@@ -92,6 +93,9 @@ def main(argv: list[str] | None = None) -> int:
     except (SimConfigError, ValueError) as exc:
         print(f"study: error: {exc}", file=sys.stderr)
         return 2
+    except OutputError as exc:
+        print(f"study: error: --out {exc}", file=sys.stderr)
+        return 2
     for name, value in result.headline.items():
         print(f"{name} = {value:.4f}")
     print(f"report: {result.report_path}")
@@ -105,6 +109,7 @@ def _check_inputs(config: StudyConfig) -> None:
 
     load_sim_config(config.vehicle)
     check_feature_set(config.features, config.learned_model)
+    check_writable_dir(config.out_dir)
 
 
 if __name__ == "__main__":

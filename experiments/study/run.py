@@ -20,6 +20,7 @@ from experiments.study.paper000 import Paper000Result, run_paper000
 from experiments.study.paper004 import TrialsResult, run_trials
 from experiments.study.plots import plot_paths, plot_residual_fits, plot_trials
 from experiments.study.report import render_report
+from flightlog.atomic_output import atomic_output_dir, check_writable_dir
 from gp.model_io import save_model
 
 
@@ -42,23 +43,23 @@ def worker_progress(message: str) -> None:
 def run_study(config: StudyConfig, progress: Callable[[str], None]) -> StudyResult:
     """Fly [Kulathunga23]'s experiment and [Ostafew16]'s trials, write the report."""
     start = time.perf_counter()
-    out = config.out_dir
-    out.mkdir(parents=True, exist_ok=True)
+    out = check_writable_dir(config.out_dir)
     with ProcessPoolExecutor(config.workers, mp_context=get_context("spawn")) as pool:
         trials_future = pool.submit(run_trials, config, worker_progress)
         result = run_paper000(config, pool, progress)
         progress("waiting for the trial-to-trial flights")
         trials = trials_future.result()
-    for sel, fit in result.fits.items():
-        save_model(out / f"gp_{sel}", fit.model)
-    images = {
-        "paths": [plot_paths(result, out / "paths.png").name],
-        "residuals": [p.name for p in plot_residual_fits(result, out)],
-        "trials": [plot_trials(trials, out / "trials.png").name],
-    }
     figs = all_planner_figures(result)
-    text = render_report(config, result, figs, trials, images, time.perf_counter() - start)
+    with atomic_output_dir(out) as tmp:  # the whole report set appears at once, or not at all
+        for sel, fit in result.fits.items():
+            save_model(tmp / f"gp_{sel}", fit.model)
+        images = {
+            "paths": [plot_paths(result, tmp / "paths.png").name],
+            "residuals": [p.name for p in plot_residual_fits(result, tmp)],
+            "trials": [plot_trials(trials, tmp / "trials.png").name],
+        }
+        text = render_report(config, result, figs, trials, images, time.perf_counter() - start)
+        (tmp / "report.md").write_text(text)
     report = out / "report.md"
-    report.write_text(text)
     progress(f"wrote {report}")
     return StudyResult(result, figs, headline_figures(result), trials, report)

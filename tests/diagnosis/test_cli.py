@@ -67,3 +67,16 @@ def test_cli_rejects_a_log_without_required_columns(tmp_path, capsys):
     log.write_text("t_s,pos_n_m\n0,0\n")
     assert main([str(log), "--sim-config", "iris", "--out", str(tmp_path / "out")]) == 2
     assert "missing required column" in capsys.readouterr().err
+
+
+def test_an_unusable_out_folder_is_refused_in_one_line_before_any_work(tmp_path, capsys):
+    from scripts.diagnose import main as diagnose_main
+
+    blocker = tmp_path / "report"
+    blocker.write_text("a file where the report folder should go\n")
+    code = diagnose_main(
+        [str(tmp_path / "absent.csv"), "--sim-config", "iris", "--out", str(blocker)]
+    )
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "--out" in err[0] and "folder" in err[0]
+    assert blocker.read_text().startswith("a file where")  # nothing lost

@@ -1,0 +1,52 @@
+"""Outputs appear whole or not at all, and output-side errors are one line."""
+
+from __future__ import annotations
+
+import pytest
+
+from flightlog.atomic_output import (
+    OutputError,
+    atomic_output_dir,
+    check_writable_dir,
+    check_writable_file,
+    write_text_atomic,
+)
+
+
+def test_a_folder_set_replaces_the_old_one_whole(tmp_path) -> None:
+    out = tmp_path / "report"
+    with atomic_output_dir(out) as tmp:
+        (tmp / "a.md").write_text("first")
+        (tmp / "old.png").write_text("x")
+    with atomic_output_dir(out) as tmp:
+        assert not (out / "missing").exists() and (out / "a.md").read_text() == "first"
+        (tmp / "a.md").write_text("second")
+    assert sorted(p.name for p in out.iterdir()) == ["a.md"]
+    assert (out / "a.md").read_text() == "second"
+    assert [p.name for p in tmp_path.iterdir()] == ["report"]  # no temporary left behind
+
+
+def test_a_failure_inside_leaves_the_old_set_untouched(tmp_path) -> None:
+    out = tmp_path / "report"
+    with atomic_output_dir(out) as tmp:
+        (tmp / "a.md").write_text("good")
+    with pytest.raises(RuntimeError), atomic_output_dir(out) as tmp:
+        (tmp / "a.md").write_text("half")
+        raise RuntimeError("plotting failed")
+    assert (out / "a.md").read_text() == "good"
+    assert [p.name for p in tmp_path.iterdir()] == ["report"]
+
+
+@pytest.mark.parametrize("check", [check_writable_dir, check_writable_file])
+def test_a_file_in_the_way_is_one_line_naming_the_path(tmp_path, check) -> None:
+    blocker = tmp_path / "blocker"
+    blocker.write_text("x")
+    with pytest.raises(OutputError, match="blocker") as info:
+        check(blocker / "out")
+    assert "\n" not in str(info.value) and "folder" in str(info.value)
+
+
+def test_a_file_is_replaced_atomically(tmp_path) -> None:
+    path = write_text_atomic(tmp_path / "sub" / "f.txt", "one")
+    write_text_atomic(path, "two")
+    assert path.read_text() == "two" and [p.name for p in path.parent.iterdir()] == ["f.txt"]
