@@ -47,6 +47,7 @@ class CompanionConfig:
         seed: simulator seed (in process).
         vehicle: simulator preset or config file (in process).
         runner: timing of the mission sequence (loop rate, deadlines).
+        verbose: let the MAVLink library's own log lines through.
     """
 
     mission_path: Path
@@ -58,6 +59,7 @@ class CompanionConfig:
     seed: int = 0
     vehicle: str = "iris"
     runner: RunnerConfig = field(default_factory=RunnerConfig)
+    verbose: bool = False
 
     def __post_init__(self) -> None:
         if self.link not in LINK_KINDS:
@@ -117,7 +119,7 @@ def open_link(config: CompanionConfig) -> Link:
     if config.link == "mavsdk":
         from companion.mavsdk_link import MavsdkLink
 
-        return MavsdkLink(config.url)
+        return MavsdkLink(config.url, verbose=config.verbose)
     if config.link == "pymavlink":
         from companion.pymavlink_link import PymavlinkLink
 

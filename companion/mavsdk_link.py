@@ -52,15 +52,13 @@ class MavsdkLink:
     Args:
         url: MAVSDK connection URL; ``udpin://127.0.0.1:14540`` listens where PX4 SITL sends.
         telemetry_rate_hz: rate requested for position/velocity and attitude [Hz].
-        debug_log: keep MAVSDK's debug messages on stderr (they are dropped by default; the
-            setting is process-wide, as MAVSDK's logging is).
+        verbose: let MAVSDK's own log lines through to stderr (they are dropped by default;
+            the setting is process-wide, as MAVSDK's logging is).
     """
 
-    def __init__(
-        self, url: str, *, telemetry_rate_hz: float = 50.0, debug_log: bool = False
-    ) -> None:
+    def __init__(self, url: str, *, telemetry_rate_hz: float = 50.0, verbose: bool = False) -> None:
         self._url = url
-        self._debug_log = debug_log
+        self._verbose = verbose
         self._telemetry_rate_hz = telemetry_rate_hz
         self._clock = WallClock()
         self._mavsdk: Mavsdk | None = None
@@ -81,8 +79,8 @@ class MavsdkLink:
 
     def connect(self, timeout_s: float) -> None:
         deadline_s = self._clock.now_s() + timeout_s
-        if not self._debug_log:
-            log_subscribe(_drop_debug)
+        if not self._verbose:
+            log_subscribe(_quiet)
         self._mavsdk = Mavsdk(
             Configuration.create_with_component_type(ComponentType.GROUND_STATION)
         )
@@ -192,9 +190,11 @@ class MavsdkLink:
         return plugin
 
 
-def _drop_debug(level: LogLevel, _message: str, _file: str | None, _line: int) -> bool:
-    """MAVSDK log filter: True suppresses a message (here: debug ones)."""
-    return level == LogLevel.DEBUG
+def _quiet(_level: LogLevel, _message: str, _file: str | None, _line: int) -> bool:
+    """MAVSDK log filter: True suppresses a message. MAVSDK's own (coloured) log lines stay out
+    of the companion's output unless it runs with --verbose; what matters reaches the user as
+    the link's errors and outcomes."""
+    return True
 
 
 def _call(command: Callable[[], object]) -> CommandOutcome:

@@ -61,6 +61,9 @@ def parse_args(argv: list[str] | None) -> CompanionConfig:
     parser.add_argument("--log", type=Path, default=Path("out/flight.csv"), help="flight log")
     parser.add_argument("--seed", type=int, default=0, help="simulator seed (inprocess)")
     parser.add_argument("--vehicle", default="iris", help="simulator preset or config (inprocess)")
+    parser.add_argument(
+        "--verbose", action="store_true", help="show MAVSDK's own log lines (hidden by default)"
+    )
     args = parser.parse_args(argv)
     try:
         runner = RunnerConfig(rate_hz=args.rate_hz)
@@ -76,6 +79,7 @@ def parse_args(argv: list[str] | None) -> CompanionConfig:
         seed=args.seed,
         vehicle=args.vehicle,
         runner=runner,
+        verbose=args.verbose,
     )
 
 

@@ -179,6 +179,7 @@ def test_ctrl_c_or_sigterm_in_the_air_holds_then_lands_and_exits_128_plus_signal
             proc.kill()
     text = stderr.text()
     assert code == code_expected, text
+    assert all(line.startswith("companion: ") for line in text.splitlines()), text  # no MAVSDK
     assert f"{said}: holding and landing" in text
     hold_at = text.index("safe stop: hold accepted")
     assert hold_at < text.index("safe stop: land accepted") < text.index("safe stop: landed and")
