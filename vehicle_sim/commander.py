@@ -1,4 +1,9 @@
-"""PX4-like commander: arming, modes, takeoff/land sequencing, auto-disarm, offboard failsafe.
+"""PX4-like commander: arming, modes, takeoff/land sequencing, auto-disarm, offboard failsafe,
+return to launch and reposition.
+
+RTL follows PX4's navigator ([PX4-params] RTL_RETURN_ALT): climb to RTL_RETURN_ALT above home
+(or stay higher), fly to above home at MPC_XY_CRUISE, then land there. Home is where the
+vehicle was armed. A reposition (MAV_CMD_DO_REPOSITION, MAVSDK's goto) flies to a point in HOLD.
 
 A pure state machine on simulated time: the simulator calls the command methods, calls
 :meth:`Commander.update` after each stretch of physics, asks :meth:`Commander.next_deadline`
@@ -22,7 +27,13 @@ SEVERITY_CRITICAL, SEVERITY_NOTICE, SEVERITY_INFO = 2, 5, 6  # MAV_SEVERITY
 TAKEOFF_ACCEPT_M = 0.1  # takeoff is complete this close to the target altitude
 TAKEOFF_POLL_S = 0.02  # how often takeoff progress is checked
 CLIMB_INTENT_MPS = 0.3  # on the ground, an offboard climb faster than this lifts off
+LIFT_OFF_M = 0.3  # on the ground, an offboard position this far above home lifts off
 MAX_TAKEOFF_ALT_M = 500.0
+RTL_ACCEPT_ALT_M = 0.3  # the RTL climb is done this close to the return altitude
+RTL_ACCEPT_XY_M = 0.5  # the RTL return is done this close above home (then it lands)
+RTL_POLL_S = 0.05  # how often RTL progress is checked
+
+RtlPhase = Literal["climb", "return"]
 
 
 @dataclass(frozen=True)
@@ -41,6 +52,7 @@ class ActiveSetpoint:
     vel_ned_mps: tuple[float, float, float]
     yaw_rate_radps: float
     yaw_rad: float | None
+    pos_ned_m: tuple[float, float, float] | None = None
 
 
 def _ok(reason: str = "") -> CommandResult:
@@ -62,10 +74,12 @@ class Commander:
         self._hold_pos = np.zeros(3)
         self._hold_yaw = 0.0
         self._landed = True
+        self._home = np.zeros(3)
+        self._rtl_phase: RtlPhase = "climb"
         self.mode_epoch = 0  # increments on every mode change (the simulator resets yaw then)
 
     # --- commands -------------------------------------------------------------------------
-    def arm(self, t: float, force: bool = False) -> CommandResult:
+    def arm(self, t: float, pos_ned_m: np.ndarray, force: bool = False) -> CommandResult:
         if self.armed:
             return _ok("already armed")
         if not self._landed and not force:
@@ -74,6 +88,7 @@ class Commander:
             return self._reject("Arming denied: no offboard setpoint stream")
         self.armed = True
         self._t_armed = t
+        self._home = np.array(pos_ned_m, dtype=float)
         self._took_off = False
         self._touchdown_t = None
         self.events.append((SEVERITY_INFO, "Armed"))
@@ -116,14 +131,48 @@ class Commander:
             return self.takeoff(t, pos_ned_m, yaw_rad, None)
         if mode is FlightMode.LAND:
             return self.land(t, pos_ned_m, yaw_rad)
-        if mode in (FlightMode.RTL, FlightMode.MISSION):
-            return self._deny(f"Mode {mode.name} is not supported by this simulator")
+        if mode is FlightMode.MISSION:
+            return self._deny("Mode MISSION is not supported by this simulator")
+        if mode is FlightMode.RTL:
+            return self._start_rtl(pos_ned_m, yaw_rad)
         if mode is FlightMode.OFFBOARD and not self._setpoint_fresh(t):
             return self._reject("Offboard denied: no setpoint stream")
         if mode is not self.mode:
             self._hold(pos_ned_m, yaw_rad)
             self._set_mode(mode)
         return _ok()
+
+    def reposition(self, pos_ned_m: np.ndarray, target_ned_m: np.ndarray) -> CommandResult:
+        """Fly to ``target_ned_m`` (NaN components: keep the current one) and hold there."""
+        if not self.armed or self._landed:
+            return self._deny("Reposition denied: not flying")
+        target = np.where(np.isfinite(target_ned_m), target_ned_m, pos_ned_m)
+        self._hold_pos = np.array(target, dtype=float)
+        self._set_mode(FlightMode.HOLD)
+        return _ok()
+
+    def _start_rtl(self, pos_ned_m: np.ndarray, yaw_rad: float) -> CommandResult:
+        if not self.armed or self._landed:
+            return self._deny("RTL denied: not flying")
+        return_alt_m = max(-pos_ned_m[2], -self._home[2] + self.params.get("RTL_RETURN_ALT"))
+        self._hold_pos = np.array([pos_ned_m[0], pos_ned_m[1], -return_alt_m])
+        self._hold_yaw = yaw_rad
+        self._rtl_phase = "climb"
+        self._set_mode(FlightMode.RTL)
+        self.events.append((SEVERITY_INFO, "RTL: climbing to return altitude"))
+        return _ok()
+
+    def _update_rtl(self, pos_ned_m: np.ndarray) -> None:
+        if self._rtl_phase == "climb" and abs(pos_ned_m[2] - self._hold_pos[2]) < RTL_ACCEPT_ALT_M:
+            self._rtl_phase = "return"
+            self._hold_pos = np.array([self._home[0], self._home[1], self._hold_pos[2]])
+            self.events.append((SEVERITY_INFO, "RTL: returning to home"))
+        elif self._rtl_phase == "return" and (
+            np.hypot(*(pos_ned_m[:2] - self._home[:2])) < RTL_ACCEPT_XY_M
+        ):
+            self._hold_pos = np.array([self._home[0], self._home[1], math.nan])
+            self._set_mode(FlightMode.LAND)
+            self.events.append((SEVERITY_INFO, "RTL: landing at home"))
 
     def on_setpoint(self, t: float) -> None:
         """A setpoint arrived (proof of life for offboard)."""
@@ -153,6 +202,8 @@ class Commander:
         target_alt_m = -self._hold_pos[2]
         accept_m = min(TAKEOFF_ACCEPT_M, 0.5 * target_alt_m)
         climbed = not contact and -pos_ned_m[2] >= target_alt_m - accept_m
+        if self.mode is FlightMode.RTL:
+            self._update_rtl(pos_ned_m)
         if self.mode is FlightMode.TAKEOFF and climbed:
             self._set_mode(FlightMode.HOLD)
             self.events.append((SEVERITY_INFO, "Takeoff complete, holding"))
@@ -181,6 +232,8 @@ class Commander:
                 deadlines.append(self._touchdown_t + land_t)
             if self.mode is FlightMode.TAKEOFF:
                 deadlines.append(t + TAKEOFF_POLL_S)
+            if self.mode is FlightMode.RTL:
+                deadlines.append(t + RTL_POLL_S)
             if self.mode is FlightMode.OFFBOARD and self._last_sp_t is not None:
                 deadlines.append(self._last_sp_t + self.params.get("COM_OF_LOSS_T"))
         return min(deadlines)
@@ -215,7 +268,9 @@ class Commander:
             sp[fc.SP_VEL + 2] = p("MPC_LAND_SPEED")
             sp[fc.SP_VMAX_DN] = p("MPC_LAND_SPEED")
         elif self.mode is FlightMode.OFFBOARD and active is not None:
-            sp[fc.SP_POS : fc.SP_POS + 3] = math.nan
+            sp[fc.SP_POS : fc.SP_POS + 3] = (
+                math.nan if active.pos_ned_m is None else active.pos_ned_m
+            )
             sp[fc.SP_VEL : fc.SP_VEL + 3] = active.vel_ned_mps
             sp[fc.SP_YAW] = math.nan if active.yaw_rad is None else active.yaw_rad
             sp[fc.SP_YAW_RATE] = 0.0 if active.yaw_rad is not None else active.yaw_rate_radps
@@ -223,7 +278,10 @@ class Commander:
             sp[fc.SP_VMAX_UP] = p("MPC_Z_VEL_MAX_UP")
             sp[fc.SP_VMAX_DN] = p("MPC_Z_VEL_MAX_DN")
             sp[fc.SP_ACC_MAX] = 0.0
-            idle = contact and active.vel_ned_mps[2] > -CLIMB_INTENT_MPS
+            wants_climb = -active.vel_ned_mps[2] >= CLIMB_INTENT_MPS or (
+                active.pos_ned_m is not None and active.pos_ned_m[2] < self._home[2] - LIFT_OFF_M
+            )
+            idle = contact and not wants_climb
         sp[fc.SP_IDLE] = 1.0 if idle else 0.0
 
     # --- helpers ------------------------------------------------------------------------------

@@ -120,7 +120,7 @@ class Simulator:
     # --- commands -----------------------------------------------------------------------------
     def arm(self, force: bool = False) -> CommandResult:
         """Arm (on the ground; in OFFBOARD only with a fresh setpoint stream)."""
-        return self._command(lambda c, t, p, y: c.arm(t, force))
+        return self._command(lambda c, t, p, y: c.arm(t, p, force))
 
     def disarm(self, force: bool = False) -> CommandResult:
         """Disarm; refused in the air unless ``force`` (then the vehicle falls)."""
@@ -137,10 +137,21 @@ class Simulator:
 
     def set_mode(self, mode: FlightMode) -> CommandResult:
         """Switch mode. OFFBOARD needs a setpoint younger than COM_OF_LOSS_T; HOLD and POSCTL
-        hold the current position; RTL and MISSION are not supported (denied)."""
+        hold the current position; RTL climbs to RTL_RETURN_ALT, returns home and lands;
+        MISSION is not supported (denied)."""
         if not isinstance(mode, FlightMode):
             raise ValueError(f"mode must be a FlightMode, got {mode!r}; use FlightMode.parse(name)")
         return self._command(lambda c, t, p, y: c.set_mode(mode, t, p, y))
+
+    def reposition(self, target_ned_m: tuple[float, float, float]) -> CommandResult:
+        """Fly to ``target_ned_m`` (NaN components keep the current ones) and hold there, as
+        PX4 does for MAV_CMD_DO_REPOSITION; needs the vehicle flying."""
+        target = np.asarray(target_ned_m, dtype=float)
+        if target.shape != (3,) or np.any(np.isinf(target)):
+            raise ValueError(
+                f"reposition target must be 3 finite or NaN values, got {target_ned_m}"
+            )
+        return self._command(lambda c, t, p, y: c.reposition(p, target))
 
     def set_velocity_setpoint(self, sp: VelocitySetpoint) -> None:
         """Take a velocity setpoint (acted on in OFFBOARD, after any command delay).
@@ -320,7 +331,8 @@ class Simulator:
             c, s = math.cos(yaw), math.sin(yaw)
             vx, vy = c * vx - s * vy, s * vx + c * vy
         yaw_rad = None if sp.yaw_rad is None else float(sp.yaw_rad)
-        return ActiveSetpoint((vx, vy, vz), float(sp.yaw_rate_radps), yaw_rad)
+        pos = None if sp.pos_ned_m is None else tuple(float(v) for v in sp.pos_ned_m)
+        return ActiveSetpoint((vx, vy, vz), float(sp.yaw_rate_radps), yaw_rad, pos)
 
     def _noise_rows(self, n: int) -> np.ndarray:
         if not self._gust_on:

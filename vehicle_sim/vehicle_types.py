@@ -50,20 +50,24 @@ SetpointFrame = Literal["ned", "body"]
 
 @dataclass(frozen=True)
 class VelocitySetpoint:
-    """A velocity + yaw-rate setpoint, as an offboard app streams it.
+    """An offboard setpoint as an offboard app streams it: a velocity (+ yaw or yaw rate), or a
+    position with the velocity as feed-forward, as PX4's position controller takes them.
 
     Attributes:
         vel_mps: (3,) velocity; NED for frame "ned", FRD body axes for frame "body" (horizontal
-            components rotated by yaw only, as PX4 does for BODY_NED).
+            components rotated by yaw only, as PX4 does for BODY_NED). With a position, the
+            feed-forward velocity (zeros for a pure position setpoint).
         yaw_rate_radps: yaw rate [rad/s]; ignored when ``yaw_rad`` is given.
         yaw_rad: absolute yaw [rad] (NED heading), or None to use the yaw rate.
-        frame: "ned" or "body".
+        frame: "ned" or "body" (a position setpoint is always "ned").
+        pos_ned_m: (3,) local NED position to go to [m], or None for a velocity setpoint.
     """
 
     vel_mps: tuple[float, float, float]
     yaw_rate_radps: float = 0.0
     yaw_rad: float | None = None
     frame: SetpointFrame = "ned"
+    pos_ned_m: tuple[float, float, float] | None = None
 
 
 MAX_SETPOINT_SPEED_MPS = 100.0
@@ -71,6 +75,8 @@ MAX_SETPOINT_SPEED_MPS = 100.0
 MAX_SETPOINT_YAW_RATE_RADPS = 50.0
 """Yaw rates beyond this are absurd for a multirotor (PX4's MC_YAWRATE_MAX is at most 1800
 deg/s, about 31 rad/s)."""
+MAX_SETPOINT_POS_M = 100_000.0
+"""Positions beyond 100 km of home are not local setpoints."""
 MAX_SETPOINT_YAW_RAD = 4.0 * math.pi
 """Yaw angles beyond two turns either way are not headings."""
 
@@ -97,6 +103,15 @@ def check_setpoint(sp: VelocitySetpoint) -> None:
         raise ValueError(
             f"invalid yaw rate setpoint {sp.yaw_rate_radps!r} rejected: need a finite value "
             f"within +-{MAX_SETPOINT_YAW_RATE_RADPS:g} rad/s"
+        )
+    if sp.pos_ned_m is not None and (
+        sp.frame != "ned"
+        or len(sp.pos_ned_m) != 3
+        or not all(math.isfinite(float(v)) and abs(v) <= MAX_SETPOINT_POS_M for v in sp.pos_ned_m)
+    ):
+        raise ValueError(
+            f"invalid position setpoint {sp.pos_ned_m!r} rejected: need 3 finite NED values "
+            f"within +-{MAX_SETPOINT_POS_M:g} m of home"
         )
     if yaw is not None and not (math.isfinite(yaw) and abs(yaw) <= MAX_SETPOINT_YAW_RAD):
         raise ValueError(

@@ -32,7 +32,7 @@ os.environ.setdefault("MAVLINK20", "1")
 from pymavlink import mavutil  # noqa: E402
 
 TAKEOVER_AFTER_S = 3.0  # of following, then the pilot switches
-PILOT_MODES = ("POSCTL", "HOLD", "LAND")
+PILOT_MODES = ("POSCTL", "HOLD", "RTL", "LAND")
 
 
 class CountingInProcessLink(InProcessLink):

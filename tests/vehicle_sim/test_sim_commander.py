@@ -131,7 +131,48 @@ def test_disarm_in_air_refused_without_force():
 
 def test_unsupported_modes_are_denied_and_hold_is_accepted():
     sim = new_sim()
-    assert sim.set_mode(FlightMode.RTL).result == "denied"
+    assert sim.set_mode(FlightMode.MISSION).result == "denied"
     assert sim.set_mode(FlightMode.POSCTL).accepted
     with pytest.raises(ValueError, match="FlightMode"):
         sim.set_mode("HOLD")  # type: ignore[arg-type]
+
+
+def test_rtl_climbs_to_the_return_altitude_returns_home_and_lands():
+    sim = hovering(settle_s=1.0)
+    sim.set_param("RTL_RETURN_ALT", 6.0)
+    home_xy = sim.state.pos_ned_m[:2].copy()
+    fly(sim, (2.0, 1.0, 0.0), 5.0)  # away from home
+    away = sim.state.pos_ned_m.copy()
+    assert np.hypot(*(away[:2] - home_xy)) > 8.0
+    assert sim.set_mode(FlightMode.RTL).accepted
+    states = [sim.step(0.1) for _ in range(450)]
+    assert FlightMode.LAND in [s.mode for s in states]
+    in_rtl = [s for s in states if s.mode is FlightMode.RTL]
+    assert max(-s.pos_ned_m[2] for s in in_rtl) == pytest.approx(6.0, abs=0.4)
+    climb_end = next(i for i, s in enumerate(in_rtl) if -s.pos_ned_m[2] > 5.7)
+    # climbs first (no long horizontal flight at low altitude), then returns at altitude
+    assert np.hypot(*(in_rtl[climb_end].pos_ned_m[:2] - away[:2])) < 2.0
+    final = states[-1]
+    assert np.hypot(*(final.pos_ned_m[:2] - home_xy)) < 0.7
+    assert final.landed_state is LandedState.ON_GROUND and not final.armed
+    events = [text for _, text in sim.drain_events()]
+    assert "RTL: landing at home" in events
+
+
+def test_rtl_and_reposition_are_refused_on_the_ground():
+    sim = new_sim()
+    assert sim.set_mode(FlightMode.RTL).result == "denied"
+    assert sim.reposition((1.0, 2.0, -3.0)).result == "denied"
+
+
+def test_reposition_flies_to_the_point_and_holds_there():
+    sim = hovering(settle_s=1.0)
+    assert sim.reposition((8.0, -4.0, float("nan"))).accepted
+    assert sim.state.mode is FlightMode.HOLD
+    altitude_m = -sim.state.pos_ned_m[2]
+    for _ in range(200):
+        state = sim.step(0.1)
+    np.testing.assert_allclose(state.pos_ned_m[:2], (8.0, -4.0), atol=0.2)
+    assert -state.pos_ned_m[2] == pytest.approx(altitude_m, abs=0.2)
+    with pytest.raises(ValueError, match="finite or NaN"):
+        sim.reposition((float("inf"), 0.0, 0.0))

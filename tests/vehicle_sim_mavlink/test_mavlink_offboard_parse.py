@@ -34,9 +34,10 @@ def test_velocity_only_mask_holds_yaw_rate_zero():
     [
         (0, 2503, (1, 0, 0), 0, 0, "frame 0 unsupported"),
         (9, 2503, (1, 0, 0), 0, 0, "frame 9 unsupported"),
-        (1, 0b110111111000, (1, 0, 0), 0, 0, "only velocity"),
-        (1, 0b110111000000, (1, 0, 0), 0, 0, "position/accel"),
-        (1, 0b110000000111, (1, 0, 0), 0, 0, "position/accel"),
+        (1, 0b110000000111, (1, 0, 0), 0, 0, "acceleration setpoints unsupported"),
+        (1, 0b110111111111, (1, 0, 0), 0, 0, "all 3 velocity components"),
+        (1, 0b110111110111, (1, 0, 0), 0, 0, "all 3 velocity components"),
+        (8, 0b110111111000, (0, 0, 0), 0, 0, "need frame 1"),
         (1, 2503, (math.nan, 0, 0), 0, 0, "invalid velocity"),
         (1, 2503, (1e9, 0, 0), 0, 0, "invalid velocity"),
         (1, 2503, (0, 0, -math.inf), 0, 0, "invalid velocity"),
@@ -50,3 +51,15 @@ def test_unusable_setpoints_are_rejected_with_a_reason(frame, mask, vel, yaw, ya
     assert result.setpoint is None
     assert reason in result.reason
     assert "\n" not in result.reason  # one line; STATUSTEXT chunks what exceeds 50 characters
+
+
+@pytest.mark.parametrize(
+    ("mask", "vel_ff"),
+    [(0b100111111000, (0.0, 0.0, 0.0)), (0b100111000000, (1.0, -0.5, 0.0))],
+    ids=["position", "position+velocity"],
+)
+def test_position_setpoints_carry_the_position_and_the_feed_forward(mask, vel_ff):
+    result = parse_setpoint(1, mask, (1.0, -0.5, 0.0), 0.3, 0.0, (4.0, -2.0, -3.0))
+    assert result.reason == ""
+    assert result.setpoint.pos_ned_m == (4.0, -2.0, -3.0)
+    assert result.setpoint.vel_mps == vel_ff and result.setpoint.yaw_rad == 0.3

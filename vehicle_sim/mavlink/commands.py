@@ -37,6 +37,7 @@ CMD_NAV_RETURN_TO_LAUNCH = mavlink2.MAV_CMD_NAV_RETURN_TO_LAUNCH
 CMD_NAV_LAND = mavlink2.MAV_CMD_NAV_LAND
 CMD_NAV_TAKEOFF = mavlink2.MAV_CMD_NAV_TAKEOFF
 CMD_DO_SET_MODE = mavlink2.MAV_CMD_DO_SET_MODE
+CMD_DO_REPOSITION = mavlink2.MAV_CMD_DO_REPOSITION
 CMD_COMPONENT_ARM_DISARM = mavlink2.MAV_CMD_COMPONENT_ARM_DISARM
 CMD_GET_HOME_POSITION = mavlink2.MAV_CMD_GET_HOME_POSITION
 CMD_GET_MESSAGE_INTERVAL = mavlink2.MAV_CMD_GET_MESSAGE_INTERVAL
@@ -142,6 +143,25 @@ def return_to_launch(_p: Params, ctx: CommandContext) -> CommandOutcome:
     return _from_sim(ctx.sim.set_mode(FlightMode.RTL))
 
 
+def reposition(p: Params, ctx: CommandContext) -> CommandOutcome:
+    """DO_REPOSITION (MAVSDK's goto): param5/6 latitude/longitude [deg], param7 altitude AMSL
+    [m]; NaN keeps the current value. Flown in HOLD, as PX4 does; the ground speed (param1)
+    is MPC_XY_CRUISE here, a requested one is not applied."""
+    lat, lon, alt = p[4], p[5], p[6]
+    if any(math.isinf(v) for v in (lat, lon, alt)) or (
+        math.isfinite(lat) and not -90.0 <= lat <= 90.0
+    ):
+        return _denied("Reposition: invalid position")
+    origin = ctx.telemetry.origin
+    here = origin.to_global(tuple(ctx.sim.state.pos_ned_m))
+    north, east, down = origin.to_local(
+        lat if math.isfinite(lat) else here[0],
+        lon if math.isfinite(lon) else here[1],
+        alt if math.isfinite(alt) else here[2],
+    )
+    return _from_sim(ctx.sim.reposition((north, east, down)))
+
+
 def _message_id(value: float) -> int | None:
     if math.isfinite(value) and value >= 0 and value == int(value):
         return int(value)
@@ -188,6 +208,7 @@ def get_message_interval(p: Params, ctx: CommandContext) -> CommandOutcome:
 
 COMMAND_HANDLERS: dict[int, Handler] = {
     CMD_NAV_RETURN_TO_LAUNCH: return_to_launch,
+    CMD_DO_REPOSITION: reposition,
     CMD_NAV_LAND: land,
     CMD_NAV_TAKEOFF: takeoff,
     CMD_DO_SET_MODE: set_mode,

@@ -48,6 +48,19 @@ class Outgoing:
     notice: Notice | None = None
 
 
+_GLOBAL_FRAMES = frozenset(
+    {
+        mavlink2.MAV_FRAME_GLOBAL,
+        mavlink2.MAV_FRAME_GLOBAL_INT,
+        mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT,
+        mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
+    }
+)
+_RELATIVE_ALT_FRAMES = frozenset(
+    {mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT, mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT}
+)
+
+
 def _for_us(msg: mavlink2.MAVLink_message) -> bool:
     """Addressed to this system (or all) and, where the message names one, this component."""
     system_ok = msg.target_system in (0, SYSTEM_ID)
@@ -120,7 +133,16 @@ class Dispatcher:
         return self._command(msg, msg.command, p, scheduler)
 
     def _command_int(self, msg, scheduler, _now_ns) -> list[Outgoing]:
-        p = (msg.param1, msg.param2, msg.param3, msg.param4, float(msg.x), float(msg.y), msg.z)
+        """COMMAND_INT -> the COMMAND_LONG parameters: x, y in degrees for a global frame (else
+        metres, [MAVLink] COMMAND_INT), z as altitude above mean sea level."""
+        x, y, z = float(msg.x), float(msg.y), float(msg.z)
+        if msg.frame in _GLOBAL_FRAMES:
+            x, y = x / 1e7, y / 1e7
+            if msg.frame in _RELATIVE_ALT_FRAMES:
+                z += self._telemetry.origin.alt_amsl_m
+        else:
+            x, y = x / 1e4, y / 1e4
+        p = (msg.param1, msg.param2, msg.param3, msg.param4, x, y, z)
         return self._command(msg, msg.command, p, scheduler)
 
     def _command(self, msg, command: int, p, scheduler: RateScheduler) -> list[Outgoing]:
@@ -171,7 +193,12 @@ class Dispatcher:
 
     def _setpoint(self, msg, _scheduler, _now_ns) -> list[Outgoing]:
         result = parse_setpoint(
-            msg.coordinate_frame, msg.type_mask, (msg.vx, msg.vy, msg.vz), msg.yaw, msg.yaw_rate
+            msg.coordinate_frame,
+            msg.type_mask,
+            (msg.vx, msg.vy, msg.vz),
+            msg.yaw,
+            msg.yaw_rate,
+            (msg.x, msg.y, msg.z),
         )
         if result.setpoint is not None:
             try:

@@ -29,3 +29,14 @@ class GeodeticOrigin:
             east_m / (EARTH_RADIUS_M * math.cos(math.radians(self.lat_deg)))
         )
         return lat_deg, lon_deg, self.alt_amsl_m - down_m
+
+    def to_local(self, lat_deg: float, lon_deg: float, alt_amsl_m: float) -> tuple[float, ...]:
+        """Local NED position [m] of a geodetic one (inverse of :meth:`to_global`); a NaN
+        coordinate stays NaN (MAVLink's "keep the current value")."""
+        north_m = math.radians(lat_deg - self.lat_deg) * EARTH_RADIUS_M
+        east_m = (
+            math.radians(lon_deg - self.lon_deg)
+            * EARTH_RADIUS_M
+            * math.cos(math.radians(self.lat_deg))
+        )
+        return north_m, east_m, self.alt_amsl_m - alt_amsl_m

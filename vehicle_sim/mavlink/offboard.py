@@ -2,8 +2,9 @@
 
 type_mask bits (1 = ignore): 0-2 position, 3-5 velocity, 6-8 acceleration, 9 force, 10 yaw,
 11 yaw rate. Frames: 1 LOCAL_NED (as given), 8 BODY_NED (velocity in body axes, rotated by yaw).
-Only velocity setpoints (optionally with yaw or yaw rate) are flown; anything else is rejected
-with a reason a STATUSTEXT can carry. The value limits are the vehicle's one set of setpoint
+Velocity setpoints, position setpoints and position + velocity feed-forward (each with yaw or
+yaw rate) are flown; acceleration, force and partial setpoints are rejected with a reason a
+STATUSTEXT can carry. The value limits are the vehicle's one set of setpoint
 rules, :func:`vehicle_sim.vehicle_types.check_setpoint`. Pure: no I/O.
 """
 
@@ -57,23 +58,35 @@ def parse_setpoint(
     vel_mps: tuple[float, float, float],
     yaw_rad: float,
     yaw_rate_radps: float,
+    pos_ned_m: tuple[float, float, float] = (0.0, 0.0, 0.0),
 ) -> SetpointResult:
-    """Validate a SET_POSITION_TARGET_LOCAL_NED's fields (SI units) and build the setpoint."""
+    """Validate a SET_POSITION_TARGET_LOCAL_NED's fields (SI units) and build the setpoint:
+    velocity, position, or position with velocity feed-forward ([PX4-PositionControl])."""
     if coordinate_frame not in SUPPORTED_FRAMES:
         return SetpointResult(None, f"Offboard: frame {coordinate_frame} unsupported, use 1 or 8")
-    if type_mask & IGNORE_VELOCITY:
-        return SetpointResult(None, "Offboard: only velocity setpoints supported")
-    if (type_mask & IGNORE_POSITION) != IGNORE_POSITION or (
-        type_mask & IGNORE_ACCELERATION
-    ) != IGNORE_ACCELERATION:
-        return SetpointResult(None, "Offboard: position/accel setpoints unsupported")
+    if (type_mask & IGNORE_ACCELERATION) != IGNORE_ACCELERATION:
+        return SetpointResult(
+            None, "Offboard: acceleration setpoints unsupported; send velocity or position"
+        )
+    position = (type_mask & IGNORE_POSITION) == 0
+    velocity = (type_mask & IGNORE_VELOCITY) == 0
+    partial = (type_mask & IGNORE_POSITION) not in (0, IGNORE_POSITION) or (
+        type_mask & IGNORE_VELOCITY
+    ) not in (0, IGNORE_VELOCITY)
+    if partial or not (position or velocity):
+        return SetpointResult(
+            None, "Offboard: send all 3 velocity components, all 3 position ones, or both"
+        )
+    if position and SUPPORTED_FRAMES[coordinate_frame] != "ned":
+        return SetpointResult(None, "Offboard: position setpoints need frame 1 (LOCAL_NED)")
     use_yaw = not type_mask & IGNORE_YAW
     use_yaw_rate = not type_mask & IGNORE_YAW_RATE
     setpoint = VelocitySetpoint(
-        vel_mps=tuple(float(v) for v in vel_mps),  # type: ignore[arg-type]
+        vel_mps=tuple(float(v) for v in vel_mps) if velocity else (0.0, 0.0, 0.0),  # type: ignore[arg-type]
         yaw_rate_radps=float(yaw_rate_radps) if use_yaw_rate else 0.0,
         yaw_rad=float(yaw_rad) if use_yaw else None,
         frame=SUPPORTED_FRAMES[coordinate_frame],  # type: ignore[arg-type]
+        pos_ned_m=tuple(float(v) for v in pos_ned_m) if position else None,  # type: ignore[arg-type]
     )
     try:
         check_setpoint(setpoint)
