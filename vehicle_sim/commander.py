@@ -1,5 +1,5 @@
 """PX4-like commander: arming, modes, takeoff/land sequencing, auto-disarm, offboard failsafe,
-return to launch and reposition.
+return to launch, reposition and AUTO.MISSION (through :class:`MissionNavigator`).
 
 RTL follows PX4's navigator ([PX4-params] RTL_RETURN_ALT): climb to RTL_RETURN_ALT above home
 (or stay higher), fly to above home at MPC_XY_CRUISE, then land there. Home is where the
@@ -20,6 +20,8 @@ from typing import Literal
 import numpy as np
 
 from vehicle_sim import flight_control as fc
+from vehicle_sim.mission_plan import MissionItem
+from vehicle_sim.navigator import MissionNavigator
 from vehicle_sim.params import Px4Params
 from vehicle_sim.vehicle_types import FlightMode, LandedState
 
@@ -76,6 +78,11 @@ class Commander:
         self._landed = True
         self._home = np.zeros(3)
         self._rtl_phase: RtlPhase = "climb"
+        self.mission: tuple[MissionItem, ...] = ()
+        self.mission_current = 0
+        self.mission_reached: list[int] = []  # drained by the simulator's user
+        self._navigator: MissionNavigator | None = None
+        self._mission_takeoff = False
         self.mode_epoch = 0  # increments on every mode change (the simulator resets yaw then)
 
     # --- commands -------------------------------------------------------------------------
@@ -132,7 +139,7 @@ class Commander:
         if mode is FlightMode.LAND:
             return self.land(t, pos_ned_m, yaw_rad)
         if mode is FlightMode.MISSION:
-            return self._deny("Mode MISSION is not supported by this simulator")
+            return self._start_mission(pos_ned_m, yaw_rad)
         if mode is FlightMode.RTL:
             return self._start_rtl(pos_ned_m, yaw_rad)
         if mode is FlightMode.OFFBOARD and not self._setpoint_fresh(t):
@@ -150,6 +157,63 @@ class Commander:
         self._hold_pos = np.array(target, dtype=float)
         self._set_mode(FlightMode.HOLD)
         return _ok()
+
+    def set_mission(self, items: tuple[MissionItem, ...]) -> None:
+        """Replace the mission (an empty one clears it); it starts from its first item."""
+        self.mission = tuple(items)
+        self.mission_current = 0
+        self._navigator = None
+        if self.mode is FlightMode.MISSION:
+            self._set_mode(FlightMode.HOLD)
+
+    def set_mission_current(self, seq: int) -> CommandResult:
+        if not 0 <= seq < len(self.mission):
+            return self._deny(
+                f"Mission item {seq} does not exist (mission has {len(self.mission)})"
+            )
+        self.mission_current = seq
+        if self._navigator is not None:
+            self._navigator = MissionNavigator(self.mission, seq)
+        return _ok()
+
+    def _start_mission(self, pos_ned_m: np.ndarray, yaw_rad: float) -> CommandResult:
+        if not self.mission:
+            return self._deny("Mission denied: no mission uploaded")
+        if not self.armed:
+            return self._deny("Mission denied: arm first")
+        start = 0 if self.mission_current >= len(self.mission) else self.mission_current
+        self._navigator = MissionNavigator(self.mission, start)
+        self._hold(pos_ned_m, yaw_rad)
+        self._mission_takeoff = self._landed  # on the ground: take off first, as PX4 does
+        if self._mission_takeoff:
+            self._hold_pos[2] = self._home[2] - self.params.get("MIS_TAKEOFF_ALT")
+        self._set_mode(FlightMode.MISSION)
+        self.events.append((SEVERITY_INFO, "Mission started"))
+        return _ok()
+
+    def _update_mission(self, t: float, pos_ned_m: np.ndarray, yaw_rad: float) -> None:
+        nav = self._navigator
+        if nav is None:
+            return
+        if self._mission_takeoff:
+            if pos_ned_m[2] > self._hold_pos[2] + RTL_ACCEPT_ALT_M:
+                return
+            self._mission_takeoff = False
+        out = nav.step(t, pos_ned_m)
+        self.mission_reached += nav.reached
+        nav.reached.clear()
+        self.mission_current = nav.current
+        if out.action == "fly":
+            self._hold_pos = out.target_ned_m
+        elif out.action == "land":
+            self._hold_pos = np.array([out.target_ned_m[0], out.target_ned_m[1], math.nan])
+            self._set_mode(FlightMode.LAND)
+        elif out.action == "rtl":
+            self._start_rtl(pos_ned_m, yaw_rad)
+        elif self._navigator is not None:  # done: hold where the mission ended
+            self._hold(pos_ned_m, yaw_rad)
+            self._navigator = None
+            self.events.append((SEVERITY_INFO, "Mission finished, holding"))
 
     def _start_rtl(self, pos_ned_m: np.ndarray, yaw_rad: float) -> CommandResult:
         if not self.armed or self._landed:
@@ -204,6 +268,8 @@ class Commander:
         climbed = not contact and -pos_ned_m[2] >= target_alt_m - accept_m
         if self.mode is FlightMode.RTL:
             self._update_rtl(pos_ned_m)
+        if self.mode is FlightMode.MISSION:
+            self._update_mission(t, pos_ned_m, yaw_rad)
         if self.mode is FlightMode.TAKEOFF and climbed:
             self._set_mode(FlightMode.HOLD)
             self.events.append((SEVERITY_INFO, "Takeoff complete, holding"))
@@ -232,7 +298,7 @@ class Commander:
                 deadlines.append(self._touchdown_t + land_t)
             if self.mode is FlightMode.TAKEOFF:
                 deadlines.append(t + TAKEOFF_POLL_S)
-            if self.mode is FlightMode.RTL:
+            if self.mode in (FlightMode.RTL, FlightMode.MISSION):
                 deadlines.append(t + RTL_POLL_S)
             if self.mode is FlightMode.OFFBOARD and self._last_sp_t is not None:
                 deadlines.append(self._last_sp_t + self.params.get("COM_OF_LOSS_T"))
@@ -261,9 +327,15 @@ class Commander:
         sp[fc.SP_YAW_RATE] = 0.0
         sp[fc.SP_ACC_MAX] = p("MPC_ACC_HOR")
         idle = contact
-        if self.mode is FlightMode.TAKEOFF:
+        if self.mode is FlightMode.TAKEOFF or (
+            self.mode is FlightMode.MISSION and self._mission_takeoff
+        ):
             sp[fc.SP_VMAX_UP] = p("MPC_TKO_SPEED")
             idle = False
+        elif self.mode is FlightMode.MISSION and self._navigator is not None:
+            speed = self._navigator.speed_mps
+            if speed is not None:
+                sp[fc.SP_VMAX_XY] = min(speed, p("MPC_XY_VEL_MAX"))
         elif self.mode is FlightMode.LAND:
             sp[fc.SP_VEL + 2] = p("MPC_LAND_SPEED")
             sp[fc.SP_VMAX_DN] = p("MPC_LAND_SPEED")

@@ -25,6 +25,7 @@ from vehicle_sim.backends import backend_name, make_backend
 from vehicle_sim.builtin_plant import BuiltinPlant, PlantBackend
 from vehicle_sim.commander import ActiveSetpoint, Commander, CommandResult
 from vehicle_sim.config import GRAVITY_MPS2, SimConfig
+from vehicle_sim.mission_plan import MissionItem
 from vehicle_sim.params import Px4Params
 from vehicle_sim.truth_log import truth_row
 from vehicle_sim.vehicle_types import FlightMode, VehicleState, VelocitySetpoint, check_setpoint
@@ -138,10 +139,35 @@ class Simulator:
     def set_mode(self, mode: FlightMode) -> CommandResult:
         """Switch mode. OFFBOARD needs a setpoint younger than COM_OF_LOSS_T; HOLD and POSCTL
         hold the current position; RTL climbs to RTL_RETURN_ALT, returns home and lands;
-        MISSION is not supported (denied)."""
+        MISSION flies the uploaded mission (taking off first when on the ground)."""
         if not isinstance(mode, FlightMode):
             raise ValueError(f"mode must be a FlightMode, got {mode!r}; use FlightMode.parse(name)")
         return self._command(lambda c, t, p, y: c.set_mode(mode, t, p, y))
+
+    def set_mission(self, items: tuple[MissionItem, ...]) -> None:
+        """Replace the mission (see :mod:`vehicle_sim.mission_plan`); () clears it."""
+        self._commander.set_mission(tuple(items))
+        self._sync_mode()
+
+    def set_mission_current(self, seq: int) -> CommandResult:
+        """Make item ``seq`` the next one flown (MISSION_SET_CURRENT)."""
+        return self._commander.set_mission_current(seq)
+
+    @property
+    def mission(self) -> tuple[MissionItem, ...]:
+        """The mission as uploaded."""
+        return self._commander.mission
+
+    @property
+    def mission_current(self) -> int:
+        """The item flown now (== len(mission) when the mission is complete)."""
+        return self._commander.mission_current
+
+    def drain_mission_reached(self) -> list[int]:
+        """Items reached since the last call, in order (MISSION_ITEM_REACHED)."""
+        reached = self._commander.mission_reached
+        self._commander.mission_reached = []
+        return reached
 
     def reposition(self, target_ned_m: tuple[float, float, float]) -> CommandResult:
         """Fly to ``target_ned_m`` (NaN components keep the current ones) and hold there, as

@@ -2,7 +2,8 @@
 
 Each test does what one of MAVSDK-Python's example scripts does, through MAVSDK's documented
 API (the native 4.x binding): takeoff_and_land (reads RTL_RETURN_ALT), goto (DO_REPOSITION),
-return to launch, offboard_position_ned and offboard_velocity_body. Real time, a real UDP
+return to launch, mission (upload, start, progress, RTL at the end), offboard_position_ned and
+offboard_velocity_body. Real time, a real UDP
 endpoint, MAVSDK's own mavlink stack; deadlines are generous so a busy CPU does not matter.
 """
 
@@ -16,6 +17,7 @@ from collections.abc import Callable, Iterator
 import pytest
 from mavsdk import ComponentType, Configuration, ConnectionResult, Mavsdk, log_subscribe
 from mavsdk.plugins.action import Action
+from mavsdk.plugins.mission import Mission, MissionItem, MissionPlan
 from mavsdk.plugins.offboard import Offboard, PositionNedYaw, VelocityBodyYawspeed, VelocityNedYaw
 from mavsdk.plugins.param import Param
 from mavsdk.plugins.telemetry import Telemetry
@@ -50,6 +52,7 @@ class Drone:
         assert system is not None, "no autopilot discovered"
         self.action, self.telemetry = Action(system), Telemetry(system)
         self.offboard, self.param = Offboard(system), Param(system)
+        self.mission = Mission(system)
         wait(lambda: self.telemetry.health_all_ok(), 30.0, "health all ok")
 
     @property
@@ -161,3 +164,32 @@ def test_offboard_velocity_body(drone: Drone) -> None:
     assert math.hypot(*moved[:2]) > 3.0  # flew forward
     drone.offboard.stop()
     land_and_disarm(drone)
+
+
+def test_mission_upload_start_progress_and_rtl_at_the_end(drone: Drone) -> None:
+    drone.param.set_param_float("RTL_RETURN_ALT", 5.0)
+    points = [(10.0, 0.0), (10.0, 8.0), (0.0, 8.0)]
+    items = [
+        MissionItem(
+            *_offset(drone, north, east),
+            relative_altitude_m=4.0,
+            speed_m_s=3.0,
+            is_fly_through=True,
+            acceptance_radius_m=1.0,
+        )
+        for north, east in points
+    ]
+    drone.mission.set_return_to_launch_after_mission(True)
+    drone.mission.upload_mission(MissionPlan(items))
+    drone.action.arm()
+    drone.mission.start_mission()
+    seen = set()
+
+    def progress() -> bool:
+        seen.add(drone.mission.mission_progress().current)
+        return drone.mission.is_mission_finished()
+
+    wait(progress, 90.0, "the mission to finish")
+    assert {1, 2, 3} <= seen
+    wait(lambda: not drone.state.armed, 90.0, "RTL at the end: landing at home and disarm")
+    assert math.hypot(*drone.state.pos_ned_m[:2]) < 0.8

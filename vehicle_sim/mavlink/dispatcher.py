@@ -26,6 +26,7 @@ from vehicle_sim.mavlink.commands import (
     Notice,
     handle_command,
 )
+from vehicle_sim.mavlink.mission_protocol import MissionProtocol, MissionReply
 from vehicle_sim.mavlink.offboard import SetpointResult, parse_setpoint
 from vehicle_sim.mavlink.scheduler import RateScheduler
 from vehicle_sim.mavlink.stats import StatsCounter
@@ -90,6 +91,7 @@ class Dispatcher:
         self._telemetry = telemetry
         self._stats = stats
         self._on_setpoint = on_setpoint
+        self.missions = MissionProtocol(sim, telemetry.origin)
         # Messages addressed to a system: checked once, in handle(), before their handler.
         self._addressed: dict[str, Callable[..., list[Outgoing]]] = {
             "COMMAND_LONG": self._command_long,
@@ -98,7 +100,14 @@ class Dispatcher:
             "PARAM_REQUEST_LIST": self._param_request_list,
             "PARAM_REQUEST_READ": self._param_request_read,
             "PARAM_SET": self._param_set,
-            "MISSION_REQUEST_LIST": self._mission_request_list,
+            "MISSION_COUNT": self._mission(self.missions.on_count),
+            "MISSION_ITEM_INT": self._mission(self.missions.on_item_int),
+            "MISSION_ITEM": self._mission_float_item,
+            "MISSION_REQUEST_LIST": self._mission(self.missions.on_request_list),
+            "MISSION_REQUEST_INT": self._mission(self.missions.on_request_item),
+            "MISSION_REQUEST": self._mission(self.missions.on_request_item),
+            "MISSION_CLEAR_ALL": self._mission(self.missions.on_clear_all),
+            "MISSION_SET_CURRENT": self._mission(self.missions.on_set_current),
             "FILE_TRANSFER_PROTOCOL": self._ftp,
             "SET_MODE": self._set_mode_message,
         }
@@ -244,8 +253,29 @@ class Dispatcher:
         reply = services.timesync_reply(msg, now_ns)
         return [] if reply is None else [Outgoing(reply)]
 
-    def _mission_request_list(self, msg, _scheduler, _now_ns) -> list[Outgoing]:
-        return [Outgoing(services.mission_count_reply(msg))]
+    def _mission(self, handler: Callable[..., MissionReply]) -> Callable[..., list[Outgoing]]:
+        """A mission-protocol handler as a dispatcher handler (reply to the sender, problems
+        as STATUSTEXT)."""
+
+        def handle(msg, _scheduler, _now_ns) -> list[Outgoing]:
+            reply = handler(msg)
+            out = [Outgoing(m) for m in reply.messages]
+            if reply.problem:
+                out += self._notices(((MAV_SEVERITY_WARNING, reply.problem),))
+            return out
+
+        return handle
+
+    def _mission_float_item(self, msg, _scheduler, _now_ns) -> list[Outgoing]:
+        """The float MISSION_ITEM is not served (AUTOPILOT_VERSION does not claim it): say so."""
+        ack = _FACTORY.mission_ack_encode(
+            msg.get_srcSystem(),
+            msg.get_srcComponent(),
+            mavlink2.MAV_MISSION_UNSUPPORTED,
+            getattr(msg, "mission_type", 0),
+        )
+        text = "Mission: send MISSION_ITEM_INT, MISSION_ITEM is not supported"
+        return [Outgoing(ack), *self._notices(((MAV_SEVERITY_WARNING, text),))]
 
     def _ftp(self, msg, _scheduler, _now_ns) -> list[Outgoing]:
         return [Outgoing(services.ftp_nak_reply(msg))]

@@ -96,6 +96,9 @@ class MavlinkEndpoint:
         self._pending: list[tuple[int, float]] = []
         self._trace: deque[SetpointActuation] = deque(maxlen=TRACE_LENGTH)
         self._notice_limiter = NoticeLimiter(NOTICE_REPEAT_S, NOTICE_MEMORY)
+        self._factory = mavlink2.MAVLink(None)
+        self._mission_seen: tuple[object, ...] | None = None
+        self._mission_sent_s = -math.inf
         self._chunk_id = 0
         self._heartbeat_wall_s: dict[str, float] = {}
 
@@ -203,6 +206,7 @@ class MavlinkEndpoint:
             self._state = state
             for severity, text in self.sim.drain_events():
                 self._notice(severity, text)
+            self._mission_progress(state, now_s)
             new_flags = (state.armed, state.mode, state.landed_state)
             if new_flags != flags:
                 flags = new_flags
@@ -213,6 +217,16 @@ class MavlinkEndpoint:
             for link in self._links:
                 if link.sock in readable:
                     self._drain(link)
+
+    def _mission_progress(self, state: VehicleState, wall_s: float) -> None:
+        """MISSION_ITEM_REACHED as items are reached; MISSION_CURRENT on a change and at 1 Hz."""
+        reached = self.sim.drain_mission_reached()
+        for seq in reached:
+            self._broadcast(self._factory.mission_item_reached_encode(seq))
+        current = (self.sim.mission_current, len(self.sim.mission), state.mode)
+        if reached or current != self._mission_seen or wall_s >= self._mission_sent_s + 1.0:
+            self._mission_seen, self._mission_sent_s = current, wall_s
+            self._broadcast(self._dispatcher.missions.current_message())
 
     def _stream(self, state: VehicleState, wall_s: float) -> None:
         heartbeat_period_s = 1.0 / self.config.heartbeat_min_hz

@@ -1,4 +1,4 @@
-"""Small request/response services PX4 answers: PING, TIMESYNC, empty mission, FTP NAK.
+"""Small request/response services PX4 answers: PING, TIMESYNC, FTP NAK.
 
 Pure builders of the reply message (or None when the message needs no reply).
 """
@@ -37,16 +37,6 @@ def timesync_reply(
     if msg.tc1 != 0:
         return None
     return _FACTORY.timesync_encode(tc1=now_ns, ts1=msg.ts1)
-
-
-def mission_count_reply(msg: mavlink2.MAVLink_message) -> mavlink2.MAVLink_message:
-    """MISSION_COUNT 0: the simulator stores no mission."""
-    return _FACTORY.mission_count_encode(
-        target_system=msg.get_srcSystem(),
-        target_component=msg.get_srcComponent(),
-        count=0,
-        mission_type=getattr(msg, "mission_type", 0),
-    )
 
 
 def ftp_nak_reply(msg: mavlink2.MAVLink_file_transfer_protocol_message) -> mavlink2.MAVLink_message:
