@@ -20,6 +20,7 @@ from typing import Literal
 import numpy as np
 
 from vehicle_sim import flight_control as fc
+from vehicle_sim.failsafe import FailsafeAction, FailsafeMonitor, Trigger
 from vehicle_sim.mission_plan import MissionItem
 from vehicle_sim.navigator import MissionNavigator
 from vehicle_sim.params import Px4Params
@@ -36,6 +37,7 @@ RTL_ACCEPT_XY_M = 0.5  # the RTL return is done this close above home (then it l
 RTL_POLL_S = 0.05  # how often RTL progress is checked
 
 RtlPhase = Literal["climb", "return"]
+_VERB: dict[str, str] = {"rtl": "returning", "land": "landing", "disarm": "disarming"}
 
 
 @dataclass(frozen=True)
@@ -83,6 +85,8 @@ class Commander:
         self.mission_reached: list[int] = []  # drained by the simulator's user
         self._navigator: MissionNavigator | None = None
         self._mission_takeoff = False
+        self.failsafes = FailsafeMonitor(params)
+        self._pending: tuple[FailsafeAction, float] | None = None  # action and when it runs
         self.mode_epoch = 0  # increments on every mode change (the simulator resets yaw then)
 
     # --- commands -------------------------------------------------------------------------
@@ -134,6 +138,7 @@ class Commander:
     def set_mode(
         self, mode: FlightMode, t: float, pos_ned_m: np.ndarray, yaw_rad: float
     ) -> CommandResult:
+        self._pending = None  # a pilot's mode change takes over from a pending failsafe
         if mode is FlightMode.TAKEOFF:
             return self.takeoff(t, pos_ned_m, yaw_rad, None)
         if mode is FlightMode.LAND:
@@ -215,6 +220,45 @@ class Commander:
             self._navigator = None
             self.events.append((SEVERITY_INFO, "Mission finished, holding"))
 
+    def _failsafe_checks(
+        self, t: float, pos_ned_m: np.ndarray, yaw_rad: float, battery_remaining: float
+    ) -> None:
+        warnings, trigger = self.failsafes.check(
+            t, self.armed and not self._landed, battery_remaining
+        )
+        self.events += [(SEVERITY_CRITICAL, text) for text in warnings]
+        if trigger is not None:
+            self._trigger(trigger, t, pos_ned_m, yaw_rad)
+        if self._pending is not None and t >= self._pending[1] - 1e-9:
+            action, _ = self._pending
+            self._pending = None
+            self._execute(action, pos_ned_m, yaw_rad)
+
+    def _trigger(self, trigger: Trigger, t: float, pos_ned_m: np.ndarray, yaw_rad: float) -> None:
+        """Hold now; run the action after COM_FAIL_ACT_T (at once when that is 0)."""
+        self._hold(pos_ned_m, yaw_rad)
+        self._set_mode(FlightMode.HOLD)
+        delay_s = self.params.get("COM_FAIL_ACT_T")
+        if trigger.action == "hold":
+            text = f"Failsafe: {trigger.reason}, holding position"
+        elif delay_s <= 0.0:
+            text = f"Failsafe: {trigger.reason}, {_VERB[trigger.action]}"
+            self._execute(trigger.action, pos_ned_m, yaw_rad)
+        else:
+            text = f"Failsafe: {trigger.reason}, holding; {_VERB[trigger.action]} in {delay_s:g} s"
+            self._pending = (trigger.action, t + delay_s)
+        self.events.append((SEVERITY_CRITICAL, text))
+
+    def _execute(self, action: FailsafeAction, pos_ned_m: np.ndarray, yaw_rad: float) -> None:
+        if action == "rtl":
+            self._start_rtl(pos_ned_m, yaw_rad)
+        elif action == "land":
+            self._hold_pos = np.array([pos_ned_m[0], pos_ned_m[1], math.nan])
+            self._hold_yaw = yaw_rad
+            self._set_mode(FlightMode.LAND)
+        elif action == "disarm":
+            self._disarm("Failsafe: disarmed (motors off)", SEVERITY_CRITICAL)
+
     def _start_rtl(self, pos_ned_m: np.ndarray, yaw_rad: float) -> CommandResult:
         if not self.armed or self._landed:
             return self._deny("RTL denied: not flying")
@@ -243,8 +287,16 @@ class Commander:
         self._last_sp_t = t
 
     # --- time -------------------------------------------------------------------------------
-    def update(self, t: float, pos_ned_m: np.ndarray, yaw_rad: float, contact: bool) -> None:
-        """Advance the state machine to time ``t`` given the vehicle's state."""
+    def update(
+        self,
+        t: float,
+        pos_ned_m: np.ndarray,
+        yaw_rad: float,
+        contact: bool,
+        battery_remaining: float = 1.0,
+    ) -> None:
+        """Advance the state machine to time ``t`` given the vehicle's state (battery charge
+        remaining as a fraction)."""
         self._landed = contact
         if not self.armed:
             return
@@ -274,17 +326,8 @@ class Commander:
             self._set_mode(FlightMode.HOLD)
             self.events.append((SEVERITY_INFO, "Takeoff complete, holding"))
         if self.mode is FlightMode.OFFBOARD and not self._setpoint_fresh(t):
-            action = int(self.params.get("COM_OBL_RC_ACT"))
-            if action == 4:
-                self._hold_pos = np.array([pos_ned_m[0], pos_ned_m[1], math.nan])
-                self._hold_yaw = yaw_rad
-                self._set_mode(FlightMode.LAND)
-                what = "landing"
-            else:
-                self._hold(pos_ned_m, yaw_rad)
-                self._set_mode(FlightMode.HOLD)
-                what = "holding position"
-            self.events.append((SEVERITY_CRITICAL, f"Failsafe: offboard setpoints lost, {what}"))
+            self._trigger(self.failsafes.offboard_lost(), t, pos_ned_m, yaw_rad)
+        self._failsafe_checks(t, pos_ned_m, yaw_rad, battery_remaining)
 
     def next_deadline(self, t: float) -> float:
         """Latest simulated time to which physics may run before :meth:`update` is due."""
@@ -300,6 +343,11 @@ class Commander:
                 deadlines.append(t + TAKEOFF_POLL_S)
             if self.mode in (FlightMode.RTL, FlightMode.MISSION):
                 deadlines.append(t + RTL_POLL_S)
+            if self._pending is not None:
+                deadlines.append(self._pending[1])
+            link_lost_s = self.failsafes.next_check_s(t)
+            if link_lost_s is not None:
+                deadlines.append(link_lost_s + 1e-3)
             if self.mode is FlightMode.OFFBOARD and self._last_sp_t is not None:
                 deadlines.append(self._last_sp_t + self.params.get("COM_OF_LOSS_T"))
         return min(deadlines)

@@ -70,6 +70,7 @@ PX4_PARAMS: dict[str, Px4ParamSpec] = {
     "COM_DISARM_PRFLT": _F(10.0, "disarm after arming without takeoff [s], <= 0 off", -1.0, 20.0),
     "COM_DL_LOSS_T": _i(10, "data-link loss time threshold [s]", 5, 300),
     "COM_FAIL_ACT_T": _F(5.0, "hold this long before a failsafe action [s]", 0.0, 25.0),
+    "COM_LOW_BAT_ACT": _i(0, "battery failsafe: 0 warn, 2 land, 3 RTL then land", 0, 3),
     "COM_OBL_RC_ACT": _i(0, "offboard-loss action: 0-3, 5 hold, 4 land", 0, 7),
     "COM_OF_LOSS_T": _F(1.0, "offboard setpoint timeout [s]", 0.0, 60.0),
     "COM_RC_IN_MODE": _i(3, "manual control input: 0 RC, 1 joystick, 2-3 either, 4 none", 0, 4),

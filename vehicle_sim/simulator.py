@@ -169,6 +169,10 @@ class Simulator:
         self._commander.mission_reached = []
         return reached
 
+    def on_gcs_heartbeat(self) -> None:
+        """A ground station's heartbeat arrived now (watched for NAV_DLL_ACT)."""
+        self._commander.failsafes.gcs_heartbeat(self.t_s)
+
     def reposition(self, target_ned_m: tuple[float, float, float]) -> CommandResult:
         """Fly to ``target_ned_m`` (NaN components keep the current ones) and hold there, as
         PX4 does for MAV_CMD_DO_REPOSITION; needs the vehicle flying."""
@@ -338,7 +342,9 @@ class Simulator:
     def _update_commander(self) -> None:
         x = self._plant.x
         contact = self._plant.aux[ph.AUX_CONTACT] > 0.5
-        self._commander.update(self.t_s, x[ph.POS : ph.POS + 3], fc.yaw_of(x), contact)
+        self._commander.update(
+            self.t_s, x[ph.POS : ph.POS + 3], fc.yaw_of(x), contact, 1.0 - float(x[ph.DISCHARGE])
+        )
         self._sync_mode()
 
     def _sync_mode(self) -> None:

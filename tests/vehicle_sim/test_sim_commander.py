@@ -108,6 +108,7 @@ def test_failsafe_after_com_of_loss_t_without_setpoints(action, mode):
     sim = hovering(settle_s=1.0)
     sim.set_param("COM_OBL_RC_ACT", action)
     sim.set_param("COM_OF_LOSS_T", 0.5)
+    sim.set_param("COM_FAIL_ACT_T", 0.0)  # act at once (the hold-first delay: next test)
     fly(sim, (1.0, 0.0, 0.0), 2.0)
     t_last = sim.state.t_s - 0.05
     t = run_until(sim, lambda s: s.mode is not FlightMode.OFFBOARD, 2.0, dt_s=0.002)
@@ -176,3 +177,67 @@ def test_reposition_flies_to_the_point_and_holds_there():
     assert -state.pos_ned_m[2] == pytest.approx(altitude_m, abs=0.2)
     with pytest.raises(ValueError, match="finite or NaN"):
         sim.reposition((float("inf"), 0.0, 0.0))
+
+
+def test_a_failsafe_holds_for_com_fail_act_t_then_acts_unless_the_pilot_takes_over():
+    sim = hovering(settle_s=1.0)
+    sim.set_param("COM_OBL_RC_ACT", 4)  # land
+    sim.set_param("COM_FAIL_ACT_T", 3.0)
+    t_lost = run_until(sim, lambda s: s.mode is not FlightMode.OFFBOARD, 3.0)
+    assert sim.state.mode is FlightMode.HOLD
+    t_land = run_until(sim, lambda s: s.mode is FlightMode.LAND, 5.0)
+    assert t_land - t_lost == pytest.approx(3.0, abs=0.05)
+    assert any("landing in 3 s" in text for _, text in sim.drain_events())
+
+    sim = hovering(settle_s=1.0)
+    sim.set_param("COM_OBL_RC_ACT", 4)
+    run_until(sim, lambda s: s.mode is not FlightMode.OFFBOARD, 3.0)
+    assert sim.set_mode(FlightMode.POSCTL).accepted  # the pilot takes over within the delay
+    sim.step(8.0)
+    assert sim.state.mode is FlightMode.POSCTL and sim.state.armed
+
+
+@pytest.mark.parametrize(("action", "mode"), [(2, FlightMode.RTL), (3, FlightMode.LAND)])
+def test_data_link_loss_runs_nav_dll_act_after_com_dl_loss_t(action, mode):
+    sim = hovering(settle_s=1.0)
+    sim.set_param("NAV_DLL_ACT", action)
+    sim.set_param("COM_DL_LOSS_T", 5)
+    sim.set_param("COM_FAIL_ACT_T", 0.0)
+    sim.set_param("RTL_RETURN_ALT", 4.0)
+    sim.set_mode(FlightMode.HOLD)
+    t0 = sim.state.t_s
+    for _ in range(20):  # a ground station heartbeat every 0.5 s, then silence
+        sim.on_gcs_heartbeat()
+        sim.step(0.5)
+    t_last = sim.state.t_s - 0.5
+    t_act = run_until(sim, lambda s: s.mode is mode, 10.0)
+    assert t_act - t_last == pytest.approx(5.0, abs=0.1) and t_act > t0 + 10.0
+    assert any("data link lost" in text for _, text in sim.drain_events())
+
+
+def test_no_data_link_failsafe_without_nav_dll_act_or_without_a_ground_station():
+    sim = hovering(settle_s=1.0)
+    sim.set_mode(FlightMode.HOLD)
+    sim.on_gcs_heartbeat()
+    sim.step(30.0)  # NAV_DLL_ACT 0 (PX4's default): disabled
+    assert sim.state.mode is FlightMode.HOLD
+
+
+def test_battery_warns_when_low_and_returns_when_critical_with_com_low_bat_act_3():
+    effects = {"battery_sag": {"full_flight_time_s": 60.0, "max_thrust_loss": 0.1}}
+    sim = hovering(effects=effects, settle_s=1.0)
+    sim.set_param("COM_LOW_BAT_ACT", 3)
+    sim.set_param("COM_FAIL_ACT_T", 0.0)
+    sim.set_param("RTL_RETURN_ALT", 4.0)
+    sim.set_mode(FlightMode.HOLD)
+    texts: list[str] = []
+    for _ in range(120):
+        sim.step(0.5)
+        texts += [text for _, text in sim.drain_events()]
+        if sim.state.mode is FlightMode.RTL:
+            break
+    assert sim.state.mode is FlightMode.RTL
+    low = next(i for i, t in enumerate(texts) if t.startswith("Battery low"))
+    critical = next(i for i, t in enumerate(texts) if t.startswith("Battery critical"))
+    assert low < critical
+    assert any(t.startswith("Failsafe: battery critical, returning") for t in texts)

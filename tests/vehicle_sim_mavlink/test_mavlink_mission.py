@@ -117,3 +117,23 @@ def test_auto_mission_flies_the_items_reports_progress_and_returns(endpoint, cli
     assert float(np.hypot(*endpoint.state.pos_ned_m[:2])) < 0.8
     current = client.recv("MISSION_CURRENT", 3.0)
     assert current is not None and current.mission_state == mavlink2.MISSION_STATE_COMPLETE
+
+
+@pytest.mark.slow
+def test_a_silent_ground_station_triggers_nav_dll_act(endpoint, client):
+    assert client.set_int_param("NAV_DLL_ACT", 3) == 3  # land
+    assert client.set_int_param("COM_DL_LOSS_T", 5) == 5
+    assert client.set_param("COM_FAIL_ACT_T", 0.0) is not None
+    assert client.command(400, 1).result == MAV_RESULT_ACCEPTED
+    assert client.command(22, *[math.nan] * 7).result == MAV_RESULT_ACCEPTED
+    wait_until(
+        lambda: endpoint.state.mode == FlightMode.HOLD and -endpoint.state.pos_ned_m[2] > 2.3,
+        30.0,
+        "takeoff",
+    )
+    with client.send_lock:
+        client.mav.heartbeat_send(mavlink2.MAV_TYPE_GCS, 8, 0, 0, 0)
+    # The client now stays silent: after COM_DL_LOSS_T of simulated time the vehicle lands.
+    text = client.recv("STATUSTEXT", 15.0, lambda m: "data link lost" in m.text)
+    assert text is not None
+    wait_until(lambda: endpoint.state.mode == FlightMode.LAND, 5.0, "LAND")

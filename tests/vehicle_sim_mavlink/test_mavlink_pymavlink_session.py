@@ -40,6 +40,7 @@ def test_offboard_needs_a_stream_and_loss_triggers_the_configured_failsafe(
     endpoint, client, action, custom_mode, mode
 ):
     assert client.set_int_param("COM_OBL_RC_ACT", int(action)) == action
+    assert client.set_param("COM_FAIL_ACT_T", 0.0) is not None  # act at once
     take_off(client, endpoint)
 
     refused = client.command(CMD_SET_MODE, 129, 6, 0)

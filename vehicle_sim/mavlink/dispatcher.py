@@ -113,6 +113,7 @@ class Dispatcher:
         }
         # Services with their own addressing rules (a PING to 0 is a request to all).
         self._services: dict[str, Callable[..., list[Outgoing]]] = {
+            "HEARTBEAT": self._heartbeat,
             "PING": self._ping,
             "TIMESYNC": self._timesync,
         }
@@ -244,6 +245,12 @@ class Dispatcher:
         return self._param_reply(reply, broadcast=True)
 
     # -- small services -----------------------------------------------------------------------
+
+    def _heartbeat(self, msg, _scheduler, _now_ns) -> list[Outgoing]:
+        """A ground station's heartbeat keeps the data link alive (NAV_DLL_ACT)."""
+        if msg.type == mavlink2.MAV_TYPE_GCS:
+            self._sim.on_gcs_heartbeat()
+        return []
 
     def _ping(self, msg, _scheduler, _now_ns) -> list[Outgoing]:
         reply = services.ping_reply(msg)

@@ -1,0 +1,91 @@
+"""PX4-like failsafe conditions and their actions (pure, on simulated time).
+
+Conditions ([PX4-params]): offboard setpoints lost for COM_OF_LOSS_T (action COM_OBL_RC_ACT),
+no ground-station heartbeat for COM_DL_LOSS_T while NAV_DLL_ACT is set (data-link loss), and
+battery below BAT_LOW_THR (a warning), BAT_CRIT_THR and BAT_EMERGEN_THR (action
+COM_LOW_BAT_ACT). As in PX4's failsafe framework (v1.14+), the vehicle first holds for
+COM_FAIL_ACT_T so a pilot can take over, then the action runs (at once when that delay is 0);
+a mode change by the pilot in the meantime cancels it. Without RC in the simulator, PX4's
+position/altitude/manual fallbacks are a hold.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+from vehicle_sim.params import Px4Params
+
+FailsafeAction = Literal["hold", "rtl", "land", "disarm"]
+
+# COM_OBL_RC_ACT: 0 position, 1 altitude, 2 manual, 3 return, 4 land, 5 hold, 6 terminate,
+# 7 disarm.
+OFFBOARD_LOSS_ACTIONS: dict[int, FailsafeAction] = {
+    0: "hold", 1: "hold", 2: "hold", 3: "rtl", 4: "land", 5: "hold", 6: "disarm", 7: "disarm",
+}  # fmt: skip
+# NAV_DLL_ACT: 0 disabled, 1 hold, 2 return, 3 land, 5 terminate, 6 disarm.
+DATALINK_LOSS_ACTIONS: dict[int, FailsafeAction] = {
+    1: "hold", 2: "rtl", 3: "land", 5: "disarm", 6: "disarm",
+}  # fmt: skip
+
+
+@dataclass(frozen=True)
+class Trigger:
+    """A failsafe that fired: what to do and why (for the STATUSTEXT)."""
+
+    action: FailsafeAction
+    reason: str
+
+
+class FailsafeMonitor:
+    """Watches the data link and the battery; the commander watches offboard setpoints."""
+
+    def __init__(self, params: Px4Params) -> None:
+        self._params = params
+        self._last_gcs_s: float | None = None
+        self._link_lost = False
+        self._battery_level = 0  # 0 ok, 1 low, 2 critical, 3 emergency
+
+    def gcs_heartbeat(self, t_s: float) -> None:
+        """A ground-station heartbeat arrived (the data link is alive)."""
+        self._last_gcs_s = t_s
+        self._link_lost = False
+
+    def offboard_lost(self) -> Trigger:
+        action = int(self._params.get("COM_OBL_RC_ACT"))
+        return Trigger(OFFBOARD_LOSS_ACTIONS.get(action, "hold"), "offboard setpoints lost")
+
+    def check(
+        self, t_s: float, flying: bool, battery_remaining: float
+    ) -> tuple[list[str], Trigger | None]:
+        """Warnings to announce and the failsafe that fires now (None if none)."""
+        warnings: list[str] = []
+        trigger = None
+        p = self._params.get
+        action = int(p("NAV_DLL_ACT"))
+        silent_s = None if self._last_gcs_s is None else t_s - self._last_gcs_s
+        if (
+            flying
+            and action in DATALINK_LOSS_ACTIONS
+            and not self._link_lost
+            and (silent_s is not None and silent_s > p("COM_DL_LOSS_T"))
+        ):
+            self._link_lost = True
+            trigger = Trigger(DATALINK_LOSS_ACTIONS[action], "data link lost")
+        thresholds = (p("BAT_LOW_THR"), p("BAT_CRIT_THR"), p("BAT_EMERGEN_THR"))
+        level = sum(battery_remaining < thr for thr in thresholds)
+        if level > self._battery_level:
+            self._battery_level = level
+            name = ("", "low", "critical", "emergency")[level]
+            warnings.append(f"Battery {name}: {battery_remaining:.0%} remaining")
+            bat_action = int(p("COM_LOW_BAT_ACT"))
+            if flying and trigger is None and level >= 2 and bat_action in (2, 3):
+                act: FailsafeAction = "rtl" if bat_action == 3 and level == 2 else "land"
+                trigger = Trigger(act, f"battery {name}")
+        return warnings, trigger
+
+    def next_check_s(self, t_s: float) -> float | None:
+        """When the data link would count as lost, if it is being watched."""
+        if self._last_gcs_s is None or self._link_lost or int(self._params.get("NAV_DLL_ACT")) == 0:
+            return None
+        return max(t_s, self._last_gcs_s + self._params.get("COM_DL_LOSS_T"))
