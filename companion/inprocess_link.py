@@ -94,6 +94,12 @@ class InProcessLink:
     def start_offboard(self) -> CommandOutcome:
         return _outcome(self._sim.set_mode(FlightMode.OFFBOARD))
 
+    def read_param(self, name: str) -> float | None:
+        try:
+            return float(self._sim.get_param(name))
+        except ValueError:
+            return None
+
     def stop_streaming(self) -> None:
         """Nothing streams in process: the simulator holds no periodic sender."""
 

@@ -168,6 +168,11 @@ class Link(Protocol):
         """Switch to OFFBOARD; the caller must have streamed setpoints first."""
         ...
 
+    def read_param(self, name: str) -> float | None:
+        """The autopilot's value of PX4 parameter ``name``, or None when it does not answer
+        (an autopilot without it, or a link that cannot ask)."""
+        ...
+
     def stop_streaming(self) -> None:
         """Stop sending setpoints and command nothing: the vehicle is handed over to whoever
         switched it out of OFFBOARD (a pilot or a ground station)."""

@@ -30,6 +30,7 @@ from mavsdk import (
 )
 from mavsdk.plugins.action import Action, ActionError
 from mavsdk.plugins.offboard import Offboard, OffboardError, VelocityNedYaw
+from mavsdk.plugins.param import Param, ParamError
 from mavsdk.plugins.telemetry import Telemetry, TelemetryError
 
 from companion.clocks import WallClock
@@ -65,6 +66,7 @@ class MavsdkLink:
         self._action: Action | None = None
         self._telemetry: Telemetry | None = None
         self._offboard: Offboard | None = None
+        self._param: Param | None = None
         self._system: System | None = None
         self._yaw_target_rad: float | None = None
         self._yaw_updated_s = 0.0
@@ -94,6 +96,7 @@ class MavsdkLink:
         self._action = Action(system)
         self._telemetry = Telemetry(system)
         self._offboard = Offboard(system)
+        self._param = Param(system)
         for set_rate in (
             self._telemetry.set_rate_position_velocity_ned,
             self._telemetry.set_rate_attitude_quaternion,
@@ -158,6 +161,15 @@ class MavsdkLink:
     def start_offboard(self) -> CommandOutcome:
         return _call(self._require(self._offboard).start)
 
+    def read_param(self, name: str) -> float | None:
+        param = self._require(self._param)
+        for getter in (param.get_param_float, param.get_param_int):
+            try:
+                return float(getter(name))
+            except (ParamError, MavsdkError):
+                continue
+        return None
+
     def stop_streaming(self) -> None:
         """MAVSDK's offboard plugin re-sends the last setpoint only while the vehicle reports
         OFFBOARD (it stops by itself on a heartbeat in another mode); ``offboard.stop()``
@@ -182,7 +194,7 @@ class MavsdkLink:
         if self._mavsdk is not None:
             self._mavsdk.destroy()
             self._mavsdk = None
-            self._system = self._action = self._telemetry = self._offboard = None
+            self._system = self._action = self._telemetry = self._offboard = self._param = None
 
     def _require(self, plugin: _Plugin | None) -> _Plugin:
         if plugin is None or self._mavsdk is None:

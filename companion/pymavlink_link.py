@@ -10,6 +10,7 @@ Wire units (mm, cm/s, degE7, mV) never leave this module.
 from __future__ import annotations
 
 import math
+import struct
 from collections.abc import Callable, Mapping
 
 import numpy as np
@@ -177,6 +178,18 @@ class PymavlinkLink:
     def start_offboard(self) -> CommandOutcome:
         return self._set_mode("OFFBOARD")
 
+    def read_param(self, name: str) -> float | None:
+        mav = self._require_open()
+        target = self._require_target()
+        for _ in range(self._command_attempts):
+            self._params.pop(name, None)
+            mav.mav.param_request_read_send(*target, name.encode(), -1)
+            deadline_s = self._clock.now_s() + self._command_timeout_s
+            self.service_until(deadline_s, stop=lambda: name in self._params)
+            if name in self._params:
+                return self._params[name]
+        return None
+
     def stop_streaming(self) -> None:
         self._setpoint = None
 
@@ -292,7 +305,10 @@ class PymavlinkLink:
 
     def _on_param_value(self, msg: MAVLink_message) -> None:
         name = msg.param_id.decode() if isinstance(msg.param_id, bytes) else msg.param_id
-        self._params[name.rstrip("\x00")] = float(msg.param_value)
+        value = float(msg.param_value)
+        if msg.param_type == _MAV.MAV_PARAM_TYPE_INT32:  # PX4 encodes integers bytewise
+            value = float(struct.unpack("<i", struct.pack("<f", value))[0])
+        self._params[name.rstrip("\x00")] = value
 
     def _on_status_text(self, msg: MAVLink_message) -> None:
         text = msg.text.decode() if isinstance(msg.text, bytes) else msg.text

@@ -28,7 +28,13 @@ from companion.waiting import command_until_accepted, describe, wait_for
 from planners.reference import Planner, Reference
 
 FlightStatus = Literal[
-    "completed", "goal_not_reached", "failed", "interrupted", "terminated", "handed_over"
+    "completed",
+    "goal_not_reached",
+    "failed",
+    "interrupted",
+    "terminated",
+    "handed_over",
+    "refused",
 ]
 
 
@@ -80,7 +86,8 @@ class FlightOutcome:
             until the deadline, landed), "failed" (a phase failed; safe stop done),
             "interrupted" (Ctrl-C; safe stop done), "terminated" (SIGTERM; safe stop done) or
             "handed_over" (someone else switched the vehicle out of OFFBOARD; the companion
-            stopped streaming and commanded nothing).
+            stopped streaming and commanded nothing) or "refused" (the mission asks more than
+            the vehicle's PX4 limits allow; nothing was commanded).
         detail: one line saying what happened.
         goal_error_m: distance to the goal when following ended [m], None if never followed.
         landed_error_m: horizontal distance from the goal after landing [m], or None.
@@ -117,6 +124,10 @@ def fly_mission(
         link.connect(config.connect_timeout_s)
         progress(f"connected over {link.name}; {describe(link.read_state())}")
         wait_for(link, lambda s: s.is_finite(), config.connect_timeout_s, "finite telemetry")
+        problem = mission_beyond_vehicle_limits(link, mission, config)
+        if problem:
+            progress(f"refused: {problem}")
+            return FlightOutcome("refused", problem, None, None, False, 0, 0)
         command_until_accepted(link, link.arm, config.arm_timeout_s, "arm")
         airborne = True
         progress("armed; taking off")
@@ -181,6 +192,28 @@ def fly_mission(
         ticks=counters.ticks,
         deadline_misses=counters.deadline_misses,
     )
+
+
+def mission_beyond_vehicle_limits(link: Link, mission: Mission, config: RunnerConfig) -> str:
+    """One line naming the PX4 limit the mission or the runner would exceed, "" if none.
+
+    PX4 clips setpoints to MPC_XY_VEL_MAX and MPC_Z_VEL_MAX_UP/DN ([PX4-params]): a plan that
+    counts on more would be flown slower than planned, so it is refused before take-off.
+    Limits the autopilot does not report are not checked.
+    """
+    asks = (
+        ("MPC_XY_VEL_MAX", mission.horizontal_command_limit_mps, "the mission's command limit"),
+        ("MPC_Z_VEL_MAX_UP", config.vertical_limit_up_mps, "the companion's climb limit"),
+        ("MPC_Z_VEL_MAX_DN", config.vertical_limit_down_mps, "the companion's descent limit"),
+    )
+    for param, wanted_mps, what in asks:
+        limit = link.read_param(param)
+        if limit is not None and wanted_mps > limit + 1e-9:
+            return (
+                f"{what} {wanted_mps:g} m/s exceeds the vehicle's {param} {limit:g} m/s; "
+                "lower it in the mission or raise the parameter"
+            )
+    return ""
 
 
 def _start_offboard(

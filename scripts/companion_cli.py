@@ -6,7 +6,8 @@
 
 Progress goes to stderr. Exit codes: 0 mission completed (goal reached, landed, disarmed);
 1 flight failed or goal not reached (the vehicle was brought to HOLD and LAND); 2 bad input
-(mission file, option); 3 handed over: someone else (a pilot, a ground station) switched the
+(mission file, option, or a mission beyond the vehicle's PX4 limits, found before take-off); 3
+handed over: someone else (a pilot, a ground station) switched the
 vehicle out of OFFBOARD, so the companion stopped streaming and commanded nothing; 130
 interrupted by Ctrl-C, 143 terminated by SIGTERM (in both the vehicle was sent a zero velocity,
 HOLD and LAND, and the companion waited for it to disarm).
@@ -112,6 +113,9 @@ def main(argv: list[str] | None = None) -> int:
     if outcome.status == "handed_over":
         print(f"companion: {outcome.detail}", file=sys.stderr, flush=True)
         return EXIT_HANDED_OVER
+    if outcome.status == "refused":
+        print(f"companion: error: {outcome.detail}", file=sys.stderr, flush=True)
+        return EXIT_BAD_INPUT
     _progress(
         f"{outcome.status}: {outcome.detail}; landed {_metres(outcome.landed_error_m)} from the "
         f"goal; {outcome.deadline_misses} deadline misses in {outcome.ticks} steps"

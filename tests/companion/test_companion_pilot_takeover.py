@@ -180,3 +180,29 @@ def test_pilot_takeover_over_mavlink_no_command_after_the_mode_change(kind: str,
         assert final.pos_ned_m[2] > pos_at_return[2] - 0.05  # descending (NED: down is +)
     else:
         assert float(np.linalg.norm(final.pos_ned_m[:2] - pos_at_return[:2])) < 1.0
+
+
+@pytest.mark.parametrize(
+    ("param", "value", "named"),
+    [("MPC_XY_VEL_MAX", 2.0, "command limit"), ("MPC_Z_VEL_MAX_UP", 1.0, "climb limit")],
+)
+def test_a_mission_beyond_the_vehicles_px4_limits_is_refused_before_take_off(
+    param: str, value: float, named: str
+) -> None:
+    sim = Simulator(load_sim_config("iris"), seed=5)
+    sim.set_param(param, value)
+    link = CountingInProcessLink(sim)
+    link.counting = True
+    mission = load_mission(LINE)
+    outcome = fly_mission(
+        link,
+        make_planner("pd", 3.0),
+        reference_of(mission),
+        mission,
+        RunnerConfig(),
+        lambda _tick: None,
+        lambda _m: None,
+    )
+    assert outcome.status == "refused"
+    assert named in outcome.detail and param in outcome.detail and "\n" not in outcome.detail
+    assert link.sent_after == [] and not sim.state.armed
