@@ -82,6 +82,12 @@ def run_companion(config: CompanionConfig, progress: Callable[[str], None]) -> C
     """
     try:
         mission = load_mission(config.mission_path)
+        if mission.obstacles_world is not None:
+            raise CompanionInputError(
+                f"{config.mission_path}: obstacles_world is set, but no companion planner honours "
+                "obstacles yet and it would fly through them; refusing (remove the key to fly "
+                "without obstacles)"
+            )
         planner = make_planner(
             config.planner,
             mission.horizontal_command_limit_mps,

@@ -9,6 +9,8 @@ A mission file looks like this (units in the names; NED, so altitude is -down)::
                                # for a planner that leads a lagging vehicle
     repeats = 1                # how many times the reference is flown (optional, default 1)
     goal_tolerance_m = 0.3     # "arrived" radius at the goal (optional, default 0.3)
+    endurance_s = 900.0        # optional: the vehicle's hover time on a full battery [s];
+                               # a mission longer than it allows is refused before take-off
     obstacles_world = "w.toml" # optional obstacle world, relative to the mission file
 
     [reference]
@@ -32,6 +34,7 @@ REFERENCE_KINDS: tuple[str, ...] = get_args(ReferenceKind)
 
 _TOP_KEYS = {
     "name", "altitude_m", "speed_limit_mps", "command_limit_mps", "repeats", "goal_tolerance_m",
+    "endurance_s",
     "obstacles_world", "reference",
 }  # fmt: skip
 _REFERENCE_KEYS = {"kind", "points_ned_m"}
@@ -60,6 +63,7 @@ class Mission:
             None (the reference speed is the limit). A vehicle lags its velocity command, so a
             planner commanding exactly the reference speed falls behind a reference moving at
             it; the headroom lets a planner that knows the lag (a learned model) lead.
+        endurance_s: the vehicle's hover time on a full battery [s], if the user gives it.
     """
 
     name: str
@@ -71,6 +75,7 @@ class Mission:
     obstacles_world: Path | None = None
     repeats: int = 1
     command_limit_mps: float | None = None
+    endurance_s: float | None = None
 
     @property
     def horizontal_command_limit_mps(self) -> float:
@@ -138,6 +143,11 @@ def parse_mission(text: str, source: Path | str = "<mission>") -> Mission:
         obstacles_world=None if obstacles is None else base / obstacles,
         repeats=repeats,
         command_limit_mps=command_limit,
+        endurance_s=(
+            None
+            if raw.get("endurance_s") is None
+            else _positive(raw["endurance_s"], where, "endurance_s")
+        ),
     )
 
 

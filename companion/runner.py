@@ -124,7 +124,7 @@ def fly_mission(
         link.connect(config.connect_timeout_s)
         progress(f"connected over {link.name}; {describe(link.read_state())}")
         wait_for(link, lambda s: s.is_finite(), config.connect_timeout_s, "finite telemetry")
-        problem = mission_beyond_vehicle_limits(link, mission, config)
+        problem = mission_beyond_vehicle_limits(link, mission, config, reference.duration_s)
         if problem:
             progress(f"refused: {problem}")
             return FlightOutcome("refused", problem, None, None, False, 0, 0)
@@ -194,13 +194,32 @@ def fly_mission(
     )
 
 
-def mission_beyond_vehicle_limits(link: Link, mission: Mission, config: RunnerConfig) -> str:
-    """One line naming the PX4 limit the mission or the runner would exceed, "" if none.
+def mission_beyond_vehicle_limits(
+    link: Link, mission: Mission, config: RunnerConfig, reference_s: float
+) -> str:
+    """One line naming the limit the mission or the runner would exceed, "" if none.
 
     PX4 clips setpoints to MPC_XY_VEL_MAX and MPC_Z_VEL_MAX_UP/DN ([PX4-params]): a plan that
-    counts on more would be flown slower than planned, so it is refused before take-off.
-    Limits the autopilot does not report are not checked.
+    counts on more would be flown slower than planned, so it is refused before take-off; so
+    is a flight (climb, reference, settling, descent) longer than the mission's ``endurance_s``
+    leaves before the vehicle's BAT_LOW_THR reserve. Limits the autopilot does not report are
+    not checked.
     """
+    if mission.endurance_s is not None:
+        reserve = link.read_param("BAT_LOW_THR") or 0.0
+        usable_s = mission.endurance_s * (1.0 - reserve)
+        flight_s = (
+            reference_s
+            + config.settle_timeout_s
+            + mission.altitude_m / config.vertical_limit_up_mps
+            + mission.altitude_m / config.vertical_limit_down_mps
+        )
+        if flight_s > usable_s:
+            return (
+                f"the mission needs about {flight_s:.0f} s of flight but endurance_s "
+                f"{mission.endurance_s:g} s leaves {usable_s:.0f} s above the BAT_LOW_THR "
+                f"reserve {reserve:.0%}; shorten the mission or fly a fuller battery"
+            )
     asks = (
         ("MPC_XY_VEL_MAX", mission.horizontal_command_limit_mps, "the mission's command limit"),
         ("MPC_Z_VEL_MAX_UP", config.vertical_limit_up_mps, "the companion's climb limit"),

@@ -83,3 +83,15 @@ def test_bad_missions_fail_with_one_line(text: str, match: str) -> None:
 def test_missing_file_is_one_line(tmp_path: Path) -> None:
     with pytest.raises(MissionError, match="no such mission file"):
         load_mission(tmp_path / "nope.toml")
+
+
+def test_a_mission_with_obstacles_is_refused_before_take_off(tmp_path: Path) -> None:
+    from companion.app import CompanionConfig, CompanionInputError, run_companion
+
+    f = tmp_path / "m.toml"
+    f.write_text('obstacles_world = "w.toml"\n' + GOOD)
+    log = tmp_path / "f.csv"
+    config = CompanionConfig(mission_path=f, link="inprocess", log_path=log)
+    with pytest.raises(CompanionInputError, match="would fly through them") as info:
+        run_companion(config, lambda _m: None)
+    assert "\n" not in str(info.value) and not log.exists()

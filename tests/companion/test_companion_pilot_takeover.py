@@ -206,3 +206,22 @@ def test_a_mission_beyond_the_vehicles_px4_limits_is_refused_before_take_off(
     assert outcome.status == "refused"
     assert named in outcome.detail and param in outcome.detail and "\n" not in outcome.detail
     assert link.sent_after == [] and not sim.state.armed
+
+
+def test_a_mission_longer_than_the_endurance_is_refused_before_take_off(tmp_path) -> None:
+    short = tmp_path / "short_battery.toml"
+    short.write_text(LINE.read_text().replace("[reference]", "endurance_s = 20.0\n\n[reference]"))
+    sim = Simulator(load_sim_config("iris"), seed=5)
+    link = CountingInProcessLink(sim)
+    mission = load_mission(short)
+    outcome = fly_mission(
+        link,
+        make_planner("pd", 3.0),
+        reference_of(mission),
+        mission,
+        RunnerConfig(),
+        lambda _tick: None,
+        lambda _m: None,
+    )
+    assert outcome.status == "refused" and "endurance_s 20 s" in outcome.detail
+    assert "BAT_LOW_THR" in outcome.detail and not sim.state.armed
