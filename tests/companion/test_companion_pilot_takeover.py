@@ -182,6 +182,18 @@ def test_pilot_takeover_over_mavlink_no_command_after_the_mode_change(kind: str,
         assert float(np.linalg.norm(final.pos_ned_m[:2] - pos_at_return[:2])) < 1.0
 
 
+def fly_quietly(link, mission) -> FlightOutcome:
+    return fly_mission(
+        link,
+        make_planner("pd", 3.0),
+        reference_of(mission),
+        mission,
+        RunnerConfig(),
+        lambda _tick: None,
+        lambda _m: None,
+    )
+
+
 @pytest.mark.parametrize(
     ("param", "value", "named"),
     [("MPC_XY_VEL_MAX", 2.0, "command limit"), ("MPC_Z_VEL_MAX_UP", 1.0, "climb limit")],
@@ -194,15 +206,7 @@ def test_a_mission_beyond_the_vehicles_px4_limits_is_refused_before_take_off(
     link = CountingInProcessLink(sim)
     link.counting = True
     mission = load_mission(LINE)
-    outcome = fly_mission(
-        link,
-        make_planner("pd", 3.0),
-        reference_of(mission),
-        mission,
-        RunnerConfig(),
-        lambda _tick: None,
-        lambda _m: None,
-    )
+    outcome = fly_quietly(link, mission)
     assert outcome.status == "refused"
     assert named in outcome.detail and param in outcome.detail and "\n" not in outcome.detail
     assert link.sent_after == [] and not sim.state.armed
@@ -214,14 +218,6 @@ def test_a_mission_longer_than_the_endurance_is_refused_before_take_off(tmp_path
     sim = Simulator(load_sim_config("iris"), seed=5)
     link = CountingInProcessLink(sim)
     mission = load_mission(short)
-    outcome = fly_mission(
-        link,
-        make_planner("pd", 3.0),
-        reference_of(mission),
-        mission,
-        RunnerConfig(),
-        lambda _tick: None,
-        lambda _m: None,
-    )
+    outcome = fly_quietly(link, mission)
     assert outcome.status == "refused" and "endurance_s 20 s" in outcome.detail
     assert "BAT_LOW_THR" in outcome.detail and not sim.state.armed
