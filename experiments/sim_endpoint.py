@@ -16,7 +16,9 @@ from pathlib import Path
 from types import TracebackType
 
 _STOP_TIMEOUT_S = 10.0
-_STARTUP_S = 0.5
+_READY_TIMEOUT_S = 180.0  # a fresh checkout compiles the numba kernels first; a busy CPU slows it
+_READY_LINE = b"Ctrl-C to stop"  # what vehicle-sim prints once its endpoint is running
+_POLL_S = 0.1
 
 
 class EndpointError(RuntimeError):
@@ -42,7 +44,7 @@ class SimEndpoint:
 
     Attributes:
         mavsdk_url: where the companion's MAVSDK link listens (udpin://127.0.0.1:PORT).
-        log_path: the endpoint's stderr, kept for diagnosis.
+        log_path: the endpoint's output (announcement and errors), kept for diagnosis.
     """
 
     def __init__(self, vehicle: str, seed: int, log_path: Path) -> None:
@@ -57,13 +59,22 @@ class SimEndpoint:
         self._process: subprocess.Popen[bytes] | None = None
 
     def __enter__(self) -> SimEndpoint:
+        """Start it and wait until it serves (its announcement), so a companion connecting next
+        finds it however long the start took."""
         self.log_path.parent.mkdir(parents=True, exist_ok=True)
-        with self.log_path.open("wb") as err:
-            self._process = subprocess.Popen(self._argv, stdout=subprocess.DEVNULL, stderr=err)
-        time.sleep(_STARTUP_S)
-        code = self._process.poll()
-        if code is not None:
-            raise EndpointError(f"vehicle-sim exited at once with code {code}; see {self.log_path}")
+        with self.log_path.open("wb") as out:
+            self._process = subprocess.Popen(self._argv, stdout=out, stderr=subprocess.STDOUT)
+        deadline = time.monotonic() + _READY_TIMEOUT_S
+        while _READY_LINE not in self.log_path.read_bytes():
+            code = self._process.poll()
+            if code is not None:
+                raise EndpointError(f"vehicle-sim exited with code {code}; see {self.log_path}")
+            if time.monotonic() > deadline:
+                self.stop()
+                raise EndpointError(
+                    f"vehicle-sim not serving within {_READY_TIMEOUT_S:g} s; see {self.log_path}"
+                )
+            time.sleep(_POLL_S)
         return self
 
     def __exit__(
