@@ -38,6 +38,17 @@ FlightStatus = Literal[
 ]
 
 
+_MODES_OF_THE_CLIMB = ("TAKEOFF", "HOLD")  # PX4 climbs in AUTO.TAKEOFF, then loiters
+
+
+class _HandedOver(Exception):
+    """Someone else chose another mode while the companion was still climbing."""
+
+    def __init__(self, mode: str, t_s: float) -> None:
+        super().__init__(mode)
+        self.mode, self.t_s = mode, t_s
+
+
 class Terminated(KeyboardInterrupt):
     """The process was asked to stop (SIGTERM): handled like Ctrl-C, reported as SIGTERM."""
 
@@ -134,11 +145,15 @@ def fly_mission(
         command_until_accepted(
             link, lambda: link.takeoff(mission.altitude_m), config.arm_timeout_s, "takeoff"
         )
+        t_climb_s = link.clock.now_s()
+
+        def climbed(s: LinkState) -> bool:
+            if s.mode not in _MODES_OF_THE_CLIMB:  # a pilot took over during the climb
+                raise _HandedOver(s.mode, link.clock.now_s() - t_climb_s)
+            return s.altitude_m >= mission.altitude_m - 0.25 and s.landed != LandedPhase.TAKEOFF
+
         hover = wait_for(
-            link,
-            lambda s: s.altitude_m >= mission.altitude_m - 0.25 and s.landed != LandedPhase.TAKEOFF,
-            config.takeoff_timeout_s,
-            f"takeoff to {mission.altitude_m:g} m",
+            link, climbed, config.takeoff_timeout_s, f"takeoff to {mission.altitude_m:g} m"
         )
         progress(f"airborne at {hover.altitude_m:.2f} m; streaming setpoints")
         _start_offboard(link, config, hover, counters, on_tick)
@@ -162,6 +177,11 @@ def fly_mission(
             progress("landing")
             wait_for(link, lambda s: not s.armed, config.land_timeout_s, "landing and disarm")
             airborne = False
+    except _HandedOver as exc:
+        airborne = False  # the pilot's vehicle now: no safe stop, no command
+        status = "handed_over"
+        detail = f"pilot took control in {exc.mode} at t={exc.t_s:.1f} s; mission abandoned"
+        progress(f"{detail}; nothing more sent")
     except Terminated:
         status, detail = "terminated", "terminated by SIGTERM"
         progress(f"{detail}: holding and landing")

@@ -88,8 +88,10 @@ def write_bytes_atomic(path: str | Path, data: bytes) -> Path:
 
 @contextmanager
 def atomic_output_dir(path: str | Path) -> Iterator[Path]:
-    """Yield a temporary sibling folder to fill; on success it replaces ``path`` as a whole, on
-    any error it is removed and ``path`` is left as it was."""
+    """Yield a temporary sibling folder to fill. On success a new ``path`` is that folder
+    renamed as a whole; an existing ``path`` gets each output file renamed into it (each one
+    atomic), and nothing else in it is touched: a user's folder never loses a file. On any
+    error the temporary folder is removed and ``path`` is left as it was."""
     path = Path(path)
     try:
         if path.exists() and not path.is_dir():
@@ -100,13 +102,16 @@ def atomic_output_dir(path: str | Path) -> Iterator[Path]:
         raise OutputError(describe_os_error(path, exc)) from None
     try:
         yield tmp
-        old = None
-        if path.exists():
-            old = Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}.old."))
-            os.replace(path, old / "previous")
-        os.replace(tmp, path)
-        if old is not None:
-            shutil.rmtree(old, ignore_errors=True)
+        if path.is_dir():
+            for produced in sorted(tmp.rglob("*")):
+                target = path / produced.relative_to(tmp)
+                if produced.is_dir():
+                    target.mkdir(exist_ok=True)
+                else:
+                    os.replace(produced, target)
+            shutil.rmtree(tmp, ignore_errors=True)
+        else:
+            os.replace(tmp, path)
     except OSError as exc:
         shutil.rmtree(tmp, ignore_errors=True)
         raise OutputError(describe_os_error(path, exc)) from None

@@ -221,3 +221,23 @@ def test_a_mission_longer_than_the_endurance_is_refused_before_take_off(tmp_path
     outcome = fly_quietly(link, mission)
     assert outcome.status == "refused" and "endurance_s 20 s" in outcome.detail
     assert "BAT_LOW_THR" in outcome.detail and not sim.state.armed
+
+
+def test_a_pilot_switch_during_the_climb_is_handed_over_too() -> None:
+    sim = Simulator(load_sim_config("iris"), seed=5)
+    mission = load_mission(LINE)
+
+    class PilotDuringClimb(CountingInProcessLink):
+        def read_state(self):
+            state = super().read_state()
+            if state.mode == "TAKEOFF" and state.altitude_m > 1.0 and not self.counting:
+                assert sim.set_mode(FlightMode.POSCTL).accepted
+                self.counting = True
+                state = super().read_state()
+            return state
+
+    link = PilotDuringClimb(sim)
+    outcome = fly_quietly(link, mission)
+    assert outcome.status == "handed_over", outcome.detail
+    assert outcome.detail.startswith("pilot took control in POSCTL at t=")
+    assert link.sent_after == [] and sim.state.mode is FlightMode.POSCTL

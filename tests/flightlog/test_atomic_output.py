@@ -13,16 +13,19 @@ from flightlog.atomic_output import (
 )
 
 
-def test_a_folder_set_replaces_the_old_one_whole(tmp_path) -> None:
+def test_a_new_folder_set_appears_whole_and_an_existing_folder_loses_nothing(tmp_path) -> None:
     out = tmp_path / "report"
     with atomic_output_dir(out) as tmp:
         (tmp / "a.md").write_text("first")
-        (tmp / "old.png").write_text("x")
+        assert not out.exists()  # nothing visible until the set is complete
+    (out / "users_notes.txt").write_text("mine")
     with atomic_output_dir(out) as tmp:
-        assert not (out / "missing").exists() and (out / "a.md").read_text() == "first"
         (tmp / "a.md").write_text("second")
-    assert sorted(p.name for p in out.iterdir()) == ["a.md"]
-    assert (out / "a.md").read_text() == "second"
+        (tmp / "plots").mkdir()
+        (tmp / "plots" / "p.png").write_text("png")
+    assert sorted(p.name for p in out.iterdir()) == ["a.md", "plots", "users_notes.txt"]
+    assert (out / "a.md").read_text() == "second" and (out / "plots" / "p.png").is_file()
+    assert (out / "users_notes.txt").read_text() == "mine"
     assert [p.name for p in tmp_path.iterdir()] == ["report"]  # no temporary left behind
 
 
