@@ -31,7 +31,7 @@ from planners.solver_output import SolverOutput
 COLD_START_ITERATIONS = 10
 _SLACK_L1 = 1e5
 _SLACK_L2 = 1.0
-_NO_UPPER = 1e9
+_NO_UPPER = 1e4  # [m]
 
 
 def acados_unavailable() -> str:
@@ -80,6 +80,7 @@ class AcadosSolver:
         n_o = f.config.n_obstacles
         self._f, self._nx, self._nu, self._n = f, nx, nu, n
         self.last_solve_s = float("nan")
+        self._healthy = True
         x = ca.SX.sym("x", nx)
         u = ca.SX.sym("u", nu)
         slots = ca.SX.sym("slots", OBSTACLE_SLOT_SIZE * n_o)
@@ -118,15 +119,27 @@ class AcadosSolver:
                 setattr(ocp.constraints, "lh" + suffix, np.zeros(n_o))
                 setattr(ocp.constraints, "uh" + suffix, np.full(n_o, _NO_UPPER))
                 setattr(ocp.constraints, "idxsh" + suffix, np.arange(n_o))
-                for name, value in (("zl", _SLACK_L1), ("zu", 0.0), ("Zl", _SLACK_L2), ("Zu", 0.0)):
+                # The upper bound (far beyond any clearance) is softened too, with the same
+                # weights: a free upper slack would leave the QP's slacks non-unique.
+                for name, value in (
+                    ("zl", _SLACK_L1),
+                    ("zu", _SLACK_L1),
+                    ("Zl", _SLACK_L2),
+                    ("Zu", _SLACK_L2),
+                ):
                     setattr(ocp.cost, name + suffix, np.full(n_o, value))
         opts = ocp.solver_options
-        opts.tf = n * f.config.dt_s
+        # acados weighs each stage cost by its time step; with discrete dynamics the step only
+        # does that, so a unit step keeps the formulation's cost (stage and terminal alike).
+        opts.tf = float(n)
         opts.integrator_type = "DISCRETE"
         opts.nlp_solver_type = "SQP_RTI"
         opts.hessian_approx = "GAUSS_NEWTON"
         opts.qp_solver = "PARTIAL_CONDENSING_HPIPM"
         opts.print_level = 0
+        opts.qp_solver_iter_max = 100
+        opts.qp_solver_cond_N = max(1, n // 4)
+        opts.qp_solver_warm_start = 1
         self._tmp = None
         if build_dir is None:
             self._tmp = tempfile.TemporaryDirectory(prefix="acados_peer_")
@@ -144,6 +157,8 @@ class AcadosSolver:
         f, s, n = self._f, self._solver, self._n
         x_now, x_ref, u_ref, slots = (np.asarray(a) for a in f.split_parameters(ca.DM(p)))
         states, inputs = f.split_w(np.asarray(w0, dtype=float))
+        if cold_start or not self._healthy:
+            s.reset()  # a failed QP leaves NaNs in acados' memory
         p_stage = np.ravel(slots, order="F")  # slot j is column j: 7 numbers each
         for k in range(n):
             s.set(k, "yref", np.concatenate([x_ref[:, k], u_ref[:, k]]))
@@ -159,10 +174,11 @@ class AcadosSolver:
         self.last_solve_s = 0.0
         for _ in range(COLD_START_ITERATIONS if cold_start else 1):
             status = s.solve()
-            self.last_solve_s += float(s.get_stats("time_tot"))
+            self.last_solve_s += float(np.ravel(s.get_stats("time_tot"))[0])
             if status not in (0, 2):
                 break
         out_x = np.vstack([s.get(k, "x") for k in range(n + 1)])
         out_u = np.vstack([s.get(k, "u") for k in range(n)])
-        ok = status in (0, 2)  # 2: iteration limit (one RTI step is the scheme)
+        ok = status in (0, 2) and bool(np.all(np.isfinite(out_u)))  # 2: iteration limit
+        self._healthy = ok
         return SolverOutput(f.pack_w(out_x, out_u), ok, "" if ok else f"acados status {status}", 1)
