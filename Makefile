@@ -4,7 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: setup demo showcase study test test-fast lint bench clean
+.PHONY: setup acados demo showcase study test test-fast lint bench clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -13,6 +13,21 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 setup: $(STAMP)
+
+# Optional: acados (SQP_RTI + HPIPM), the peer `bench --only nmpc` measures our fast path
+# against. Its package ships a slim CasADi (no IPOPT) over ours; reinstalling our pinned
+# CasADi afterwards restores IPOPT and keeps acados working (its generated code links its own
+# libraries).
+ACADOS_STAMP := $(VENV)/.acados
+$(ACADOS_STAMP): $(STAMP)
+	$(PY) -m pip install --quiet --no-deps comma-deps-acados
+	$(PY) -m pip install --quiet --force-reinstall --no-deps \
+		"casadi==$$($(PY) -c 'import importlib.metadata as m; print(m.version("casadi"))')"
+	$(PY) -c "from experiments.bench.acados_peer import acados_unavailable as u; \
+		import sys; sys.exit(u() or 0)"
+	touch $(ACADOS_STAMP)
+
+acados: $(ACADOS_STAMP)
 
 demo: setup
 	$(PY) -m scripts.demo

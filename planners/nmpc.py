@@ -18,12 +18,13 @@ simulation violates the constraints gives the safe command (zero velocity and ya
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 
 import numpy as np
 
 from planners.model_vectors import angle_indices, reference_vectors, state_vector
 from planners.nmpc_formulation import UNUSED_SLOT, NmpcConfig, NmpcFormulation
-from planners.nmpc_solvers import make_solver
+from planners.nmpc_solvers import NlpSolver, make_solver
 from planners.nominal_models import NominalModel
 from planners.obstacles import ObstacleWorld
 from planners.plan_result import PlanResult, safe_result
@@ -37,8 +38,10 @@ class NmpcPlanner:
     """NMPC local planner; see the module docstring.
 
     Arguments: the nominal model, the problem and solver settings, an optional learned
-    residual, the obstacle world, and ``compile_functions`` (compile the fast path's
-    linearisation to C at first use, cached per machine; see ``SqpOptions.compile``).
+    residual, the obstacle world, ``compile_functions`` (compile the fast path's
+    linearisation to C at first use, cached per machine; see ``SqpOptions.compile``) and
+    ``solver_factory`` (formulation -> an ``NlpSolver`` used instead of ``config.solver``, e.g.
+    a benchmark peer).
 
     Attributes:
         formulation: the NLP (model, config, residual).
@@ -52,13 +55,21 @@ class NmpcPlanner:
         residual: ResidualTerm | None = None,
         world: ObstacleWorld | None = None,
         compile_functions: bool = False,
+        solver_factory: Callable[[NmpcFormulation], NlpSolver] | None = None,
     ) -> None:
         self.formulation = NmpcFormulation(model, config or NmpcConfig(), residual)
         self.world = world
         cfg = self.formulation.config
-        self._solver = make_solver(
-            cfg.solver, self.formulation, cfg.max_iterations, compile_functions, cfg.time_budget_s
-        )
+        if solver_factory is not None:  # another solver on the same formulation (a peer)
+            self._solver = solver_factory(self.formulation)
+        else:
+            self._solver = make_solver(
+                cfg.solver,
+                self.formulation,
+                cfg.max_iterations,
+                compile_functions,
+                cfg.time_budget_s,
+            )
         self._angles = angle_indices(model)
         self._pos_index = [
             model.state_names.index(n)

@@ -1,18 +1,24 @@
 """`diagnose`: show what a simulation config gets wrong about measured flights, and fix it.
 
     diagnose LOGS... --sim-config FILE|PRESET --out DIR
+    diagnose LOGS... --sim-config FILE|PRESET --out DIR --batch [--workers 2 | --scheduler ADDR]
 
 LOGS are schema-v1 CSV flight logs (with their .json sidecars) or PX4 ULog files (.ulg).
 Writes DIR/report.json (schema diagnosis/1), DIR/report.md with PNG plots, and
 DIR/extended_config.toml (the config plus the accepted effects with fitted parameters).
-Progress goes to stderr. Exit codes: 0 done, 2 bad input (one line saying why).
+With ``--batch`` every log is diagnosed on its own (one job each, on ``--workers`` local
+processes or on the workers of the Dask cluster at ``--scheduler tcp://HOST:8786``) and DIR
+holds one such report set per log, in DIR/<log name>/, plus DIR/batch.json (verdict and gain
+per log). Progress goes to stderr. Exit codes: 0 done, 2 bad input (one line saying why).
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -20,14 +26,19 @@ from diagnosis.diagnosis import diagnose
 from diagnosis.extend_config import write_extended_config
 from diagnosis.forces import ForceDataError
 from diagnosis.report import write_report
+from experiments.batch_diagnose import DiagnosisJob, diagnose_each
+from experiments.executors import SchedulerError, check_scheduler_address, job_executor
 from flightlog.atomic_output import OutputError, atomic_output_dir, check_writable_dir
-from flightlog.schema import FlightLogError, read_flight_log
+from flightlog.schema import FlightLog, FlightLogError, read_flight_log
 from flightlog.ulog import read_ulog
-from vehicle_sim import SimConfigError, load_sim_config
+from vehicle_sim import SimConfig, SimConfigError, load_sim_config
 
 EXIT_OK = 0
 EXIT_BAD_INPUT = 2
 EXTENDED_CONFIG_NAME = "extended_config.toml"
+BATCH_SUMMARY_NAME = "batch.json"
+
+Progress = Callable[[str], None]
 
 
 @dataclass(frozen=True)
@@ -37,6 +48,9 @@ class DiagnoseArgs:
     logs: tuple[Path, ...]
     sim_config: str
     out_dir: Path
+    batch: bool = False
+    workers: int = 2
+    scheduler: str | None = None
 
 
 def parse_args(argv: list[str] | None) -> DiagnoseArgs:
@@ -53,8 +67,29 @@ def parse_args(argv: list[str] | None) -> DiagnoseArgs:
         "--sim-config", required=True, help="simulation config TOML file or preset name"
     )
     parser.add_argument("--out", required=True, type=Path, help="output directory")
+    parser.add_argument(
+        "--batch", action="store_true", help="diagnose every log on its own (one report each)"
+    )
+    parser.add_argument("--workers", type=int, default=2, help="--batch: local processes")
+    parser.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="--batch: run the jobs on a Dask cluster (tcp://HOST:PORT) instead of local "
+        "processes; needs pip install 'residual-companion[cluster]'",
+    )
     args = parser.parse_args(argv)
-    return DiagnoseArgs(tuple(args.logs), args.sim_config, args.out)
+    if args.workers < 1:
+        parser.error(f"--workers must be >= 1, got {args.workers}")
+    if args.scheduler is not None and not args.batch:
+        parser.error("--scheduler runs a --batch diagnosis; add --batch")
+    if args.scheduler is not None:
+        try:
+            check_scheduler_address(args.scheduler)
+        except SchedulerError as exc:
+            parser.error(str(exc))
+    return DiagnoseArgs(
+        tuple(args.logs), args.sim_config, args.out, args.batch, args.workers, args.scheduler
+    )
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -69,8 +104,10 @@ def main(argv: list[str] | None = None) -> int:
         sim_config = load_sim_config(args.sim_config)
         logs = [read_ulog(p) if p.suffix == ".ulg" else read_flight_log(p) for p in args.logs]
         progress(f"read {len(logs)} log(s), {sum(log.n_rows for log in logs)} rows")
+        if args.batch:
+            return _run_batch(args, logs, sim_config, progress)
         result = diagnose(logs, sim_config, progress=progress)
-    except (SimConfigError, FlightLogError, ForceDataError) as exc:
+    except (SimConfigError, FlightLogError, ForceDataError, SchedulerError) as exc:
         print(f"diagnose: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except OutputError as exc:
@@ -89,6 +126,49 @@ def main(argv: list[str] | None = None) -> int:
     verdict = ", ".join(result.verdict) or "none"
     progress(f"verdict: {verdict}; gain {result.gain:.1f}x; report in {args.out_dir}")
     return EXIT_OK
+
+
+def _run_batch(
+    args: DiagnoseArgs, logs: list[FlightLog], sim_config: SimConfig, progress: Progress
+) -> int:
+    """Diagnose each log on its own on the chosen executor; write the report sets atomically."""
+    names = _unique_names(args.logs)
+    jobs = [DiagnosisJob(n, log, sim_config) for n, log in zip(names, logs, strict=True)]
+    where = args.scheduler or f"{args.workers} local processes"
+    progress(f"batch: {len(jobs)} diagnoses on {where}")
+    with job_executor(args.workers, args.scheduler) as pool:
+        results = diagnose_each(jobs, pool, progress)
+    summary = []
+    try:
+        with atomic_output_dir(args.out_dir) as tmp:
+            for name, path, result in zip(names, args.logs, results, strict=True):
+                (tmp / name).mkdir()
+                extended = write_extended_config(
+                    args.sim_config, result.added_effects, tmp / name / EXTENDED_CONFIG_NAME
+                )
+                final = args.out_dir / name / extended.name
+                write_report(result, tmp / name, [path.name], args.sim_config, final)
+                summary.append(
+                    {
+                        "log": path.name,
+                        "report": f"{name}/report.json",
+                        "verdict": list(result.verdict),
+                        "gain": result.gain,
+                    }
+                )
+            doc = {"schema": "diagnosis-batch/1", "sim_config": args.sim_config, "logs": summary}
+            (tmp / BATCH_SUMMARY_NAME).write_text(json.dumps(doc, indent=2) + "\n")
+    except OutputError as exc:
+        print(f"diagnose: --out {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    progress(f"batch: {len(results)} report sets in {args.out_dir}")
+    return EXIT_OK
+
+
+def _unique_names(paths: tuple[Path, ...]) -> list[str]:
+    """A folder name per log: its stem, numbered when two logs share one."""
+    stems = [p.stem for p in paths]
+    return [s if stems.count(s) == 1 else f"{i:03d}_{s}" for i, s in enumerate(stems)]
 
 
 if __name__ == "__main__":

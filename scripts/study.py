@@ -1,7 +1,8 @@
 """`study`: [Kulathunga23]'s residual-learning experiment and [Ostafew16]'s trials, in simulation.
 
     study [--out out/study] [--trajectories 20] [--repeats 3] [--trials 6] [--m 30]
-          [--workers 2] [--vehicle iris_study] [--learned-model first_order_lag|kinematic_4dof]
+          [--workers 2 | --scheduler tcp://HOST:8786] [--vehicle iris_study]
+          [--learned-model first_order_lag|kinematic_4dof]
           [--features state_input|velocity] [--seed 0] [--compile] [--quick]
 
 The nominal planner is [Kulathunga23]'s kinematic NMPC. The learned model is, by default, a
@@ -9,8 +10,9 @@ first-order velocity lag whose time constants are identified from the nominal fl
 sparse GP on what is left; ``--learned-model kinematic_4dof --features velocity`` is paper
 000's setup (the GP alone).
 
-Flies every flight in process (lockstep, deterministic, seeded) on ``--workers`` processes and
-writes OUT/report.md with PNG plots and the fitted model files. Progress goes to stderr; the
+Flies every flight in process (lockstep, deterministic, seeded) on ``--workers`` local processes,
+or on the workers of a Dask cluster with ``--scheduler`` (same figures either way), and writes
+OUT/report.md with PNG plots and the fitted model files. Progress goes to stderr; the
 headline figures are printed on stdout. Exit code 0 on success, 2 with a one-line reason on
 bad input.
 """
@@ -39,6 +41,12 @@ def parse_args(argv: list[str] | None) -> StudyConfig:
     parser.add_argument("--trials", type=int, default=6, help="trials on the repeated path")
     parser.add_argument("--m", type=int, default=30, help="inducing points per output")
     parser.add_argument("--workers", type=int, default=2, help="processes flying in parallel")
+    parser.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="fly on a Dask cluster's workers (e.g. tcp://10.0.0.5:8786) instead of local "
+        "processes; needs pip install 'residual-companion[cluster]' here and on every worker",
+    )
     parser.add_argument("--vehicle", default=STUDY_VEHICLE, help="simulator preset or config")
     parser.add_argument(
         "--learned-model",
@@ -64,6 +72,7 @@ def parse_args(argv: list[str] | None) -> StudyConfig:
             n_trials=args.trials,
             m=args.m,
             workers=args.workers,
+            scheduler=args.scheduler,
             trajectory_seed=args.seed,
             learned_model=args.learned_model,
             features=args.features,

@@ -14,17 +14,40 @@ wall-clock per plan() call, everything included. Figures:
     nmpc_ipopt_median_ms                    time per plan() of IPOPT [ms]
     nmpc_fast_ok_fraction, nmpc_ipopt_ok_fraction   plans returned with ok=True [-]
     nmpc_cmd_diff_median_mps                median |command difference| fast vs IPOPT [m/s]
+    nmpc_augmented_median_ms, nmpc_augmented_p99_ms, nmpc_augmented_ipopt_median_ms
+                                            the same three on this GP-augmented problem, under
+                                            issue 17's names (the planner the companion flies
+                                            with a learned model is this fast path)
+    nmpc_acados_median_ms, nmpc_acados_p99_ms   acados SQP_RTI + HPIPM (the peer, see
+                                            experiments.bench.acados_peer) in the same planner,
+                                            on the same problems; NaN when acados is missing
+    nmpc_acados_solve_median_ms             acados' own solve time (time_tot, C only), without
+                                            the per-stage Python set/get of its interface [ms]
+    nmpc_acados_build_s                     acados: generate and compile its solver [s]
+    nmpc_acados_cmd_diff_median_mps         median |command difference| acados vs IPOPT [m/s]
+    nmpc_model_ready_s                      a new residual model file (first_order_lag +
+                                            state_input features, m = 30 per output) to the
+                                            companion's planner ready to fly (loaded, built,
+                                            one warm-up plan) [s]
 ``quick=True`` flies 3 s instead of 30 s, for a smoke test.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import tempfile
+import time
 from collections.abc import Callable
+from pathlib import Path
 
 import casadi as ca
 import numpy as np
 
+from companion.nmpc_planner import NmpcSettings, load_nmpc
+from experiments.bench.acados_peer import AcadosSolver, acados_unavailable
+from gp.features import feature_definition
+from gp.model_io import ResidualModel, save_model
+from gp.posterior import Posterior
 from planners.nmpc import NmpcPlanner
 from planners.nmpc_formulation import NmpcConfig
 from planners.nominal_models import kinematic_4dof
@@ -84,14 +107,97 @@ def run(progress: Callable[[str], None] = print, quick: bool = False) -> dict[st
     ipopt_res = [ipopt.plan(state, reference, t) for state, t in problems]
     fast_ms = 1e3 * np.array([r.solve_time_s for r in fast_res])
     ipopt_ms = 1e3 * np.array([r.solve_time_s for r in ipopt_res])
-    pairs = zip(fast_res, ipopt_res, strict=True)
-    both = [(a, b) for a, b in pairs if a.ok and b.ok]
-    diff = [np.max(np.abs(a.command - b.command)) for a, b in both]
-    return {
+    figures = {
         "nmpc_fast_median_ms": float(np.median(fast_ms)),
         "nmpc_fast_p99_ms": float(np.percentile(fast_ms, 99)),
         "nmpc_ipopt_median_ms": float(np.median(ipopt_ms)),
         "nmpc_fast_ok_fraction": float(np.mean([r.ok for r in fast_res])),
         "nmpc_ipopt_ok_fraction": float(np.mean([r.ok for r in ipopt_res])),
-        "nmpc_cmd_diff_median_mps": float(np.median(diff)) if diff else float("nan"),
+        "nmpc_cmd_diff_median_mps": _cmd_diff(fast_res, ipopt_res),
     }
+    figures["nmpc_augmented_median_ms"] = figures["nmpc_fast_median_ms"]
+    figures["nmpc_augmented_p99_ms"] = figures["nmpc_fast_p99_ms"]
+    figures["nmpc_augmented_ipopt_median_ms"] = figures["nmpc_ipopt_median_ms"]
+    figures.update(_acados_figures(model, base, residual, world, problems, ipopt_res, progress))
+    progress("nmpc: a new model file to a planner ready to fly")
+    figures["nmpc_model_ready_s"] = model_ready_s()
+    return figures
+
+
+def _cmd_diff(results_a: list, results_b: list) -> float:
+    """Median over problems both solved of max |command a - command b| [m/s]."""
+    pairs = zip(results_a, results_b, strict=True)
+    diff = [np.max(np.abs(a.command - b.command)) for a, b in pairs if a.ok and b.ok]
+    return float(np.median(diff)) if diff else float("nan")
+
+
+def _acados_figures(model, base, residual, world, problems, ipopt_res, progress) -> dict:
+    """The acados peer on the same problems (NaN figures and the reason when it is missing)."""
+    names = (
+        "median_ms",
+        "solve_median_ms",
+        "p99_ms",
+        "build_s",
+        "cmd_diff_median_mps",
+        "ok_fraction",
+    )
+    why = acados_unavailable()
+    if why:
+        progress(f"nmpc: acados peer skipped: {why}")
+        return {f"nmpc_acados_{n}": float("nan") for n in names}
+    progress("nmpc: acados SQP_RTI + HPIPM: generating and compiling its solver")
+    start = time.perf_counter()
+    solvers: list[AcadosSolver] = []
+
+    def factory(formulation):
+        solvers.append(AcadosSolver(formulation))
+        return solvers[-1]
+
+    peer = NmpcPlanner(model, base, residual, world, solver_factory=factory)
+    build_s = time.perf_counter() - start
+    reference = generate_trajectories(1, seed=11)[0]
+    x = reference.x_ref(0.0)
+    peer.plan(PlannerState(x[:3], np.zeros(3), x[3]), reference, 0.0)  # first call, as fast
+    peer.reset()
+    progress(f"nmpc: acados on the same {len(problems)} problems")
+    res, solve_ms = [], []
+    for state, t in problems:
+        res.append(peer.plan(state, reference, t))
+        solve_ms.append(1e3 * solvers[0].last_solve_s)
+    ms = 1e3 * np.array([r.solve_time_s for r in res])
+    return {
+        "nmpc_acados_median_ms": float(np.median(ms)),
+        "nmpc_acados_solve_median_ms": float(np.median(solve_ms)),
+        "nmpc_acados_p99_ms": float(np.percentile(ms, 99)),
+        "nmpc_acados_build_s": build_s,
+        "nmpc_acados_cmd_diff_median_mps": _cmd_diff(res, ipopt_res),
+        "nmpc_acados_ok_fraction": float(np.mean([r.ok for r in res])),
+    }
+
+
+def flying_model(m: int = _N_INDUCING, seed: int = 3) -> ResidualModel:
+    """A seeded residual model of the shape the companion flies: first_order_lag (tau 0.5 s)
+    with state_input features, an SE-ARD posterior of ``m`` points per output (not fitted:
+    its numbers only need the shape and scale of a fitted one)."""
+    rng = np.random.default_rng(seed)
+    features = feature_definition("state_input", "first_order_lag", tau_s=0.5, tau_d_s=0.4)
+    d, n_out = features.n_features, len(features.outputs)
+    factor = np.tril(rng.normal(0.0, 0.05, (n_out, m, m)))
+    posterior = Posterior(
+        support=rng.uniform(-1.5, 1.5, (n_out, m, d)),
+        lengthscales=rng.uniform(0.7, 2.0, (n_out, d)),
+        variance=np.full(n_out, 0.25),
+        alpha=rng.normal(0.0, 0.5, (n_out, m)),
+        var_factor=factor,
+        y_offset=np.zeros(n_out),
+    )
+    return ResidualModel(features, posterior, np.full(n_out, 0.01), "sgpr")
+
+
+def model_ready_s() -> float:
+    """Seconds from a new model file on disk to the companion's planner ready to fly."""
+    with tempfile.TemporaryDirectory() as tmp:
+        path = save_model(Path(tmp) / "new_model", flying_model())
+        start = time.perf_counter()
+        load_nmpc(NmpcSettings(speed_limit_mps=2.5), path)
+        return time.perf_counter() - start

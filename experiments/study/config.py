@@ -6,6 +6,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from companion.nmpc_planner import NmpcSettings
+from experiments.executors import check_scheduler_address
 
 STUDY_VEHICLE = "iris_study"
 SELECTIONS: tuple[str, ...] = ("low_speed", "cluster")
@@ -27,7 +28,9 @@ class StudyConfig:
         n_trials: [Ostafew16] view: trials on one repeated path (1 nominal, then augmented with a
             model refitted on all trials so far).
         trajectory_seed: seed of the trajectory generator.
-        workers: processes flying in parallel.
+        workers: processes flying in parallel on this machine.
+        scheduler: a Dask scheduler address (tcp://host:8786): fly on that cluster's workers
+            instead of local processes (None: this machine; see experiments.executors).
         nmpc: the nominal planner ([Kulathunga23]: the kinematic model; command limit, loop period).
         learned_model: the nominal model under the learned residual: "first_order_lag" (its
             time constants identified from the flights, then the GP on what is left; see
@@ -51,6 +54,7 @@ class StudyConfig:
     n_trials: int = 6
     trajectory_seed: int = 0
     workers: int = 2
+    scheduler: str | None = None
     nmpc: NmpcSettings = NmpcSettings(speed_limit_mps=2.5)
     learned_model: str = "first_order_lag"
     features: str = "state_input"
@@ -65,6 +69,8 @@ class StudyConfig:
             )
         if self.workers < 1:
             raise ValueError(f"workers must be >= 1, got {self.workers}")
+        if self.scheduler is not None:
+            check_scheduler_address(self.scheduler)
 
     def quick(self) -> StudyConfig:
         """A small smoke version: 2 short trajectories, 1 flight each, 3 trials, no compile."""

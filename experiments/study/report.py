@@ -44,8 +44,7 @@ def render_report(
         f"dt={nmpc.dt_s:g} s, loop {1 / nmpc.period_s:g} Hz, command limit "
         f"{nmpc.speed_limit_mps:g} m/s). Learned model: `{config.learned_model}` "
         f"{_identified(result)}plus a sparse GP on features `{config.features}`, m={config.m} "
-        f"per output. Lockstep in process, {config.workers} worker processes, "
-        f"{elapsed_s:.0f} s.",
+        f"per output. Lockstep in process, {_where(config)}, {elapsed_s:.0f} s.",
         "",
         "## Paper 000: random trajectories, nominal vs augmented",
         "",
@@ -103,3 +102,10 @@ def _identified(result: Paper000Result) -> str:
         f"with time constants identified from the nominal flights (tau_s={lag['tau_s']:.3f} s, "
         f"tau_d_s={lag['tau_d_s']:.3f} s) "
     )
+
+
+def _where(config: StudyConfig) -> str:
+    """Where the flights ran: local worker processes or a Dask cluster."""
+    if config.scheduler is None:
+        return f"{config.workers} worker processes"
+    return f"on the Dask cluster at {config.scheduler}"

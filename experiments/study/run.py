@@ -1,7 +1,9 @@
 """Run the whole study and write ``report.md`` with its PNGs and model files.
 
-Flights are spread over ``config.workers`` processes; every flight is lockstep and seeded, so
-the figures (all but the wall-clock solve times) are the same on every run and machine.
+Flights are spread over ``config.workers`` local processes, or over the workers of a Dask
+cluster when ``config.scheduler`` names one (see :mod:`experiments.executors`); every flight is
+lockstep and seeded, so the figures (all but the wall-clock solve times) are the same on every
+run, machine and cluster.
 """
 
 from __future__ import annotations
@@ -9,11 +11,10 @@ from __future__ import annotations
 import sys
 import time
 from collections.abc import Callable
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
-from multiprocessing import get_context
 from pathlib import Path
 
+from experiments.executors import job_executor
 from experiments.study.config import StudyConfig
 from experiments.study.figures import PlannerFigures, all_planner_figures, headline_figures
 from experiments.study.paper000 import Paper000Result, run_paper000
@@ -44,7 +45,7 @@ def run_study(config: StudyConfig, progress: Callable[[str], None]) -> StudyResu
     """Fly [Kulathunga23]'s experiment and [Ostafew16]'s trials, write the report."""
     start = time.perf_counter()
     out = check_writable_dir(config.out_dir)
-    with ProcessPoolExecutor(config.workers, mp_context=get_context("spawn")) as pool:
+    with job_executor(config.workers, config.scheduler) as pool:
         trials_future = pool.submit(run_trials, config, worker_progress)
         result = run_paper000(config, pool, progress)
         progress("waiting for the trial-to-trial flights")

@@ -1,0 +1,53 @@
+"""`diagnose --batch`: one report set per log, the same on a Dask cluster as on local processes."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from scripts.diagnose import main
+from tests.diagnosis.hidden_effects import draw, fly_hidden
+
+
+@pytest.mark.slow
+def test_batch_on_a_dask_cluster_equals_the_local_batch(tmp_path, capsys):
+    distributed = pytest.importorskip("distributed")
+    rng = np.random.default_rng(5)
+    logs = []
+    for i in range(2):  # two airframes, each with its own hidden payload; same file name
+        truth, _ = draw("payload", rng)
+        fly_hidden(truth, tmp_path / f"vehicle{i}", seed=30 + i)
+        logs.append(str(tmp_path / f"vehicle{i}" / "flight_0.csv"))
+    args = [*logs, "--sim-config", "iris", "--batch"]
+    assert main([*args, "--out", str(tmp_path / "local"), "--workers", "2"]) == 0
+    with distributed.LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0"
+    ) as cluster:
+        remote = ["--out", str(tmp_path / "dask"), "--scheduler", cluster.scheduler_address]
+        assert main([*args, *remote]) == 0
+    assert "batch: 2 diagnoses on tcp://" in capsys.readouterr().err
+    local = json.loads((tmp_path / "local" / "batch.json").read_text())
+    assert [e["report"] for e in local["logs"]] == [
+        "000_flight_0/report.json",
+        "001_flight_0/report.json",
+    ]
+    assert all(e["verdict"] == ["payload"] for e in local["logs"])
+    assert (tmp_path / "dask" / "batch.json").read_text() == json.dumps(local, indent=2) + "\n"
+    for entry in local["logs"]:
+        a = (tmp_path / "local" / entry["report"]).read_text()
+        assert a == (tmp_path / "dask" / entry["report"]).read_text()
+        assert (tmp_path / "dask" / entry["report"]).with_name("extended_config.toml").is_file()
+
+
+def test_scheduler_without_batch_or_malformed_exits_2(tmp_path, capsys):
+    log = tmp_path / "flight_0.csv"
+    log.write_text("t_s,pos_n_m\n0,0\n")
+    base = [str(log), "--sim-config", "iris", "--out", str(tmp_path / "out")]
+    with pytest.raises(SystemExit) as exc:
+        main([*base, "--scheduler", "tcp://h:8786"])
+    assert exc.value.code == 2 and "add --batch" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exc:
+        main([*base, "--batch", "--scheduler", "h:8786"])
+    assert exc.value.code == 2 and "tcp://HOST:PORT" in capsys.readouterr().err

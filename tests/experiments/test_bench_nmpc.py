@@ -1,0 +1,33 @@
+"""`bench --only nmpc --quick`: issue 17's figures come out beside today's, finite where they
+must be (the acados ones are NaN only when acados is not installed)."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from experiments.bench import nmpc
+from experiments.bench.acados_peer import acados_unavailable
+
+
+@pytest.mark.slow
+def test_quick_nmpc_part_reports_augmented_acados_and_model_ready_figures():
+    figures = nmpc.run(progress=lambda message: None, quick=True)
+    for name in (
+        "nmpc_fast_median_ms",
+        "nmpc_ipopt_median_ms",
+        "nmpc_augmented_median_ms",
+        "nmpc_augmented_p99_ms",
+        "nmpc_augmented_ipopt_median_ms",
+        "nmpc_model_ready_s",
+    ):
+        assert math.isfinite(figures[name]) and figures[name] > 0, name
+    assert figures["nmpc_cmd_diff_median_mps"] < 1e-3
+    acados = [figures[n] for n in ("nmpc_acados_median_ms", "nmpc_acados_solve_median_ms")]
+    if acados_unavailable():
+        assert all(math.isnan(v) for v in acados)
+    else:
+        assert all(math.isfinite(v) and v > 0 for v in acados)
+        assert figures["nmpc_acados_ok_fraction"] > 0.9
+        assert figures["nmpc_acados_cmd_diff_median_mps"] < 1e-3
