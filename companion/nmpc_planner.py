@@ -32,7 +32,6 @@ from planners.reference import PlannerState, Reference, ReferenceSample
 from planners.residual import ResidualTerm
 
 MULTIROTOR_MODELS = ("kinematic_4dof", "first_order_lag")
-_VEL_STATES = ("vel_n_mps", "vel_e_mps", "vel_d_mps")
 _DT_TOLERANCE = 0.05
 
 
@@ -97,7 +96,7 @@ class CompanionNmpc:
             check_residual_model(residual_model, settings.period_s)
             self.model = residual_model.features.nominal()
             mean_fn = _bounded(residual_model)
-            residual = ResidualTerm(mean_fn, _feature_map(residual_model.features.name, self.model))
+            residual = ResidualTerm(mean_fn, residual_model.features.planner_map(self.model))
         v, w = settings.speed_limit_mps, settings.yaw_rate_limit_radps
         config = NmpcConfig(
             horizon_steps=settings.horizon_steps,
@@ -169,13 +168,6 @@ class _HoverReference:
         return ReferenceSample(pos, zeros, zeros, np.zeros(n), np.zeros(n))
 
 
-def _feature_map(name: str, model: NominalModel):
-    """z(x, u) for a feature set, in its input order (see gp.features)."""
-    if name == "velocity":
-        return lambda x, u: model.velocity_of(x, u)
-    return lambda x, u: ca.vertcat(model.velocity_of(x, u), u[:3], u[3])
-
-
 def _one_step_function(
     model: NominalModel, residual: ResidualTerm | None, period_s: float
 ) -> ca.Function:
@@ -184,7 +176,7 @@ def _one_step_function(
     x = ca.SX.sym("x", model.nx)
     u = ca.SX.sym("u", model.nu)
     x_next = model.rk4_step(x, u, period_s, residual)
-    if all(n in model.state_names for n in _VEL_STATES):
+    if model.carries_velocity:
         vel = model.velocity_of(x_next, u)
     else:
         pos = [model.state_names.index(n) for n in ("pos_n_m", "pos_e_m", "pos_d_m")]
@@ -200,13 +192,14 @@ def check_residual_model(model: ResidualModel, period_s: float) -> None:
             f"residual model is taken against {features.nominal_model}; the NMPC flies "
             f"{' or '.join(MULTIROTOR_MODELS)}; refit with fit-gp --nominal kinematic_4dof"
         )
+    nominal = features.nominal()
     try:
-        check_feature_set(features.name, features.nominal_model)
+        features.planner_map(nominal)
     except ValueError as exc:
         raise ModelFileError(f"residual model: {exc}; refit with fit-gp") from None
-    has_velocity = features.nominal_model == "first_order_lag"
     dt_s = dict(features.nominal_params).get("residual_dt_s")
-    if not has_velocity and (dt_s is None or abs(dt_s - period_s) > _DT_TOLERANCE * period_s):
+    off_rate = dt_s is None or abs(dt_s - period_s) > _DT_TOLERANCE * period_s
+    if not nominal.carries_velocity and off_rate:
         raise ModelFileError(
             f"residual model was measured over steps of {dt_s} s but the control loop runs "
             f"every {period_s:g} s; refit from logs flown at the same rate"
@@ -214,15 +207,12 @@ def check_residual_model(model: ResidualModel, period_s: float) -> None:
 
 
 def check_feature_set(features: str, nominal_model: str) -> None:
-    """Raise ValueError unless the NMPC can build feature set ``features`` from the state and
-    input of ``nominal_model``: "velocity" with any model, "state_input" (velocity and command)
-    only with a velocity state (first_order_lag)."""
-    if features == "velocity" or (features == "state_input" and nominal_model == "first_order_lag"):
-        return
-    raise ValueError(
-        f"the NMPC cannot feed features {features!r} from {nominal_model}'s state; use "
-        "'velocity', or 'state_input' with first_order_lag"
-    )
+    """Raise ValueError (one line) unless the NMPC can build feature set ``features`` from the
+    state and input of ``nominal_model`` (see FeatureDefinition.planner_map)."""
+    from gp.features import feature_definition
+
+    definition = feature_definition(features, nominal_model)
+    definition.planner_map(definition.nominal())
 
 
 def load_nmpc(settings: NmpcSettings, gp_model_path: Path | None) -> CompanionNmpc:

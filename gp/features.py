@@ -15,8 +15,10 @@ In the NMPC, "vel" is the velocity the (augmented) model predicts for the vehicl
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+
+import casadi as ca
 
 from planners.nominal_models import MODELS, NominalModel, make_model
 
@@ -32,6 +34,14 @@ FEATURE_SETS: dict[str, tuple[tuple[str, int], ...]] = {
         + [(c, 0) for c in _CMD] + [(c, 1) for c in _CMD]
     ),
 }  # fmt: skip
+
+
+# Where the NMPC takes each feature column from: (model velocity (3,), input u (nu,)) -> scalar.
+_PLANNER_SOURCES: dict[str, Callable[[ca.SX, ca.SX], ca.SX]] = {
+    **{c: (lambda vel, u, i=i: vel[i]) for i, c in enumerate(_VEL)},
+    **{c: (lambda vel, u, i=i: u[i]) for i, c in enumerate(_CMD)},
+    "cmd_yaw_rate_radps": lambda vel, u: u[3],
+}
 
 
 @dataclass(frozen=True)
@@ -73,6 +83,36 @@ class FeatureDefinition:
     def nominal(self) -> NominalModel:
         """The nominal model instance."""
         return make_model(self.nominal_model, **dict(self.nominal_params))
+
+    def planner_map(self, model: NominalModel) -> Callable[[ca.SX, ca.SX], ca.SX]:
+        """z(x, u) (SX, n_features) for the NMPC, from the same ``inputs`` the dataset reads
+        from the logs: a measured velocity is the model's velocity (``model.velocity_of``), a
+        command is the input u. Raises ValueError (one line) if the planner cannot build it:
+        lagged features, or a measured velocity beside other features on a model that does
+        not carry the velocity ([Kulathunga23]'s "velocity" set queries the kinematic model
+        at its commanded velocity, its only notion of velocity)."""
+        lagged = [n for n, (_, lag) in zip(self.input_names, self.inputs, strict=True) if lag]
+        if lagged:
+            raise ValueError(
+                f"the NMPC cannot feed lagged features {lagged} (it carries no history along "
+                "the horizon); use the 'velocity' or 'state_input' feature set"
+            )
+        uses = {c in _VEL for c, _ in self.inputs}
+        if uses == {True, False} and not model.carries_velocity:
+            raise ValueError(
+                f"features {self.name!r} need the measured velocity beside the command, "
+                f"but {model.name} has no velocity state; use 'velocity', or "
+                "'state_input' with first_order_lag"
+            )
+        unknown = [c for c, _ in self.inputs if c not in _PLANNER_SOURCES]
+        if unknown:
+            raise ValueError(f"the NMPC has no source for features {unknown}")
+
+        def z(x: ca.SX, u: ca.SX) -> ca.SX:
+            vel = model.velocity_of(x, u)
+            return ca.vertcat(*(_PLANNER_SOURCES[c](vel, u) for c, _ in self.inputs))
+
+        return z
 
     def to_dict(self) -> dict[str, object]:
         return {
