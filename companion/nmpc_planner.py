@@ -23,6 +23,7 @@ import numpy as np
 
 from gp.errors import ModelFileError
 from gp.model_io import ResidualModel, load_model
+from gp.prediction_check import refusal
 from planners.model_vectors import state_vector
 from planners.nmpc import NmpcPlanner
 from planners.nmpc_formulation import NmpcConfig
@@ -95,7 +96,7 @@ class CompanionNmpc:
         else:
             check_residual_model(residual_model, settings.period_s)
             self.model = residual_model.features.nominal()
-            mean_fn = _bounded(residual_model)
+            mean_fn = residual_model.flight_mean_function()
             residual = ResidualTerm(mean_fn, residual_model.features.planner_map(self.model))
         v, w = settings.speed_limit_mps, settings.yaw_rate_limit_radps
         config = NmpcConfig(
@@ -137,25 +138,6 @@ class CompanionNmpc:
         return np.asarray(self._one_step(x, u), dtype=float).reshape(3)
 
 
-RESIDUAL_BOUND_STD = 4.0
-
-
-def _bounded(model: ResidualModel) -> ca.Function:
-    """The model's mean g(z), clipped per axis to the training residuals' mean +- 4 std (from
-    the model file's training summary), so that a badly conditioned fit cannot command the
-    vehicle with residuals it never saw. Unclipped if the summary is missing."""
-    mean_fn = model.casadi_function(include_variance=False).expand()
-    mean = model.training.get("residual_mean")
-    std = model.training.get("residual_std")
-    if mean is None or std is None:
-        return mean_fn
-    lo = np.asarray(mean, dtype=float) - RESIDUAL_BOUND_STD * np.asarray(std, dtype=float)
-    hi = np.asarray(mean, dtype=float) + RESIDUAL_BOUND_STD * np.asarray(std, dtype=float)
-    z = ca.SX.sym("z", mean_fn.numel_in(0))
-    g = ca.fmin(ca.fmax(mean_fn(z), ca.DM(lo)), ca.DM(hi))
-    return ca.Function("gp_residual_bounded", [z], [g], ["z"], ["mean"])
-
-
 class _HoverReference:
     """Hold (0, 0, -3) m at rest: the warm-up problem."""
 
@@ -186,6 +168,9 @@ def _one_step_function(
 
 def check_residual_model(model: ResidualModel, period_s: float) -> None:
     """Raise ModelFileError (one line) unless the NMPC can fly ``model`` at this period."""
+    refused = refusal(model)
+    if refused is not None:
+        raise ModelFileError(refused)
     features = model.features
     if features.nominal_model not in MULTIROTOR_MODELS:
         raise ModelFileError(

@@ -27,6 +27,7 @@ from experiments.study.metrics import residual_rmse_mps, tracking_errors_m, trac
 from flightlog.schema import FlightLog, read_flight_log
 from gp.model_io import save_model
 from gp.plots import plot_residuals
+from gp.prediction_check import refusal
 from gp.training import TrainingResult
 
 SELECTION = "low_speed"
@@ -70,7 +71,11 @@ def run_demo(config: DemoConfig, progress: Callable[[str], None]) -> list[Flight
     fit = fit_residual([nominal], SELECTION, 1.0 / config.rate_hz, progress=progress)
     model_path = save_model(out / f"gp_{SELECTION}", fit.model)
     progress(f"wrote {model_path}; the augmented planner compiles its solver before take-off")
-    augmented = _fly(config, "augmented", model_path, config.seed + 1, progress)
+    flying = model_path
+    if not fit.may_fly:
+        progress(f"{refusal(fit.model)}: the second flight flies the nominal planner")
+        flying = None
+    augmented = _fly(config, "augmented", flying, config.seed + 1, progress)
     logs = {"nominal": nominal, "augmented": augmented}
     figures = [_figures(name, log) for name, log in logs.items()]
     images = _plots(config, logs, fit, out)

@@ -19,6 +19,7 @@ from companion.nmpc_planner import NmpcSettings
 from experiments.study.config import StudyConfig
 from experiments.study.fitting import fit_residual
 from experiments.study.jobs import FlightJob, FlightSummary, run_flight_job, warm_up_planner
+from gp.prediction_check import refusal
 from gp.training import TrainingResult
 from planners.bspline import BSplineReference
 from planners.trajectory_generator import TrajectorySpec, generate_trajectories
@@ -73,9 +74,12 @@ def run_paper000(
     for sel, fit in fits.items():
         nom, aug = fit.metrics["nominal_rmse_mps"], fit.metrics["augmented_rmse_mps"]
         progress(f"fit {sel}: held-out rows nominal {_fmt(nom)} -> augmented {_fmt(aug)} m/s")
+        if not fit.may_fly:
+            progress(f"fit {sel}: {refusal(fit.model)}; its flights fly the nominal planner")
+    flying = {sel: fit.model if fit.may_fly else None for sel, fit in fits.items()}
     if config.compile_augmented:
         progress("compiling the augmented planners (once per model, cached on disk)")
-        models = [fits[sel].model for sel in config.selections]
+        models = [m for m in flying.values() if m is not None]
         list(pool.map(warm_up_planner, [config.nmpc] * len(models), models))
     aug_jobs = [
         FlightJob(
@@ -85,7 +89,7 @@ def run_paper000(
             config.repeats + seed,
             config.vehicle,
             config.nmpc,
-            fits[sel].model,
+            flying[sel],
             config.compile_augmented,
         )
         for sel in config.selections
