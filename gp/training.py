@@ -45,6 +45,8 @@ class TrainingConfig:
             horizon [s] against the incumbent (default: [Kulathunga23]'s kinematic model) on
             them before it may fly; the verdict goes into the model file.
         check_fraction: share of the logs held out for that check.
+        residual_steps: log steps the residual is measured over (gp.datasets); the planner's
+            interval divided by the log step learns what one step hides under noise.
     """
 
     features: str = "velocity"
@@ -59,6 +61,7 @@ class TrainingConfig:
     seed: int = 0
     check_horizon_s: float | None = None
     check_fraction: float = 0.25
+    residual_steps: int = 1
 
 
 @dataclass(frozen=True, eq=False)
@@ -156,4 +159,7 @@ def resolve_features(
     if config.nominal == "first_order_lag" and "tau_s" not in params:
         identified = identify_velocity_lag(logs, config.modes)
         params = {**identified.nominal_params(), **params}
-    return feature_definition(config.features, config.nominal, **params), identified
+    definition = feature_definition(
+        config.features, config.nominal, residual_steps=config.residual_steps, **params
+    )
+    return definition, identified

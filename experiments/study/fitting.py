@@ -9,9 +9,11 @@ import numpy as np
 from flightlog.schema import FlightLog
 from gp.prediction_check import Predictor
 from gp.training import TrainingConfig, TrainingResult, train_residual_model
+from planners.nominal_models import make_model
 
 FOLLOWING_MODES = ("OFFBOARD",)
 CHECK_HORIZON_S = 2.0  # the NMPC's horizon, N x dt = 20 x 0.1 s ([Kulathunga23])
+PLANNER_DT_S = 0.1  # the NMPC's interval [s]
 
 
 def fit_residual(
@@ -27,6 +29,7 @@ def fit_residual(
     progress: Callable[[str], None] = lambda message: None,
     incumbent: Predictor | None = None,
     check_horizon_s: float | None = CHECK_HORIZON_S,
+    planner_dt_s: float | None = PLANNER_DT_S,
 ) -> TrainingResult:
     """A residual model from the following phase (OFFBOARD rows) of ``logs``, flown with a
     control period of ``period_s`` [s], with ``m`` inducing points chosen by ``inducing``
@@ -41,6 +44,9 @@ def fit_residual(
     nominal kinematic model); ``result.may_fly`` is the verdict (gp.prediction_check).
     """
     params = {"residual_dt_s": period_s} if learned_model == "kinematic_4dof" else {}
+    steps = 1
+    if planner_dt_s is not None and make_model(learned_model).carries_velocity:
+        steps = max(1, int(round(planner_dt_s / period_s)))
     config = TrainingConfig(
         features=features,
         nominal=learned_model,
@@ -51,6 +57,7 @@ def fit_residual(
         modes=FOLLOWING_MODES,
         seed=seed,
         check_horizon_s=check_horizon_s,
+        residual_steps=steps,
     )
     regular = [regular_rows(log, period_s) for log in logs]
     return train_residual_model(regular, config, progress, incumbent)
