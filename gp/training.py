@@ -74,11 +74,18 @@ class TrainingResult:
     test: ResidualDataset
     metrics: dict[str, list[float]]
     check: PredictionCheck | None = None
+    structure_check: PredictionCheck | None = None
 
     @property
     def may_fly(self) -> bool:
         """False only if a check was made and the model did not beat the incumbent."""
         return self.check is None or self.check.passed
+
+    @property
+    def gp_earns_its_place(self) -> bool:
+        """False only if checked and the GP does not beat its own nominal model alone (the
+        identified structure): then the structure should fly without it."""
+        return self.structure_check is None or self.structure_check.passed
 
 
 def train_residual_model(
@@ -127,7 +134,7 @@ def train_residual_model(
         },
         training=training,
     )
-    check = None
+    check = alone = None
     if check_logs:
         horizon = float(config.check_horizon_s)
         candidate = Predictor.of_residual_model(model, f"learned ({features.nominal_model} + GP)")
@@ -141,7 +148,7 @@ def train_residual_model(
             progress(alone.describe())
             training["prediction_check_structure"] = alone.to_dict()
         model = ResidualModel.from_estimator(estimator, features, model.inducing, training)
-    return TrainingResult(model, train, test, metrics, check)
+    return TrainingResult(model, train, test, metrics, check, alone)
 
 
 def resolve_features(
