@@ -7,6 +7,9 @@ Built-in sets (outputs are always the NED velocity-rate residuals in m/s^2):
     velocity: [Kulathunga23]. z = measured velocity (vel_n, vel_e, vel_d) [m/s].
     state_input: measured velocity and the command: (vel_ned [m/s], cmd_vel_ned [m/s],
         cmd_yaw_rate [rad/s]), 7 features.
+    position_state: state_input plus the horizontal position (pos_n, pos_e [m]) in front, 9
+        features: for a disturbance that depends on where the vehicle is (a wind field on a
+        repeated path, [Ostafew16]'s path-dependent disturbance).
     history: [Ostafew16]'s a_k = (x_k, v_{k-1}, u_k, u_{k-1}) for a velocity-commanded
         multirotor: the velocity state now and one step ago, the command now and one step ago
         (vel_ned[k], vel_ned[k-1], cmd_vel_ned[k], cmd_vel_ned[k-1]), 12 features in m/s.
@@ -25,10 +28,14 @@ from planners.nominal_models import MODELS, NominalModel, make_model
 RESIDUAL_OUTPUTS: tuple[str, ...] = ("res_acc_n_mps2", "res_acc_e_mps2", "res_acc_d_mps2")
 _VEL = ("vel_n_mps", "vel_e_mps", "vel_d_mps")
 _CMD = ("cmd_vel_n_mps", "cmd_vel_e_mps", "cmd_vel_d_mps")
+_POS = ("pos_n_m", "pos_e_m", "pos_d_m")
 
 FEATURE_SETS: dict[str, tuple[tuple[str, int], ...]] = {
     "velocity": tuple((c, 0) for c in _VEL),
     "state_input": tuple((c, 0) for c in (*_VEL, *_CMD, "cmd_yaw_rate_radps")),
+    "position_state": tuple(
+        (c, 0) for c in ("pos_n_m", "pos_e_m", *_VEL, *_CMD, "cmd_yaw_rate_radps")
+    ),
     "history": tuple(
         [(c, 0) for c in _VEL] + [(c, 1) for c in _VEL]
         + [(c, 0) for c in _CMD] + [(c, 1) for c in _CMD]
@@ -36,11 +43,13 @@ FEATURE_SETS: dict[str, tuple[tuple[str, int], ...]] = {
 }  # fmt: skip
 
 
-# Where the NMPC takes each feature column from: (model velocity (3,), input u (nu,)) -> scalar.
-_PLANNER_SOURCES: dict[str, Callable[[ca.SX, ca.SX], ca.SX]] = {
-    **{c: (lambda vel, u, i=i: vel[i]) for i, c in enumerate(_VEL)},
-    **{c: (lambda vel, u, i=i: u[i]) for i, c in enumerate(_CMD)},
-    "cmd_yaw_rate_radps": lambda vel, u: u[3],
+# Where the NMPC takes each feature column from: (model, state x, input u, model velocity) ->
+# scalar. A position is the model's position state of that name.
+_PLANNER_SOURCES: dict[str, Callable[..., ca.SX]] = {
+    **{c: (lambda m, x, u, vel, i=i: vel[i]) for i, c in enumerate(_VEL)},
+    **{c: (lambda m, x, u, vel, i=i: u[i]) for i, c in enumerate(_CMD)},
+    "cmd_yaw_rate_radps": lambda m, x, u, vel: u[3],
+    **{c: (lambda m, x, u, vel, c=c: x[m.state_names.index(c)]) for c in _POS},
 }
 
 
@@ -106,20 +115,24 @@ class FeatureDefinition:
                 f"the NMPC cannot feed lagged features {lagged} (it carries no history along "
                 "the horizon); use the 'velocity' or 'state_input' feature set"
             )
-        uses = {c in _VEL for c, _ in self.inputs}
+        uses = {c in _VEL for c, _ in self.inputs if c not in _POS}
         if uses == {True, False} and not model.carries_velocity:
             raise ValueError(
                 f"features {self.name!r} need the measured velocity beside the command, "
                 f"but {model.name} has no velocity state; use 'velocity', or "
                 "'state_input' with first_order_lag"
             )
-        unknown = [c for c, _ in self.inputs if c not in _PLANNER_SOURCES]
+        unknown = [
+            c
+            for c, _ in self.inputs
+            if c not in _PLANNER_SOURCES or (c in _POS and c not in model.state_names)
+        ]
         if unknown:
             raise ValueError(f"the NMPC has no source for features {unknown}")
 
         def z(x: ca.SX, u: ca.SX) -> ca.SX:
             vel = model.velocity_of(x, u)
-            return ca.vertcat(*(_PLANNER_SOURCES[c](vel, u) for c, _ in self.inputs))
+            return ca.vertcat(*(_PLANNER_SOURCES[c](model, x, u, vel) for c, _ in self.inputs))
 
         return z
 

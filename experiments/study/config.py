@@ -20,7 +20,8 @@ class StudyConfig:
         vehicle: simulator preset or config file (default: the study vehicle, see
             vehicle_sim/presets/iris_study.toml).
         n_trajectories: random trajectories of [Kulathunga23]'s experiment.
-        length_range_m: their length range [m]; max_speed_mps: their speed limit [m/s].
+        length_range_m: their length range [m]; max_speed_mps: their speed limit [m/s];
+            max_acc_mps2: their acceleration limit [m/s^2].
         repeats: flights per trajectory and planner (nominal seeds 0.., augmented after them).
         selections: inducing-point selections compared at equal ``m``.
         m: inducing points per output.
@@ -42,6 +43,7 @@ class StudyConfig:
             improve its multi-step prediction on held-out flights (gp.prediction_check). Off in
             the study by default, so that the ablation shows what the GP does; the learned
             model is always refused when it does not beat the nominal model.
+        regime: the name of the regime these settings come from (experiments.study.regimes).
     """
 
     out_dir: Path = Path("out/study")
@@ -49,6 +51,7 @@ class StudyConfig:
     n_trajectories: int = 20
     length_range_m: tuple[float, float] = (40.0, 60.0)
     max_speed_mps: float = 1.5
+    max_acc_mps2: float = 1.0
     repeats: int = 3
     selections: tuple[str, ...] = SELECTIONS
     m: int = 30
@@ -61,6 +64,7 @@ class StudyConfig:
     gp_restarts: int = 2
     compile_augmented: bool = False
     gate_gp: bool = False
+    regime: str = "paper000"
 
     def __post_init__(self) -> None:
         if self.n_trajectories < 1 or self.repeats < 1 or self.n_trials < 2:

@@ -40,7 +40,11 @@ class Paper000Result:
 
 def study_trajectories(config: StudyConfig) -> list[BSplineReference]:
     """The seeded random trajectories of the experiment."""
-    spec = TrajectorySpec(length_range_m=config.length_range_m, max_speed_mps=config.max_speed_mps)
+    spec = TrajectorySpec(
+        length_range_m=config.length_range_m,
+        max_speed_mps=config.max_speed_mps,
+        max_acc_mps2=config.max_acc_mps2,
+    )
     return generate_trajectories(config.n_trajectories, config.trajectory_seed, spec)
 
 

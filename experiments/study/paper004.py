@@ -34,7 +34,11 @@ class TrialsResult:
 
 def run_trials(config: StudyConfig, progress: Callable[[str], None]) -> TrialsResult:
     """Fly ``config.n_trials`` trials in this process (each refit needs the previous trial)."""
-    spec = TrajectorySpec(length_range_m=config.length_range_m, max_speed_mps=config.max_speed_mps)
+    spec = TrajectorySpec(
+        length_range_m=config.length_range_m,
+        max_speed_mps=config.max_speed_mps,
+        max_acc_mps2=config.max_acc_mps2,
+    )
     seed = config.trajectory_seed + TRIAL_PATH_SEED_OFFSET
     reference = generate_trajectories(1, seed, spec)[0]
     selection = config.selections[0]
