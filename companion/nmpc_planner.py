@@ -56,6 +56,10 @@ class NmpcSettings:
         compile_functions: compile the solver's linearisation to C (cached per machine and
             formulation); each new residual model is a new formulation, so a short flight
             with a fresh model is faster uncompiled.
+        latency_s: the known time [s] from the measured state to the command taking effect
+            (link delay plus solve time). Before planning, the state is predicted forward over
+            it with the planner's own model (and residual) under the last command sent, and
+            the plan starts at t + latency_s, as practical NMPCs compensate dead time. 0: off.
     """
 
     speed_limit_mps: float
@@ -68,8 +72,14 @@ class NmpcSettings:
     yaw_rate_limit_radps: float = 1.0
     max_iterations: int | None = None
     compile_functions: bool = False
+    latency_s: float = 0.0
 
     def __post_init__(self) -> None:
+        if not 0.0 <= self.latency_s < self.horizon_steps * self.dt_s:
+            raise ValueError(
+                f"latency_s must be in [0, {self.horizon_steps * self.dt_s:g}) s, got "
+                f"{self.latency_s}"
+            )
         if self.nominal_model not in MULTIROTOR_MODELS:
             raise ValueError(
                 f"unknown NMPC model {self.nominal_model!r}; choose one of "
@@ -111,6 +121,13 @@ class CompanionNmpc:
             self.model, config, residual, compile_functions=settings.compile_functions
         )
         self._one_step = _one_step_function(self.model, residual, settings.period_s)
+        self._latency_s = settings.latency_s
+        self._advance = None
+        if settings.latency_s > 0:
+            x, u = ca.SX.sym("x", self.model.nx), ca.SX.sym("u", self.model.nu)
+            x_next = self.model.rk4_step(x, u, settings.latency_s, residual)
+            self._advance = ca.Function("advance_latency", [x, u], [x_next])
+        self._last_command: np.ndarray | None = None
         self._warm_up()
 
     def _warm_up(self) -> None:
@@ -119,14 +136,32 @@ class CompanionNmpc:
         hover = PlannerState(np.array([0.0, 0.0, -3.0]), np.zeros(3), 0.0)
         self._planner.plan(hover, _HoverReference(), 0.0)
         self._planner.reset()
+        self._last_command = None
 
     @property
     def augmented(self) -> bool:
         return self.residual_model is not None
 
     def plan(self, state: PlannerState, reference: Reference, t_s: float) -> PlanResult:
-        """One NMPC step (see :meth:`NmpcPlanner.plan`); never raises."""
-        return self._planner.plan(state, reference, t_s)
+        """One NMPC step (see :meth:`NmpcPlanner.plan`), from the state predicted over the
+        known latency when ``latency_s`` is set; never raises."""
+        if self._advance is not None and self._last_command is not None and state.is_finite():
+            state = self._predicted(state, self._last_command)
+            t_s = t_s + self._latency_s
+        result = self._planner.plan(state, reference, t_s)
+        self._last_command = np.array(result.command, dtype=float)
+        return result
+
+    def _predicted(self, state: PlannerState, command: np.ndarray) -> PlannerState:
+        """``state`` advanced by the latency under ``command`` with this planner's model."""
+        x = np.asarray(self._advance(state_vector(self.model, state), command)).ravel()
+        names = self.model.state_names
+        pos = x[[names.index(c) for c in ("pos_n_m", "pos_e_m", "pos_d_m")]]
+        vel = state.vel_ned_mps
+        if self.model.carries_velocity:
+            vel = x[[names.index(c) for c in ("vel_n_mps", "vel_e_mps", "vel_d_mps")]]
+        yaw = float(x[names.index("yaw_rad")]) if "yaw_rad" in names else state.yaw_rad
+        return PlannerState(pos, vel, yaw)
 
     def one_step_velocity(self, vel_ned_mps: np.ndarray, cmd_vel_ned_mps: np.ndarray) -> np.ndarray:
         """Velocity [m/s] (3,) this planner's model (with its residual) predicts one control
