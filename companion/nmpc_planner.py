@@ -34,6 +34,7 @@ from planners.residual import ResidualTerm
 
 MULTIROTOR_MODELS = ("kinematic_4dof", "first_order_lag")
 _DT_TOLERANCE = 0.05
+LATE_FALLBACK_S = 0.2  # oldest plan [s] flown on when a new plan comes back late
 
 
 @dataclass(frozen=True)
@@ -128,6 +129,8 @@ class CompanionNmpc:
             x_next = self.model.rk4_step(x, u, settings.latency_s, residual)
             self._advance = ca.Function("advance_latency", [x, u], [x_next])
         self._last_command: np.ndarray | None = None
+        self._last_ok: tuple[float, PlanResult] | None = None
+        self._dt_s = settings.dt_s
         self._warm_up()
 
     def _warm_up(self) -> None:
@@ -137,6 +140,7 @@ class CompanionNmpc:
         self._planner.plan(hover, _HoverReference(), 0.0)
         self._planner.reset()
         self._last_command = None
+        self._last_ok = None
 
     @property
     def augmented(self) -> bool:
@@ -149,8 +153,31 @@ class CompanionNmpc:
             state = self._predicted(state, self._last_command)
             t_s = t_s + self._latency_s
         result = self._planner.plan(state, reference, t_s)
+        if result.ok:
+            self._last_ok = (t_s, result)
+        elif result.reason.startswith("late") and self._last_ok is not None:
+            result = self._previous_plan(t_s, result.solve_time_s) or result
         self._last_command = np.array(result.command, dtype=float)
         return result
+
+    def _previous_plan(self, t_s: float, solve_time_s: float) -> PlanResult | None:
+        """The last good plan's input for time ``t_s`` (its row floor((t - t_plan) / dt)), as
+        the answer to a plan that came back late (a busy computer), if that plan is at most
+        LATE_FALLBACK_S old; braking to a hover on one late solve costs more tracking than
+        flying on the plan of a tick or two ago."""
+        t0, prev = self._last_ok
+        age_s = t_s - t0
+        row = int(np.floor(age_s / self._dt_s + 1e-9))
+        if not 0.0 <= age_s <= LATE_FALLBACK_S or row >= prev.predicted_inputs.shape[0]:
+            return None
+        return PlanResult(
+            prev.predicted_inputs[row],
+            prev.predicted_trajectory,
+            True,
+            "",
+            solve_time_s,
+            prev.predicted_inputs[row:],
+        )
 
     def _predicted(self, state: PlannerState, command: np.ndarray) -> PlannerState:
         """``state`` advanced by the latency under ``command`` with this planner's model."""

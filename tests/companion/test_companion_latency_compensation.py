@@ -37,3 +37,33 @@ def test_the_state_is_predicted_forward_under_the_last_command_with_the_planner_
 def test_a_latency_beyond_the_horizon_is_refused_in_one_line():
     with pytest.raises(ValueError, match="latency_s must be in"):
         NmpcSettings(speed_limit_mps=3.0, latency_s=5.0)
+
+
+class _Line:
+    """Fly north at 1 m/s from (0, 0, -3)."""
+
+    duration_s = 10.0
+
+    def sample(self, t_s):
+        from planners.reference import ReferenceSample
+
+        t = np.atleast_1d(np.asarray(t_s, dtype=float))
+        pos = np.column_stack([t, np.zeros_like(t), np.full_like(t, -3.0)])
+        vel = np.tile([1.0, 0.0, 0.0], (t.size, 1))
+        return ReferenceSample(pos, vel, np.zeros_like(vel), np.zeros(t.size), np.zeros(t.size))
+
+
+def test_a_late_plan_flies_on_the_previous_plan_instead_of_braking():
+    from planners.plan_result import safe_result
+
+    planner = CompanionNmpc(NmpcSettings(speed_limit_mps=3.0, time_budget_s=10.0))
+    state = PlannerState(np.array([0.0, 0.0, -3.0]), np.zeros(3), 0.0)
+    first = planner.plan(state, _Line(), 1.0)
+    assert first.ok
+    late = safe_result(4, planner.model.nx, "late: solve took 0.05 s > budget 0.02 s", 0.05)
+    planner._planner.plan = lambda *args: late  # the next solve comes back late
+    second = planner.plan(state, _Line(), 1.13)
+    assert second.ok
+    np.testing.assert_allclose(second.command, first.predicted_inputs[1])
+    stale = planner.plan(state, _Line(), 1.5)  # older than LATE_FALLBACK_S: brake
+    assert not stale.ok
