@@ -20,6 +20,7 @@ import numpy as np
 from companion.app import CompanionConfig, CompanionResult, run_companion
 from companion.mission import load_mission
 from companion.mission_reference import reference_of
+from companion.runner import RunnerConfig
 from experiments.sim_endpoint import SimEndpoint
 from experiments.study.config import STUDY_VEHICLE
 from experiments.study.fitting import fit_residual
@@ -31,6 +32,10 @@ from gp.prediction_check import refusal
 from gp.training import TrainingResult
 
 SELECTION = "low_speed"
+# Generous deadlines: on a busy computer the endpoint (a fresh Python process) may need most of
+# a minute before its first heartbeat; the flight itself is not affected by waiting longer.
+DEMO_CONNECT_TIMEOUT_S = 120.0
+DEMO_PHASE_TIMEOUT_S = 30.0
 
 
 @dataclass(frozen=True)
@@ -101,6 +106,12 @@ def _fly(
             planner="nmpc",
             gp_model=gp_model,
             log_path=log_path,
+            runner=RunnerConfig(
+                rate_hz=config.rate_hz,
+                connect_timeout_s=DEMO_CONNECT_TIMEOUT_S,
+                arm_timeout_s=DEMO_PHASE_TIMEOUT_S,
+                offboard_timeout_s=DEMO_PHASE_TIMEOUT_S,
+            ),
         )
         result: CompanionResult = run_companion(companion, progress)
     if result.outcome.status != "completed" or result.log_path is None:
