@@ -39,3 +39,12 @@ def test_features_the_planner_cannot_build_are_refused_in_one_line(features, nom
 def test_only_velocity_loop_models_carry_velocity():
     assert feature_definition("velocity", "first_order_lag").nominal().carries_velocity
     assert not feature_definition("velocity", "kinematic_4dof").nominal().carries_velocity
+
+
+def test_position_state_map_takes_the_position_from_the_model_state():
+    fd = feature_definition("position_state", "first_order_lag", tau_s=0.4)
+    model = fd.nominal()
+    x = np.arange(1.0, 8.0)  # pos (1, 2, 3), vel (4, 5, 6), yaw 7
+    u = np.array([0.5, 0.6, 0.7, 0.8])
+    z = np.asarray(ca.DM(fd.planner_map(model)(ca.DM(x), ca.DM(u)))).ravel()
+    np.testing.assert_allclose(z, [1.0, 2.0, 4.0, 5.0, 6.0, 0.5, 0.6, 0.7, 0.8])
