@@ -118,9 +118,9 @@ class FeatureDefinition:
         uses = {c in _VEL for c, _ in self.inputs if c not in _POS}
         if uses == {True, False} and not model.carries_velocity:
             raise ValueError(
-                f"features {self.name!r} need the measured velocity beside the command, "
-                f"but {model.name} has no velocity state; use 'velocity', or "
-                "'state_input' with first_order_lag"
+                f"the NMPC cannot feed features {self.name!r} from {model.name}'s state: they "
+                f"need the measured velocity beside the command and it has no velocity state; "
+                "use 'velocity', or 'state_input' with first_order_lag"
             )
         unknown = [
             c
