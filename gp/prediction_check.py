@@ -161,11 +161,12 @@ def check_prediction(
 
 
 def split_logs(
-    logs: Sequence[FlightLog], fraction: float = 0.25
+    logs: Sequence[FlightLog], fraction: float = 0.25, modes: tuple[str, ...] | None = None
 ) -> tuple[list[FlightLog], list[FlightLog]]:
     """(training, held-out) logs: every round(1/fraction)-th log is held out when there are at
-    least 1/fraction + 1 of them; otherwise each log is cut in time, its last ``fraction`` held
-    out (a single flight still gets a check it was not trained on)."""
+    least 1/fraction + 1 of them; otherwise each log is cut in time, the last ``fraction`` of
+    its rows in ``modes`` (all rows if None) held out (a single flight still gets a check it was
+    not trained on)."""
     every = max(2, int(round(1.0 / fraction)))
     if len(logs) > every:
         held = [log for i, log in enumerate(logs) if i % every == every - 1]
@@ -173,7 +174,14 @@ def split_logs(
         return train, held
     train, held = [], []
     for log in logs:
-        cut = int(round((1.0 - fraction) * log.n_rows))
+        rows = np.arange(log.n_rows)
+        if modes is not None and log.has("mode"):
+            rows = np.flatnonzero(np.isin(log["mode"], modes))
+        if rows.size == 0:
+            train.append(log)
+            continue
+        first, last = int(rows[0]), int(rows[-1]) + 1
+        cut = first + int(round((1.0 - fraction) * (last - first)))
         train.append(log.slice(0, cut))
         held.append(log.slice(cut, log.n_rows))
     return train, held

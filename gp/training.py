@@ -98,7 +98,7 @@ def train_residual_model(
     with ``config.check_horizon_s``, check it against ``incumbent`` on held-out logs."""
     check_logs: list[FlightLog] = []
     if config.check_horizon_s is not None:
-        logs, check_logs = split_logs(logs, config.check_fraction)
+        logs, check_logs = split_logs(logs, config.check_fraction, config.modes)
     features, identified = resolve_features(logs, config)
     if identified is not None:
         progress(f"identified {identified.describe()}")
