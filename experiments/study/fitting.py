@@ -44,9 +44,11 @@ def fit_residual(
     nominal kinematic model); ``result.may_fly`` is the verdict (gp.prediction_check).
     """
     params = {"residual_dt_s": period_s} if learned_model == "kinematic_4dof" else {}
+    regular = [regular_rows(log, period_s) for log in logs]
     steps = 1
     if planner_dt_s is not None and make_model(learned_model).carries_velocity:
-        steps = max(1, int(round(planner_dt_s / period_s)))
+        log_step_s = float(np.median(np.concatenate([np.diff(log["t_s"]) for log in regular])))
+        steps = max(1, int(round(planner_dt_s / log_step_s)))
     config = TrainingConfig(
         features=features,
         nominal=learned_model,
@@ -59,7 +61,6 @@ def fit_residual(
         check_horizon_s=check_horizon_s,
         residual_steps=steps,
     )
-    regular = [regular_rows(log, period_s) for log in logs]
     return train_residual_model(regular, config, progress, incumbent)
 
 
