@@ -89,7 +89,9 @@ class NmpcSettings:
 
 
 class CompanionNmpc:
-    """:class:`NmpcPlanner` on a multirotor nominal model, with an optional residual model.
+    """:class:`NmpcPlanner` on a multirotor nominal model, with an optional residual model
+    (flown without its GP when the file says the GP does not beat the structure alone, see
+    :func:`structure_only`).
 
     Attributes:
         model: the nominal model the NMPC plans with.
@@ -107,8 +109,9 @@ class CompanionNmpc:
         else:
             check_residual_model(residual_model, settings.period_s)
             self.model = residual_model.features.nominal()
-            mean_fn = residual_model.flight_mean_function()
-            residual = ResidualTerm(mean_fn, residual_model.features.planner_map(self.model))
+            if not structure_only(residual_model):
+                mean_fn = residual_model.flight_mean_function()
+                residual = ResidualTerm(mean_fn, residual_model.features.planner_map(self.model))
         v, w = settings.speed_limit_mps, settings.yaw_rate_limit_radps
         config = NmpcConfig(
             horizon_steps=settings.horizon_steps,
@@ -226,6 +229,14 @@ def _one_step_function(
         pos = [model.state_names.index(n) for n in ("pos_n_m", "pos_e_m", "pos_d_m")]
         vel = (x_next[pos] - x[pos]) / period_s
     return ca.Function("one_step_velocity", [x, u], [vel])
+
+
+def structure_only(model: ResidualModel) -> bool:
+    """True when the model file records that its GP predicts worse over the horizon than its
+    own nominal model alone (the identified structure; gp.prediction_check): then the planner
+    flies that structure without the GP, never worse than what was learned without it."""
+    check = model.training.get("prediction_check_structure")
+    return isinstance(check, dict) and check.get("passed") is False
 
 
 def check_residual_model(model: ResidualModel, period_s: float) -> None:

@@ -6,7 +6,7 @@ and T_k = t[k+H] - t[k]:
     y_k = (v_measured(t[k+H]) - v_predicted(t[k+H])) / T_k        [m/s^2, NED]
 
 where v_predicted is the nominal model's velocity H steps after the measured state at k under
-the logged commands u(k..k+H-1) (RK4 steps of the segment's median step; for H = 1 and the
+the logged commands u(k..k+H-1) (one RK4 step per row, of its own dt; for H = 1 and the
 default kinematic_4dof model, the commanded velocity itself, [Kulathunga23] eq. 5). H > 1
 measures the residual over the planner's interval: the mean acceleration the nominal model
 misses over it, which is how the NMPC applies it (constant over each 0.1 s interval). The
@@ -23,6 +23,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+import casadi as ca
 import numpy as np
 
 from flightlog.schema import REQUIRED_COLUMNS, FlightLog
@@ -161,14 +162,24 @@ def _segment_rows(seg: FlightLog, features: FeatureDefinition) -> tuple[np.ndarr
     model = features.nominal()
     x = model_state(model, seg)[k]
     u_all = model_input(model, seg)
-    step_s = float(np.median(t[k + 1] - t[k]))
-    for i in range(steps - 1):
-        x = model.step_np(x, u_all[k + i], step_s)
-    v_pred = model.predicted_velocity_np(x, u_all[k + steps - 1], step_s)
+    if steps == 1:
+        v_pred = model.predicted_velocity_np(x, u_all[k], float(np.median(dt)))
+    else:  # each row's own step: a wall-clock log's rows are not evenly spaced
+        step = _step_with_dt(model).map(k.size)
+        xt = x.T
+        for i in range(steps):
+            xt = step(xt, u_all[k + i].T, (t[k + i + 1] - t[k + i])[None, :])
+        v_pred = np.asarray(model.velocity_of.map(k.size)(xt, u_all[k + steps - 1].T)).T
     v_meas = seg.stack(*_VEL)
     Y = (v_meas[k + steps] - v_pred) / dt[:, None]
     X = np.column_stack([seg[c][k - lg] for c, lg in features.inputs])
     return X, Y, dt, v_meas[k]
+
+
+def _step_with_dt(model) -> ca.Function:
+    """(x, u, dt [s]) -> x after one RK4 step of ``model``."""
+    x, u, dt = ca.SX.sym("x", model.nx), ca.SX.sym("u", model.nu), ca.SX.sym("dt")
+    return ca.Function("step_dt", [x, u, dt], [model.rk4_step(x, u, dt)])
 
 
 def _check_finite(log: FlightLog, features: FeatureDefinition) -> None:

@@ -39,10 +39,6 @@ class StudyConfig:
         compile_augmented: compile each augmented planner to C (cached on disk). Off by
             default: with the identified-lag model gcc needs over 6 minutes and 3 GB per model,
             and the uncompiled solves (about 4 ms) already fit a 50 Hz loop.
-        gate_gp: fly the identified structure instead of structure + GP when the GP does not
-            improve its multi-step prediction on held-out flights (gp.prediction_check). Off in
-            the study by default, so that the ablation shows what the GP does; the learned
-            model is always refused when it does not beat the nominal model.
         regime: the name of the regime these settings come from (experiments.study.regimes).
     """
 
@@ -63,7 +59,6 @@ class StudyConfig:
     features: str = "state_input"
     gp_restarts: int = 2
     compile_augmented: bool = False
-    gate_gp: bool = False
     regime: str = "paper000"
 
     def __post_init__(self) -> None:

@@ -84,13 +84,8 @@ def run_paper000(
         if not fit.may_fly:
             progress(f"fit {sel}: {refusal(fit.model)}; its flights fly the nominal planner")
         elif not fit.gp_earns_its_place:
-            progress(f"fit {sel}: the GP does not beat its structure; the structure flies")
+            progress(f"fit {sel}: the GP does not beat its structure; the structure flies alone")
     flying = {sel: fit.model if fit.may_fly else None for sel, fit in fits.items()}
-    settings = {sel: config.nmpc for sel in fits}
-    for sel, fit in fits.items():
-        if fit.may_fly and not fit.gp_earns_its_place and config.gate_gp:
-            flying[sel] = None
-            settings[sel] = identified_lag_settings(config, fit) or config.nmpc
     if config.compile_augmented:
         progress("compiling the augmented planners (once per model, cached on disk)")
         models = [m for m in flying.values() if m is not None]
@@ -102,7 +97,7 @@ def run_paper000(
             sel,
             config.repeats + seed,
             config.vehicle,
-            settings[sel],
+            config.nmpc,
             flying[sel],
             config.compile_augmented,
         )

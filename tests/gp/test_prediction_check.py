@@ -83,3 +83,18 @@ def test_the_companion_refuses_a_model_file_that_failed_its_check(hidden_plant_l
         check_residual_model(bad, period_s=0.02)
     assert "\n" not in str(info.value)
     check_residual_model(model, period_s=0.02)  # an unchecked model is not refused
+
+
+def test_a_gp_that_does_not_beat_its_structure_flies_without_it(hidden_plant_logs):
+    from dataclasses import replace
+
+    from companion.nmpc_planner import structure_only
+
+    config = TrainingConfig(features="state_input", nominal="first_order_lag", m=10, restarts=1)
+    model = train_residual_model(hidden_plant_logs[:2], config).model
+    assert not structure_only(model)
+    worse = {"candidate": "learned", "incumbent": "first_order_lag alone", "passed": False,
+             "candidate_rmse_m": 0.2, "incumbent_rmse_m": 0.03, "horizon_s": 2.0}  # fmt: skip
+    assert structure_only(
+        replace(model, training={**model.training, "prediction_check_structure": worse})
+    )
