@@ -24,6 +24,7 @@ import numpy as np
 from gp.errors import ModelFileError
 from gp.features import feature_definition
 from gp.model_io import ResidualModel, load_model
+from gp.prediction_check import refusal
 from planners.model_vectors import state_vector
 from planners.nmpc import NmpcPlanner
 from planners.nmpc_formulation import NmpcConfig
@@ -34,6 +35,7 @@ from planners.residual import ResidualTerm
 
 MULTIROTOR_MODELS = ("kinematic_4dof", "first_order_lag")
 _DT_TOLERANCE = 0.05
+LATE_FALLBACK_S = 0.2  # oldest plan [s] flown on when a new plan comes back late
 
 
 @dataclass(frozen=True)
@@ -56,6 +58,10 @@ class NmpcSettings:
         compile_functions: compile the solver's linearisation to C (cached per machine and
             formulation); each new residual model is a new formulation, so a short flight
             with a fresh model is faster uncompiled.
+        latency_s: the known time [s] from the measured state to the command taking effect
+            (link delay plus solve time). Before planning, the state is predicted forward over
+            it with the planner's own model (and residual) under the last command sent, and
+            the plan starts at t + latency_s, as practical NMPCs compensate dead time. 0: off.
     """
 
     speed_limit_mps: float
@@ -68,8 +74,14 @@ class NmpcSettings:
     yaw_rate_limit_radps: float = 1.0
     max_iterations: int | None = None
     compile_functions: bool = False
+    latency_s: float = 0.0
 
     def __post_init__(self) -> None:
+        if not 0.0 <= self.latency_s < self.horizon_steps * self.dt_s:
+            raise ValueError(
+                f"latency_s must be in [0, {self.horizon_steps * self.dt_s:g}) s, got "
+                f"{self.latency_s}"
+            )
         if self.nominal_model not in MULTIROTOR_MODELS:
             raise ValueError(
                 f"unknown NMPC model {self.nominal_model!r}; choose one of "
@@ -78,7 +90,9 @@ class NmpcSettings:
 
 
 class CompanionNmpc:
-    """:class:`NmpcPlanner` on a multirotor nominal model, with an optional residual model.
+    """:class:`NmpcPlanner` on a multirotor nominal model, with an optional residual model
+    (flown without its GP when the file says the GP does not beat the structure alone, see
+    :func:`structure_only`).
 
     Attributes:
         model: the nominal model the NMPC plans with.
@@ -96,9 +110,9 @@ class CompanionNmpc:
         else:
             check_residual_model(residual_model, settings.period_s)
             self.model = residual_model.features.nominal()
-            mean_fn = _bounded(residual_model)
-            features = residual_model.features
-            residual = ResidualTerm(mean_fn, lambda x, u: features.symbolic(self.model, x, u))
+            if not structure_only(residual_model):
+                mean_fn = residual_model.flight_mean_function()
+                residual = ResidualTerm(mean_fn, residual_model.features.planner_map(self.model))
         v, w = settings.speed_limit_mps, settings.yaw_rate_limit_radps
         config = NmpcConfig(
             horizon_steps=settings.horizon_steps,
@@ -112,6 +126,15 @@ class CompanionNmpc:
             self.model, config, residual, compile_functions=settings.compile_functions
         )
         self._one_step = _one_step_function(self.model, residual, settings.period_s)
+        self._latency_s = settings.latency_s
+        self._advance = None
+        if settings.latency_s > 0:
+            x, u = ca.SX.sym("x", self.model.nx), ca.SX.sym("u", self.model.nu)
+            x_next = self.model.rk4_step(x, u, settings.latency_s, residual)
+            self._advance = ca.Function("advance_latency", [x, u], [x_next])
+        self._last_command: np.ndarray | None = None
+        self._last_ok: tuple[float, PlanResult] | None = None
+        self._dt_s = settings.dt_s
         self._warm_up()
 
     def _warm_up(self) -> None:
@@ -120,14 +143,56 @@ class CompanionNmpc:
         hover = PlannerState(np.array([0.0, 0.0, -3.0]), np.zeros(3), 0.0)
         self._planner.plan(hover, _HoverReference(), 0.0)
         self._planner.reset()
+        self._last_command = None
+        self._last_ok = None
 
     @property
     def augmented(self) -> bool:
         return self.residual_model is not None
 
     def plan(self, state: PlannerState, reference: Reference, t_s: float) -> PlanResult:
-        """One NMPC step (see :meth:`NmpcPlanner.plan`); never raises."""
-        return self._planner.plan(state, reference, t_s)
+        """One NMPC step (see :meth:`NmpcPlanner.plan`), from the state predicted over the
+        known latency when ``latency_s`` is set; never raises."""
+        if self._advance is not None and self._last_command is not None and state.is_finite():
+            state = self._predicted(state, self._last_command)
+            t_s = t_s + self._latency_s
+        result = self._planner.plan(state, reference, t_s)
+        if result.ok:
+            self._last_ok = (t_s, result)
+        elif result.reason.startswith("late") and self._last_ok is not None:
+            result = self._previous_plan(t_s, result.solve_time_s) or result
+        self._last_command = np.array(result.command, dtype=float)
+        return result
+
+    def _previous_plan(self, t_s: float, solve_time_s: float) -> PlanResult | None:
+        """The last good plan's input for time ``t_s`` (its row floor((t - t_plan) / dt)), as
+        the answer to a plan that came back late (a busy computer), if that plan is at most
+        LATE_FALLBACK_S old; braking to a hover on one late solve costs more tracking than
+        flying on the plan of a tick or two ago."""
+        t0, prev = self._last_ok
+        age_s = t_s - t0
+        row = int(np.floor(age_s / self._dt_s + 1e-9))
+        if not 0.0 <= age_s <= LATE_FALLBACK_S or row >= prev.predicted_inputs.shape[0]:
+            return None
+        return PlanResult(
+            prev.predicted_inputs[row],
+            prev.predicted_trajectory,
+            True,
+            "",
+            solve_time_s,
+            prev.predicted_inputs[row:],
+        )
+
+    def _predicted(self, state: PlannerState, command: np.ndarray) -> PlannerState:
+        """``state`` advanced by the latency under ``command`` with this planner's model."""
+        x = np.asarray(self._advance(state_vector(self.model, state), command)).ravel()
+        names = self.model.state_names
+        pos = x[[names.index(c) for c in ("pos_n_m", "pos_e_m", "pos_d_m")]]
+        vel = state.vel_ned_mps
+        if self.model.carries_velocity:
+            vel = x[[names.index(c) for c in ("vel_n_mps", "vel_e_mps", "vel_d_mps")]]
+        yaw = float(x[names.index("yaw_rad")]) if "yaw_rad" in names else state.yaw_rad
+        return PlannerState(pos, vel, yaw)
 
     def one_step_velocity(self, vel_ned_mps: np.ndarray, cmd_vel_ned_mps: np.ndarray) -> np.ndarray:
         """Velocity [m/s] (3,) this planner's model (with its residual) predicts one control
@@ -137,25 +202,6 @@ class CompanionNmpc:
         x = state_vector(self.model, state)
         u = np.append(np.asarray(cmd_vel_ned_mps, dtype=float).reshape(3), 0.0)
         return np.asarray(self._one_step(x, u), dtype=float).reshape(3)
-
-
-RESIDUAL_BOUND_STD = 4.0
-
-
-def _bounded(model: ResidualModel) -> ca.Function:
-    """The model's mean g(z), clipped per axis to the training residuals' mean +- 4 std (from
-    the model file's training summary), so that a badly conditioned fit cannot command the
-    vehicle with residuals it never saw. Unclipped if the summary is missing."""
-    mean_fn = model.casadi_function(include_variance=False).expand()
-    mean = model.training.get("residual_mean")
-    std = model.training.get("residual_std")
-    if mean is None or std is None:
-        return mean_fn
-    lo = np.asarray(mean, dtype=float) - RESIDUAL_BOUND_STD * np.asarray(std, dtype=float)
-    hi = np.asarray(mean, dtype=float) + RESIDUAL_BOUND_STD * np.asarray(std, dtype=float)
-    z = ca.SX.sym("z", mean_fn.numel_in(0))
-    g = ca.fmin(ca.fmax(mean_fn(z), ca.DM(lo)), ca.DM(hi))
-    return ca.Function("gp_residual_bounded", [z], [g], ["z"], ["mean"])
 
 
 class _HoverReference:
@@ -178,7 +224,7 @@ def _one_step_function(
     x = ca.SX.sym("x", model.nx)
     u = ca.SX.sym("u", model.nu)
     x_next = model.rk4_step(x, u, period_s, residual)
-    if model.velocity_in_state:
+    if model.carries_velocity:
         vel = model.velocity_of(x_next, u)
     else:
         pos = [model.state_names.index(n) for n in ("pos_n_m", "pos_e_m", "pos_d_m")]
@@ -186,22 +232,33 @@ def _one_step_function(
     return ca.Function("one_step_velocity", [x, u], [vel])
 
 
+def structure_only(model: ResidualModel) -> bool:
+    """True when the model file records that its GP predicts worse over the horizon than its
+    own nominal model alone (the identified structure; gp.prediction_check): then the planner
+    flies that structure without the GP, never worse than what was learned without it."""
+    check = model.training.get("prediction_check_structure")
+    return isinstance(check, dict) and check.get("passed") is False
+
+
 def check_residual_model(model: ResidualModel, period_s: float) -> None:
     """Raise ModelFileError (one line) unless the NMPC can fly ``model`` at this period."""
+    refused = refusal(model)
+    if refused is not None:
+        raise ModelFileError(refused)
     features = model.features
     if features.nominal_model not in MULTIROTOR_MODELS:
         raise ModelFileError(
             f"residual model is taken against {features.nominal_model}; the NMPC flies "
             f"{' or '.join(MULTIROTOR_MODELS)}; refit with fit-gp --nominal kinematic_4dof"
         )
+    nominal = features.nominal()
     try:
-        features.check_feedable(features.nominal())
+        features.planner_map(nominal)
     except ValueError as exc:
         raise ModelFileError(f"residual model: {exc}; refit with fit-gp") from None
     dt_s = dict(features.nominal_params).get("residual_dt_s")
-    if not features.nominal().velocity_in_state and (
-        dt_s is None or abs(dt_s - period_s) > _DT_TOLERANCE * period_s
-    ):
+    off_rate = dt_s is None or abs(dt_s - period_s) > _DT_TOLERANCE * period_s
+    if not nominal.carries_velocity and off_rate:
         raise ModelFileError(
             f"residual model was measured over steps of {dt_s} s but the control loop runs "
             f"every {period_s:g} s; refit from logs flown at the same rate"
@@ -209,9 +266,11 @@ def check_residual_model(model: ResidualModel, period_s: float) -> None:
 
 
 def check_feature_set(features: str, nominal_model: str) -> None:
-    """Raise ValueError unless the NMPC can build feature set ``features`` from the state and
-    input of ``nominal_model`` (see gp.features.FeatureDefinition.check_feedable)."""
-    feature_definition(features, nominal_model).check_feedable(make_model(nominal_model))
+    """Raise ValueError (one line) unless the NMPC can build feature set ``features`` from the
+    state and input of ``nominal_model`` (see FeatureDefinition.planner_map)."""
+
+    definition = feature_definition(features, nominal_model)
+    definition.planner_map(definition.nominal())
 
 
 def load_nmpc(settings: NmpcSettings, gp_model_path: Path | None) -> CompanionNmpc:

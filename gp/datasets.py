@@ -1,11 +1,15 @@
 """Residual datasets from flight logs ([Kulathunga23], eq. 5).
 
-For each control step k of a clean segment, with dt_k = t[k+1] - t[k]:
+For each control step k of a clean segment, with H = the feature definition's residual_steps
+and T_k = t[k+H] - t[k]:
 
-    y_k = (v_measured(t[k+1]) - v_predicted(t[k+1])) / dt_k        [m/s^2, NED]
+    y_k = (v_measured(t[k+H]) - v_predicted(t[k+H])) / T_k        [m/s^2, NED]
 
-where v_predicted is the nominal model's velocity one step after the measured state under the
-logged command (for the default kinematic_4dof model, the commanded velocity itself). The
+where v_predicted is the nominal model's velocity H steps after the measured state at k under
+the logged commands u(k..k+H-1) (one RK4 step per row, of its own dt; for H = 1 and the
+default kinematic_4dof model, the commanded velocity itself, [Kulathunga23] eq. 5). H > 1
+measures the residual over the planner's interval: the mean acceleration the nominal model
+misses over it, which is how the NMPC applies it (constant over each 0.1 s interval). The
 input row z_k is the feature definition's columns at k minus their lags.
 
 Segments: a log is split where the time step exceeds ``max_gap_factor`` times its median step,
@@ -19,6 +23,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+import casadi as ca
 import numpy as np
 
 from flightlog.schema import REQUIRED_COLUMNS, FlightLog
@@ -135,7 +140,8 @@ def split_segments(log: FlightLog, config: DatasetConfig) -> list[FlightLog]:
         keep &= log["armed"] > 0.5
         cut |= (log["armed"][1:] > 0.5) != (log["armed"][:-1] > 0.5)
     edges = [0, *(np.flatnonzero(cut) + 1).tolist(), n]
-    need = max(config.min_segment_rows, config.features.max_lag + 2)
+    features = config.features
+    need = max(config.min_segment_rows, features.max_lag + features.residual_steps + 1)
     return [
         log.slice(a, b)
         for a, b in zip(edges[:-1], edges[1:], strict=True)
@@ -147,19 +153,33 @@ def _segment_rows(seg: FlightLog, features: FeatureDefinition) -> tuple[np.ndarr
     """(X, Y, dt, vel) for one clean segment, or None if it is too short for the lags."""
     n = seg.n_rows
     lag = features.max_lag
-    k = np.arange(lag, n - 1)
+    steps = features.residual_steps
+    k = np.arange(lag, n - steps)
     if k.size == 0:
         return None
     t = seg["t_s"]
-    dt = t[k + 1] - t[k]
+    dt = t[k + steps] - t[k]
     model = features.nominal()
     x = model_state(model, seg)[k]
-    u = model_input(model, seg)[k]
-    v_pred = model.predicted_velocity_np(x, u, float(np.median(dt)))
+    u_all = model_input(model, seg)
+    if steps == 1:
+        v_pred = model.predicted_velocity_np(x, u_all[k], float(np.median(dt)))
+    else:  # each row's own step: a wall-clock log's rows are not evenly spaced
+        step = _step_with_dt(model).map(k.size)
+        xt = x.T
+        for i in range(steps):
+            xt = step(xt, u_all[k + i].T, (t[k + i + 1] - t[k + i])[None, :])
+        v_pred = np.asarray(model.velocity_of.map(k.size)(xt, u_all[k + steps - 1].T)).T
     v_meas = seg.stack(*_VEL)
-    Y = (v_meas[k + 1] - v_pred) / dt[:, None]
+    Y = (v_meas[k + steps] - v_pred) / dt[:, None]
     X = np.column_stack([seg[c][k - lg] for c, lg in features.inputs])
     return X, Y, dt, v_meas[k]
+
+
+def _step_with_dt(model) -> ca.Function:
+    """(x, u, dt [s]) -> x after one RK4 step of ``model``."""
+    x, u, dt = ca.SX.sym("x", model.nx), ca.SX.sym("u", model.nu), ca.SX.sym("dt")
+    return ca.Function("step_dt", [x, u, dt], [model.rk4_step(x, u, dt)])
 
 
 def _check_finite(log: FlightLog, features: FeatureDefinition) -> None:

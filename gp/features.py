@@ -7,6 +7,9 @@ Built-in sets (outputs are always the NED velocity-rate residuals in m/s^2):
     velocity: [Kulathunga23]. z = measured velocity (vel_n, vel_e, vel_d) [m/s].
     state_input: measured velocity and the command: (vel_ned [m/s], cmd_vel_ned [m/s],
         cmd_yaw_rate [rad/s]), 7 features.
+    position_state: state_input plus the horizontal position (pos_n, pos_e [m]) in front, 9
+        features: for a disturbance that depends on where the vehicle is (a wind field on a
+        repeated path, [Ostafew16]'s path-dependent disturbance).
     history: [Ostafew16]'s a_k = (x_k, v_{k-1}, u_k, u_{k-1}) for a velocity-commanded
         multirotor: the velocity state now and one step ago, the command now and one step ago
         (vel_ned[k], vel_ned[k-1], cmd_vel_ned[k], cmd_vel_ned[k-1]), 12 features in m/s.
@@ -15,7 +18,7 @@ In the NMPC, "vel" is the velocity the (augmented) model predicts for the vehicl
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import casadi as ca
@@ -25,15 +28,29 @@ from planners.nominal_models import MODELS, NominalModel, make_model
 RESIDUAL_OUTPUTS: tuple[str, ...] = ("res_acc_n_mps2", "res_acc_e_mps2", "res_acc_d_mps2")
 _VEL = ("vel_n_mps", "vel_e_mps", "vel_d_mps")
 _CMD = ("cmd_vel_n_mps", "cmd_vel_e_mps", "cmd_vel_d_mps")
+_POS = ("pos_n_m", "pos_e_m", "pos_d_m")
 
 FEATURE_SETS: dict[str, tuple[tuple[str, int], ...]] = {
     "velocity": tuple((c, 0) for c in _VEL),
     "state_input": tuple((c, 0) for c in (*_VEL, *_CMD, "cmd_yaw_rate_radps")),
+    "position_state": tuple(
+        (c, 0) for c in ("pos_n_m", "pos_e_m", *_VEL, *_CMD, "cmd_yaw_rate_radps")
+    ),
     "history": tuple(
         [(c, 0) for c in _VEL] + [(c, 1) for c in _VEL]
         + [(c, 0) for c in _CMD] + [(c, 1) for c in _CMD]
     ),
 }  # fmt: skip
+
+
+# Where the NMPC takes each feature column from: (model, state x, input u, model velocity) ->
+# scalar. A position is the model's position state of that name.
+_PLANNER_SOURCES: dict[str, Callable[..., ca.SX]] = {
+    **{c: (lambda m, x, u, vel, i=i: vel[i]) for i, c in enumerate(_VEL)},
+    **{c: (lambda m, x, u, vel, i=i: u[i]) for i, c in enumerate(_CMD)},
+    "cmd_yaw_rate_radps": lambda m, x, u, vel: u[3],
+    **{c: (lambda m, x, u, vel, c=c: x[m.state_names.index(c)]) for c in _POS},
+}
 
 
 @dataclass(frozen=True)
@@ -46,6 +63,10 @@ class FeatureDefinition:
         outputs: residual names, in output order (units in the names).
         nominal_model: name of the planners' nominal model the residual is taken against.
         nominal_params: that model's parameters as sorted (name, value) pairs.
+        residual_steps: H, the log steps the residual is measured over (gp.datasets): 1 is
+            [Kulathunga23]'s one-step residual; the planner's interval (0.1 s = 5 steps at
+            50 Hz) lets the GP see what one 20 ms step hides under noise: the dead time and the
+            second-order part of the velocity response, drag at speed, a wind field.
     """
 
     name: str
@@ -53,6 +74,11 @@ class FeatureDefinition:
     outputs: tuple[str, ...] = RESIDUAL_OUTPUTS
     nominal_model: str = "kinematic_4dof"
     nominal_params: tuple[tuple[str, float], ...] = ()
+    residual_steps: int = 1
+
+    def __post_init__(self) -> None:
+        if self.residual_steps < 1:
+            raise ValueError(f"residual_steps must be >= 1, got {self.residual_steps}")
 
     @property
     def input_names(self) -> tuple[str, ...]:
@@ -76,29 +102,39 @@ class FeatureDefinition:
         """The nominal model instance."""
         return make_model(self.nominal_model, **dict(self.nominal_params))
 
-    def check_feedable(self, model: NominalModel) -> None:
-        """ValueError unless a planner on ``model`` can build these features along its horizon:
-        no lagged signals (the horizon has no past), and the measured velocity and the command
-        as separate signals only when the model carries a velocity state (the kinematic model
-        flies the command, so the two would be one and the same)."""
-        columns = {c for c, _ in self.inputs}
-        if self.max_lag > 0 or (
-            columns & set(_VEL) and columns & set(_CMD) and not model.velocity_in_state
-        ):
+    def planner_map(self, model: NominalModel) -> Callable[[ca.SX, ca.SX], ca.SX]:
+        """z(x, u) (SX, n_features) for the NMPC, from the same ``inputs`` the dataset reads
+        from the logs: a measured velocity is the model's velocity (``model.velocity_of``), a
+        command is the input u. Raises ValueError (one line) if the planner cannot build it:
+        lagged features, or a measured velocity beside other features on a model that does
+        not carry the velocity ([Kulathunga23]'s "velocity" set queries the kinematic model
+        at its commanded velocity, its only notion of velocity)."""
+        lagged = [n for n, (_, lag) in zip(self.input_names, self.inputs, strict=True) if lag]
+        if lagged:
             raise ValueError(
-                f"the NMPC cannot feed features {self.name!r} from {model.name}'s state; use "
-                "'velocity', or 'state_input' with first_order_lag"
+                f"the NMPC cannot feed lagged features {lagged} (it carries no history along "
+                "the horizon); use the 'velocity' or 'state_input' feature set"
             )
+        uses = {c in _VEL for c, _ in self.inputs if c not in _POS}
+        if uses == {True, False} and not model.carries_velocity:
+            raise ValueError(
+                f"the NMPC cannot feed features {self.name!r} from {model.name}'s state: they "
+                f"need the measured velocity beside the command and it has no velocity state; "
+                "use 'velocity', or 'state_input' with first_order_lag"
+            )
+        unknown = [
+            c
+            for c, _ in self.inputs
+            if c not in _PLANNER_SOURCES or (c in _POS and c not in model.state_names)
+        ]
+        if unknown:
+            raise ValueError(f"the NMPC has no source for features {unknown}")
 
-    def symbolic(self, model: NominalModel, x: ca.SX, u: ca.SX) -> ca.SX:
-        """The feature vector z(x, u), in input order, from a planner's state ``x`` and input
-        ``u`` (the same definition the datasets read from logs; see :meth:`check_feedable`)."""
-        self.check_feedable(model)
-        velocity = model.velocity_of(x, u)
-        signal = {c: velocity[i] for i, c in enumerate(_VEL)}
-        signal |= {c: u[i] for i, c in enumerate(_CMD)}
-        signal["cmd_yaw_rate_radps"] = u[3]
-        return ca.vertcat(*(signal[c] for c, _ in self.inputs))
+        def z(x: ca.SX, u: ca.SX) -> ca.SX:
+            vel = model.velocity_of(x, u)
+            return ca.vertcat(*(_PLANNER_SOURCES[c](model, x, u, vel) for c, _ in self.inputs))
+
+        return z
 
     def to_dict(self) -> dict[str, object]:
         return {
@@ -107,6 +143,7 @@ class FeatureDefinition:
             "input_names": list(self.input_names),
             "outputs": list(self.outputs),
             "nominal_model": {"name": self.nominal_model, "params": dict(self.nominal_params)},
+            "residual_steps": self.residual_steps,
         }
 
     @classmethod
@@ -118,20 +155,28 @@ class FeatureDefinition:
             outputs=tuple(str(o) for o in data["outputs"]),
             nominal_model=str(nominal["name"]),
             nominal_params=tuple(sorted((str(k), float(v)) for k, v in nominal["params"].items())),
+            residual_steps=int(data.get("residual_steps", 1)),
         )
 
     def describe(self) -> str:
         """One line: name, inputs and nominal model."""
         params = ", ".join(f"{k}={v:g}" for k, v in self.nominal_params)
+        over = "" if self.residual_steps == 1 else f", residual over {self.residual_steps} steps"
         return (
             f"{self.name!r} ({', '.join(self.input_names)}) against {self.nominal_model}({params})"
+            f"{over}"
         )
 
 
 def feature_definition(
-    name: str = "velocity", nominal_model: str = "kinematic_4dof", **nominal_params: float
+    name: str = "velocity",
+    nominal_model: str = "kinematic_4dof",
+    *,
+    residual_steps: int = 1,
+    **nominal_params: float,
 ) -> FeatureDefinition:
-    """A built-in feature set against a nominal model; bad names raise ValueError."""
+    """A built-in feature set against a nominal model, its residual measured over
+    ``residual_steps`` log steps; bad names raise ValueError."""
     if name not in FEATURE_SETS:
         raise ValueError(f"unknown feature set {name!r}; choose one of {', '.join(FEATURE_SETS)}")
     if nominal_model not in MODELS:
@@ -140,7 +185,11 @@ def feature_definition(
         )
     params = tuple(sorted((k, float(v)) for k, v in nominal_params.items()))
     definition = FeatureDefinition(
-        name, FEATURE_SETS[name], nominal_model=nominal_model, nominal_params=params
+        name,
+        FEATURE_SETS[name],
+        nominal_model=nominal_model,
+        nominal_params=params,
+        residual_steps=residual_steps,
     )
     try:
         definition.nominal()

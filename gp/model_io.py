@@ -29,6 +29,7 @@ from gp.posterior import Posterior
 
 FORMAT = "residual-gp"
 FORMAT_VERSION = 1
+RESIDUAL_BOUND_STD = 4.0
 _ARRAYS = ("support", "lengthscales", "variance", "alpha", "var_factor", "y_offset")
 
 
@@ -88,6 +89,22 @@ class ResidualModel:
         """CasADi Function z (d,) -> mean (n_out,), var (n_out,); z in ``features.input_names``
         order."""
         return posterior_function(self.posterior, include_variance=include_variance)
+
+    def flight_mean_function(self, bound_std: float = RESIDUAL_BOUND_STD) -> ca.Function:
+        """The mean g(z) as it flies (SX): clipped per axis to the training residuals' mean
+        +- ``bound_std`` std (the training summary's residual_mean/std), so that a badly
+        conditioned fit cannot command the vehicle with residuals it never saw. Unclipped if
+        the summary is missing."""
+        mean_fn = self.casadi_function(include_variance=False).expand()
+        mean = self.training.get("residual_mean")
+        std = self.training.get("residual_std")
+        if mean is None or std is None:
+            return mean_fn
+        lo = np.asarray(mean, dtype=float) - bound_std * np.asarray(std, dtype=float)
+        hi = np.asarray(mean, dtype=float) + bound_std * np.asarray(std, dtype=float)
+        z = ca.SX.sym("z", mean_fn.numel_in(0))
+        g = ca.fmin(ca.fmax(mean_fn(z), ca.DM(lo)), ca.DM(hi))
+        return ca.Function("gp_residual_bounded", [z], [g], ["z"], ["mean"])
 
     def to_dict(self) -> dict[str, object]:
         return {

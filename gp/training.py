@@ -18,8 +18,9 @@ from gp.features import FeatureDefinition, feature_definition
 from gp.inducing import InducingConfig
 from gp.lag_identification import LagIdentification, identify_velocity_lag
 from gp.model_io import ResidualModel
+from gp.prediction_check import PredictionCheck, Predictor, check_prediction, split_logs
 from gp.sparse_gp import SparseGP
-from planners.nominal_models import make_model
+from planners.nominal_models import kinematic_4dof, make_model
 
 
 @dataclass(frozen=True)
@@ -39,6 +40,13 @@ class TrainingConfig:
         holdout_fraction: share of rows held out (contiguous blocks) for evaluation.
         modes: keep only these flight modes; None keeps all.
         seed: seed for selection, split and restarts.
+        check_horizon_s: if set, hold out whole logs (or each log's last part, see
+            gp.prediction_check.split_logs) and check the model's position prediction over this
+            horizon [s] against the incumbent (default: [Kulathunga23]'s kinematic model) on
+            them before it may fly; the verdict goes into the model file.
+        check_fraction: share of the logs held out for that check.
+        residual_steps: log steps the residual is measured over (gp.datasets); the planner's
+            interval divided by the log step learns what one step hides under noise.
     """
 
     features: str = "velocity"
@@ -51,24 +59,46 @@ class TrainingConfig:
     holdout_fraction: float = 0.2
     modes: tuple[str, ...] | None = None
     seed: int = 0
+    check_horizon_s: float | None = None
+    check_fraction: float = 0.25
+    residual_steps: int = 1
 
 
 @dataclass(frozen=True, eq=False)
 class TrainingResult:
-    """The trained model, the data it saw and its held-out figures."""
+    """The trained model, the data it saw, its held-out figures and, when checked, the
+    multi-step prediction verdict against the incumbent (``check.passed``: it may fly)."""
 
     model: ResidualModel
     train: ResidualDataset
     test: ResidualDataset
     metrics: dict[str, list[float]]
+    check: PredictionCheck | None = None
+    structure_check: PredictionCheck | None = None
+
+    @property
+    def may_fly(self) -> bool:
+        """False only if a check was made and the model did not beat the incumbent."""
+        return self.check is None or self.check.passed
+
+    @property
+    def gp_earns_its_place(self) -> bool:
+        """False only if checked and the GP does not beat its own nominal model alone (the
+        identified structure): then the structure should fly without it."""
+        return self.structure_check is None or self.structure_check.passed
 
 
 def train_residual_model(
     logs: Sequence[FlightLog],
     config: TrainingConfig,
     progress: Callable[[str], None] = lambda message: None,
+    incumbent: Predictor | None = None,
 ) -> TrainingResult:
-    """Build the dataset, hold out blocks, fit an SGPR, and evaluate on the held-out blocks."""
+    """Build the dataset, hold out blocks, fit an SGPR, and evaluate on the held-out blocks;
+    with ``config.check_horizon_s``, check it against ``incumbent`` on held-out logs."""
+    check_logs: list[FlightLog] = []
+    if config.check_horizon_s is not None:
+        logs, check_logs = split_logs(logs, config.check_fraction, config.modes)
     features, identified = resolve_features(logs, config)
     if identified is not None:
         progress(f"identified {identified.describe()}")
@@ -104,7 +134,21 @@ def train_residual_model(
         },
         training=training,
     )
-    return TrainingResult(model, train, test, metrics)
+    check = alone = None
+    if check_logs:
+        horizon = float(config.check_horizon_s)
+        candidate = Predictor.of_residual_model(model, f"learned ({features.nominal_model} + GP)")
+        base = incumbent or Predictor("nominal kinematic_4dof", kinematic_4dof())
+        check = check_prediction(candidate, base, check_logs, horizon, config.modes)
+        progress(check.describe())
+        training["prediction_check"] = check.to_dict()
+        if features.nominal().carries_velocity:
+            structure = Predictor(f"{features.nominal_model} alone", features.nominal())
+            alone = check_prediction(candidate, structure, check_logs, horizon, config.modes)
+            progress(alone.describe())
+            training["prediction_check_structure"] = alone.to_dict()
+        model = ResidualModel.from_estimator(estimator, features, model.inducing, training)
+    return TrainingResult(model, train, test, metrics, check, alone)
 
 
 def resolve_features(
@@ -123,4 +167,7 @@ def resolve_features(
     if "tau_s" in from_logs:
         identified = identify_velocity_lag(logs, config.modes)
         params = {**identified.nominal_params(), **params}
-    return feature_definition(config.features, config.nominal, **params), identified
+    definition = feature_definition(
+        config.features, config.nominal, residual_steps=config.residual_steps, **params
+    )
+    return definition, identified

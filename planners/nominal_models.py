@@ -23,6 +23,8 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+VELOCITY_STATES: tuple[str, ...] = ("vel_n_mps", "vel_e_mps", "vel_d_mps")
+
 
 @dataclass(frozen=True)
 class NominalModel:
@@ -49,18 +51,18 @@ class NominalModel:
     params_from_logs: tuple[str, ...] = ()
 
     @property
-    def velocity_in_state(self) -> bool:
-        """True when the model carries the vehicle's velocity as state (a velocity-loop model),
-        False when it assumes the commanded velocity is flown at once."""
-        return "vel_n_mps" in self.state_names
-
-    @property
     def nx(self) -> int:
         return len(self.state_names)
 
     @property
     def nu(self) -> int:
         return len(self.input_names)
+
+    @property
+    def carries_velocity(self) -> bool:
+        """Whether the velocity [m/s] is part of the state (a model of the velocity loop, e.g.
+        first_order_lag), so ``velocity_of`` is what the vehicle does, not what it was told."""
+        return all(n in self.state_names for n in VELOCITY_STATES)
 
     def xdot(self, x, u, residual=None):
         """Symbolic (or DM) state derivative, with an optional residual 3-vector [m/s^2]."""

@@ -4,6 +4,12 @@
            [--nominal kinematic_4dof|first_order_lag] [--nominal-param residual_dt_s=0.05]
            [--inducing low_speed|cluster|random] [--m 30] [--optimize-inducing]
            [--seed 0] [--holdout-fraction 0.2] [--restarts 3] [--mode offboard] [--no-plots]
+           [--check-horizon-s 2.0]
+
+With ``--check-horizon-s``, a quarter of the logs (or of each log) is held out and the model's
+position prediction over that horizon (the NMPC's N x dt) is compared with [Kulathunga23]'s
+kinematic model's; a model that does not beat it is refused in one line (exit code 1, no model
+written; gp.prediction_check).
 
 With ``--nominal first_order_lag`` and no ``--nominal-param tau_s=...``, the velocity loop's
 time constants are identified from the logs first (least squares, gp.lag_identification) and
@@ -11,7 +17,8 @@ the GP learns what the identified lag leaves; the model file records them.
 
 Writes MODEL.npz (one self-describing file) and MODEL_residual_{n,e,d}.png, prints the
 held-out nominal and augmented RMSE per axis ([Kulathunga23], Table 2) on stdout; progress goes
-to stderr. Exit code 0 on success, 2 with a one-line reason on bad input.
+to stderr. Exit code 0 on success, 1 when the prediction check refuses the model, 2 with a
+one-line reason on bad input.
 """
 
 from __future__ import annotations
@@ -29,6 +36,7 @@ from gp.features import FEATURE_SETS
 from gp.inducing import STRATEGIES
 from gp.model_io import save_model
 from gp.plots import plot_residuals
+from gp.prediction_check import refusal
 from gp.training import TrainingConfig, train_residual_model
 from planners.nominal_models import MODELS
 
@@ -77,7 +85,15 @@ def parse_args(argv: list[str] | None) -> FitGpConfig:
         help="keep only rows in this flight mode (e.g. offboard; repeatable)",
     )
     parser.add_argument("--no-plots", action="store_true")
+    parser.add_argument(
+        "--check-horizon-s",
+        type=float,
+        default=None,
+        help="check the multi-step prediction over this horizon on held-out logs first",
+    )
     args = parser.parse_args(argv)
+    if args.check_horizon_s is not None and not args.check_horizon_s > 0:
+        parser.error(f"--check-horizon-s must be > 0 s, got {args.check_horizon_s}")
     params = []
     for item in args.nominal_param:
         name, sep, value = item.partition("=")
@@ -102,12 +118,13 @@ def parse_args(argv: list[str] | None) -> FitGpConfig:
         holdout_fraction=args.holdout_fraction,
         modes=tuple(m.upper() for m in args.mode) if args.mode else None,
         seed=args.seed,
+        check_horizon_s=args.check_horizon_s,
     )
     return FitGpConfig(tuple(args.logs), args.out, training, plots=not args.no_plots)
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run fit-gp; returns the exit code (0 ok, 2 bad input)."""
+    """Run fit-gp; returns the exit code (0 ok, 1 model refused by its check, 2 bad input)."""
     try:
         config = parse_args(argv)
     except SystemExit as exc:  # --help (0) or a bad argument (2, message already printed)
@@ -123,6 +140,9 @@ def main(argv: list[str] | None = None) -> int:
             logs.append(read_flight_log(path))
             progress(f"read {path} ({logs[-1].n_rows} rows)")
         result = train_residual_model(logs, config.training, progress)
+        if not result.may_fly:
+            print(f"fit-gp: {refusal(result.model)}", file=sys.stderr)
+            return 1
         model_file = save_model(config.out, result.model)
         progress(f"wrote {model_file}")
         if config.plots:

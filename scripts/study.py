@@ -4,6 +4,11 @@
           [--workers 2 | --scheduler tcp://HOST:8786] [--vehicle iris_study]
           [--learned-model first_order_lag|kinematic_4dof]
           [--features state_input|velocity] [--seed 0] [--compile] [--quick]
+          [--regime paper000|agile|wind_field]
+
+``--regime`` picks the task (experiments.study.regimes, physics written down there):
+[Kulathunga23]'s low-speed task (default), an agile task at up to 6 m/s, or repeated paths
+through a wind field; ``--vehicle`` and ``--features`` override the regime's.
 
 The nominal planner is [Kulathunga23]'s kinematic NMPC. The learned model is, by default, a
 first-order velocity lag whose time constants are identified from the nominal flights plus a
@@ -22,10 +27,12 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 from companion.nmpc_planner import MULTIROTOR_MODELS
-from experiments.study.config import STUDY_VEHICLE, StudyConfig
+from experiments.study.config import StudyConfig
+from experiments.study.regimes import REGIMES, with_regime
 from experiments.study.run import run_study
 from flightlog.atomic_output import OutputError, check_writable_dir
 from gp.features import FEATURE_SETS
@@ -47,14 +54,15 @@ def parse_args(argv: list[str] | None) -> StudyConfig:
         help="fly on a Dask cluster's workers (e.g. tcp://10.0.0.5:8786) instead of local "
         "processes; needs pip install 'residual-companion[cluster]' here and on every worker",
     )
-    parser.add_argument("--vehicle", default=STUDY_VEHICLE, help="simulator preset or config")
+    parser.add_argument("--vehicle", default=None, help="simulator preset or config")
     parser.add_argument(
         "--learned-model",
         choices=MULTIROTOR_MODELS,
         default="first_order_lag",
         help="nominal model under the learned residual",
     )
-    parser.add_argument("--features", choices=list(FEATURE_SETS), default="state_input")
+    parser.add_argument("--features", choices=list(FEATURE_SETS), default=None)
+    parser.add_argument("--regime", choices=list(REGIMES), default="paper000")
     parser.add_argument("--seed", type=int, default=0, help="trajectory generator seed")
     parser.add_argument(
         "--compile",
@@ -66,7 +74,6 @@ def parse_args(argv: list[str] | None) -> StudyConfig:
     try:
         config = StudyConfig(
             out_dir=args.out,
-            vehicle=args.vehicle,
             n_trajectories=args.trajectories,
             repeats=args.repeats,
             n_trials=args.trials,
@@ -75,9 +82,13 @@ def parse_args(argv: list[str] | None) -> StudyConfig:
             scheduler=args.scheduler,
             trajectory_seed=args.seed,
             learned_model=args.learned_model,
-            features=args.features,
             compile_augmented=args.compile,
         )
+        config = with_regime(config, args.regime)
+        if args.vehicle is not None:
+            config = replace(config, vehicle=args.vehicle)
+        if args.features is not None:
+            config = replace(config, features=args.features)
     except ValueError as exc:
         parser.error(str(exc))
     return config.quick() if args.quick else config

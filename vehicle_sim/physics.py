@@ -51,10 +51,26 @@ GROUND_RADIUS = 15  # m, rotor radius
 GROUND_HEIGHT = 16  # m, rotor plane height above the ground when landed
 MOTOR_TAU = 17  # s; 0 = the preset's motor time constant
 COMMAND_DELAY = 18  # s (applied by the simulator, not the physics)
-N_EFFECT = 19
+FIELD_VEL_NED = 19  # (3,) m/s, peak air velocity of the wind field
+FIELD_CENTER_NE = 22  # (2,) m, a point on the field's centre line (north, east)
+FIELD_HEADING = 24  # rad, direction of the centre line (0 = north)
+FIELD_HALF_WIDTH = 25  # m, 1/e half-width of the field; 0 = effect off
+N_EFFECT = 26
 
 GUST_MIN_SPEED_MPS = 1.0
 MOTOR_STOPPED = 1e-9  # normalised rotor speed below which a rotor counts as stopped
+
+
+@njit(cache=True)
+def field_weight(x, ep):
+    """Share in [0, 1] of the wind field's peak air velocity at the position x[0:2]:
+    exp(-(d / half_width)^2), d the horizontal distance [m] from the field's centre line."""
+    w = ep[FIELD_HALF_WIDTH]
+    if w <= 0.0:
+        return 0.0
+    h = ep[FIELD_HEADING]
+    d = -(x[0] - ep[FIELD_CENTER_NE]) * math.sin(h) + (x[1] - ep[FIELD_CENTER_NE + 1]) * math.cos(h)
+    return math.exp(-(d / w) * (d / w))
 
 
 @njit(cache=True)
@@ -82,9 +98,10 @@ def derivatives(x, n_cmd, pp, rp, spin, ep, gust, thrust_factor, dx):
         tx -= rp[i, 1] * t
         ty += rp[i, 0] * t
         tz += spin[i] * pp[P_KM] * t
-    vax = x[3] - ep[WIND_NED] - gust[0]
-    vay = x[4] - ep[WIND_NED + 1] - gust[1]
-    vaz = x[5] - ep[WIND_NED + 2] - gust[2]
+    fw = field_weight(x, ep)
+    vax = x[3] - ep[WIND_NED] - fw * ep[FIELD_VEL_NED] - gust[0]
+    vay = x[4] - ep[WIND_NED + 1] - fw * ep[FIELD_VEL_NED + 1] - gust[1]
+    vaz = x[5] - ep[WIND_NED + 2] - fw * ep[FIELD_VEL_NED + 2] - gust[2]
     vbx = r00 * vax + r10 * vay + r20 * vaz
     vby = r01 * vax + r11 * vay + r21 * vaz
     vbz = r02 * vax + r12 * vay + r22 * vaz

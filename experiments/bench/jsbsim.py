@@ -1,19 +1,65 @@
-"""Benchmark of the JSBSim backend: simulated seconds per wall-clock second.
+"""Benchmark of the JSBSim backend: simulated seconds per wall-clock second, and the learning
+loop on a plant we did not write.
 
-Measured exactly like ``bench_sim`` (same flight, full PX4-like flight control, a setpoint and a
-log row every 50 ms), on JSBSim's F450 (preset "f450", backend "jsbsim"). Compilation and
-JSBSim's model loading are done before timing.
+``jsbsim_realtime_factor`` is measured exactly like ``bench_sim`` (same flight, full PX4-like
+flight control, a setpoint and a log row every 50 ms), on JSBSim's F450 (preset "f450",
+backend "jsbsim"). Compilation and JSBSim's model loading are done before timing.
+
+``jsbsim_tracking_gain`` and ``jsbsim_tracking_gain_min``: a reduced study (paper000 regime)
+on ``f450_jsbsim``: each trajectory flown nominal, the model learned (identified lag + GP,
+low_speed, gated by its multi-step prediction on held-out flights: a refused model does not
+fly, the nominal planner does), then flown augmented on other seeds. Per trajectory, the gain
+is the nominal tracking RMSE divided by the learned one; the figures are their mean and minimum.
 """
 
 from __future__ import annotations
 
+import tempfile
 from collections.abc import Callable
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
 
 from experiments.bench.sim import measure_realtime_factor
+from experiments.study.config import StudyConfig
+from experiments.study.paper000 import NOMINAL
+from experiments.study.run import run_study
+
+JSBSIM_VEHICLE = "f450_jsbsim"
+
+
+def tracking_gains(flights: dict[str, list], planner: str) -> np.ndarray:
+    """Per trajectory: mean nominal tracking RMSE / mean ``planner`` tracking RMSE."""
+    trajectories = sorted({f.trajectory for f in flights[NOMINAL]})
+    gains = []
+    for i in trajectories:
+        nom = np.mean([f.tracking_rmse_m for f in flights[NOMINAL] if f.trajectory == i])
+        aug = np.mean([f.tracking_rmse_m for f in flights[planner] if f.trajectory == i])
+        gains.append(nom / aug)
+    return np.asarray(gains)
+
+
+def learning_loop_gains(progress: Callable[[str], None], quick: bool = False) -> dict[str, float]:
+    """``jsbsim_tracking_gain`` (mean over trajectories) and ``jsbsim_tracking_gain_min``."""
+    with tempfile.TemporaryDirectory() as tmp:
+        config = StudyConfig(
+            out_dir=Path(tmp), vehicle=JSBSIM_VEHICLE, n_trajectories=4, repeats=2, n_trials=2
+        )
+        if quick:
+            config = replace(config.quick(), n_trials=2)
+        progress(f"jsbsim: learning loop on {JSBSIM_VEHICLE}, {config.n_trajectories} trajectories")
+        result = run_study(config, progress)
+    gains = tracking_gains(result.paper000.flights, config.selections[0])
+    return {
+        "jsbsim_tracking_gain": float(gains.mean()),
+        "jsbsim_tracking_gain_min": float(gains.min()),
+    }
 
 
 def run(progress: Callable[[str], None] = print, quick: bool = False) -> dict[str, float]:
-    """Measure ``jsbsim_realtime_factor`` (simulated s per wall s, higher is better)."""
+    """``jsbsim_realtime_factor`` (simulated s per wall s, higher is better) and the learning
+    loop's tracking gains."""
     flight_s = 5.0 if quick else 30.0
     factor = measure_realtime_factor("f450", "jsbsim", flight_s, progress, "jsbsim")
-    return {"jsbsim_realtime_factor": factor}
+    return {"jsbsim_realtime_factor": factor, **learning_loop_gains(progress, quick)}

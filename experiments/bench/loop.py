@@ -8,6 +8,10 @@ Figures:
         (augmented: low_speed)
     loop_deadline_miss_fraction   deadline misses / ticks of a whole mission flown at 50 Hz
         with the augmented NMPC (compiled) against the simulator paced by the wall clock
+    agile_gp_over_structure, wind_gp_over_structure   tracking RMSE of the identified structure
+        alone divided by structure + GP (low_speed), in the agile and wind_field regimes
+        (experiments.study.regimes; > 1 when the GP helps); reduced studies of
+        REGIME_TRAJECTORIES x REGIME_REPEATS flights per planner
 The figures come from a reduced study (4 trajectories, one flight each per planner, m = 30);
 ``study`` runs [Kulathunga23]'s full experiment. ``quick=True`` runs the study's smoke version and
 a short paced flight with the uncompiled planner (under a minute; its deadline figure is then
@@ -29,6 +33,7 @@ from companion.nmpc_planner import CompanionNmpc
 from companion.runner import RunnerConfig, fly_mission
 from experiments.study.config import StudyConfig
 from experiments.study.paced_link import WallPacedInProcessLink
+from experiments.study.regimes import with_regime
 from experiments.study.run import run_study
 from gp.model_io import ResidualModel
 from planners.bspline import BSplineReference
@@ -72,4 +77,31 @@ def run(progress: Callable[[str], None] = print, quick: bool = False) -> dict[st
     progress("loop: flying the augmented NMPC at 50 Hz on the wall clock")
     points = _PACED_POINTS_QUICK if quick else _PACED_POINTS
     miss = paced_deadline_miss_fraction(config, model, points, progress)
-    return {**result.headline, "loop_deadline_miss_fraction": miss}
+    figures = {**result.headline, "loop_deadline_miss_fraction": miss}
+    for regime, prefix in (("agile", "agile"), ("wind_field", "wind")):
+        figures |= regime_figures(regime, prefix, progress, quick)
+    return figures
+
+
+REGIME_TRAJECTORIES, REGIME_REPEATS = 2, 3
+
+
+def regime_figures(
+    regime: str, prefix: str, progress: Callable[[str], None], quick: bool
+) -> dict[str, float]:
+    """A reduced study of ``regime``: its gp_over_structure and tracking figures, prefixed."""
+    with tempfile.TemporaryDirectory() as tmp:
+        config = StudyConfig(
+            out_dir=Path(tmp),
+            n_trajectories=REGIME_TRAJECTORIES,
+            repeats=REGIME_REPEATS,
+            n_trials=2,
+        )
+        if quick:
+            config = replace(config.quick(), n_trials=2)
+        config = with_regime(config, regime)
+        progress(f"loop: {regime} regime, {config.n_trajectories} trajectories")
+        headline = run_study(config, progress).headline
+    keep = ("gp_over_structure", "tracking_rmse_nominal_m", "tracking_rmse_augmented_m",
+            "tracking_rmse_identified_lag_m")  # fmt: skip
+    return {f"{prefix}_{k}": headline[k] for k in keep if k in headline}

@@ -21,7 +21,8 @@ class StudyConfig:
         vehicle: simulator preset or config file (default: the study vehicle, see
             vehicle_sim/presets/iris_study.toml).
         n_trajectories: random trajectories of [Kulathunga23]'s experiment.
-        length_range_m: their length range [m]; max_speed_mps: their speed limit [m/s].
+        length_range_m: their length range [m]; max_speed_mps: their speed limit [m/s];
+            max_acc_mps2: their acceleration limit [m/s^2].
         repeats: flights per trajectory and planner (nominal seeds 0.., augmented after them).
         selections: inducing-point selections compared at equal ``m``.
         m: inducing points per output.
@@ -41,6 +42,7 @@ class StudyConfig:
         compile_augmented: compile each augmented planner to C (cached on disk). Off by
             default: with the identified-lag model gcc needs over 6 minutes and 3 GB per model,
             and the uncompiled solves (about 4 ms) already fit a 50 Hz loop.
+        regime: the name of the regime these settings come from (experiments.study.regimes).
     """
 
     out_dir: Path = Path("out/study")
@@ -48,6 +50,7 @@ class StudyConfig:
     n_trajectories: int = 20
     length_range_m: tuple[float, float] = (40.0, 60.0)
     max_speed_mps: float = 1.5
+    max_acc_mps2: float = 1.0
     repeats: int = 3
     selections: tuple[str, ...] = SELECTIONS
     m: int = 30
@@ -60,6 +63,7 @@ class StudyConfig:
     features: str = "state_input"
     gp_restarts: int = 2
     compile_augmented: bool = False
+    regime: str = "paper000"
 
     def __post_init__(self) -> None:
         if self.n_trajectories < 1 or self.repeats < 1 or self.n_trials < 2:

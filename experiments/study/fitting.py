@@ -7,9 +7,13 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from flightlog.schema import FlightLog
+from gp.prediction_check import Predictor
 from gp.training import TrainingConfig, TrainingResult, train_residual_model
+from planners.nominal_models import make_model
 
 FOLLOWING_MODES = ("OFFBOARD",)
+CHECK_HORIZON_S = 2.0  # the NMPC's horizon, N x dt = 20 x 0.1 s ([Kulathunga23])
+PLANNER_DT_S = 0.1  # the NMPC's interval [s]
 
 
 def fit_residual(
@@ -23,6 +27,9 @@ def fit_residual(
     seed: int = 0,
     restarts: int = 2,
     progress: Callable[[str], None] = lambda message: None,
+    incumbent: Predictor | None = None,
+    check_horizon_s: float | None = CHECK_HORIZON_S,
+    planner_dt_s: float | None = PLANNER_DT_S,
 ) -> TrainingResult:
     """A residual model from the following phase (OFFBOARD rows) of ``logs``, flown with a
     control period of ``period_s`` [s], with ``m`` inducing points chosen by ``inducing``
@@ -31,8 +38,17 @@ def fit_residual(
     ``learned_model`` is the nominal model under the residual: "first_order_lag" has its
     time constants identified from the logs first (the model file records them);
     "kinematic_4dof" is [Kulathunga23]'s (its residual time base is one control period).
+
+    With ``check_horizon_s`` a quarter of the logs (or of each log) is held out and the model's
+    position prediction over that horizon is checked against ``incumbent`` (default: the
+    nominal kinematic model); ``result.may_fly`` is the verdict (gp.prediction_check).
     """
     params = {"residual_dt_s": period_s} if learned_model == "kinematic_4dof" else {}
+    regular = [regular_rows(log, period_s) for log in logs]
+    steps = 1
+    if planner_dt_s is not None and make_model(learned_model).carries_velocity:
+        log_step_s = float(np.median(np.concatenate([np.diff(log["t_s"]) for log in regular])))
+        steps = max(1, int(round(planner_dt_s / log_step_s)))
     config = TrainingConfig(
         features=features,
         nominal=learned_model,
@@ -42,9 +58,10 @@ def fit_residual(
         restarts=restarts,
         modes=FOLLOWING_MODES,
         seed=seed,
+        check_horizon_s=check_horizon_s,
+        residual_steps=steps,
     )
-    regular = [regular_rows(log, period_s) for log in logs]
-    return train_residual_model(regular, config, progress)
+    return train_residual_model(regular, config, progress, incumbent)
 
 
 def regular_rows(log: FlightLog, period_s: float, min_fraction: float = 0.5) -> FlightLog:

@@ -20,6 +20,7 @@ import numpy as np
 from companion.app import CompanionConfig, CompanionResult, run_companion
 from companion.mission import load_mission
 from companion.mission_reference import reference_of
+from companion.runner import RunnerConfig
 from experiments.sim_endpoint import SimEndpoint
 from experiments.study.config import STUDY_VEHICLE
 from experiments.study.fitting import fit_residual
@@ -27,9 +28,14 @@ from experiments.study.metrics import residual_rmse_mps, tracking_errors_m, trac
 from flightlog.schema import FlightLog, read_flight_log
 from gp.model_io import save_model
 from gp.plots import plot_residuals
+from gp.prediction_check import refusal
 from gp.training import TrainingResult
 
 SELECTION = "low_speed"
+# Generous deadlines: on a busy computer the endpoint (a fresh Python process) may need most of
+# a minute before its first heartbeat; the flight itself is not affected by waiting longer.
+DEMO_CONNECT_TIMEOUT_S = 120.0
+DEMO_PHASE_TIMEOUT_S = 30.0
 
 
 @dataclass(frozen=True)
@@ -70,7 +76,15 @@ def run_demo(config: DemoConfig, progress: Callable[[str], None]) -> list[Flight
     fit = fit_residual([nominal], SELECTION, 1.0 / config.rate_hz, progress=progress)
     model_path = save_model(out / f"gp_{SELECTION}", fit.model)
     progress(f"wrote {model_path}; the augmented planner compiles its solver before take-off")
-    augmented = _fly(config, "augmented", model_path, config.seed + 1, progress)
+    flying = model_path
+    if fit.structure_check is not None:
+        progress(fit.structure_check.describe())
+    if fit.may_fly and not fit.gp_earns_its_place:
+        progress("the augmented flight flies the identified lag without the GP")
+    if not fit.may_fly:
+        progress(f"{refusal(fit.model)}: the second flight flies the nominal planner")
+        flying = None
+    augmented = _fly(config, "augmented", flying, config.seed + 1, progress)
     logs = {"nominal": nominal, "augmented": augmented}
     figures = [_figures(name, log) for name, log in logs.items()]
     images = _plots(config, logs, fit, out)
@@ -96,6 +110,12 @@ def _fly(
             planner="nmpc",
             gp_model=gp_model,
             log_path=log_path,
+            runner=RunnerConfig(
+                rate_hz=config.rate_hz,
+                connect_timeout_s=DEMO_CONNECT_TIMEOUT_S,
+                arm_timeout_s=DEMO_PHASE_TIMEOUT_S,
+                offboard_timeout_s=DEMO_PHASE_TIMEOUT_S,
+            ),
         )
         result: CompanionResult = run_companion(companion, progress)
     if result.outcome.status != "completed" or result.log_path is None:

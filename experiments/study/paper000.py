@@ -19,6 +19,7 @@ from companion.nmpc_planner import NmpcSettings
 from experiments.study.config import StudyConfig
 from experiments.study.fitting import fit_residual
 from experiments.study.jobs import FlightJob, FlightSummary, run_flight_job, warm_up_planner
+from gp.prediction_check import refusal
 from gp.training import TrainingResult
 from planners.bspline import BSplineReference
 from planners.nominal_models import make_model
@@ -40,7 +41,11 @@ class Paper000Result:
 
 def study_trajectories(config: StudyConfig) -> list[BSplineReference]:
     """The seeded random trajectories of the experiment."""
-    spec = TrajectorySpec(length_range_m=config.length_range_m, max_speed_mps=config.max_speed_mps)
+    spec = TrajectorySpec(
+        length_range_m=config.length_range_m,
+        max_speed_mps=config.max_speed_mps,
+        max_acc_mps2=config.max_acc_mps2,
+    )
     return generate_trajectories(config.n_trajectories, config.trajectory_seed, spec)
 
 
@@ -74,9 +79,17 @@ def run_paper000(
     for sel, fit in fits.items():
         nom, aug = fit.metrics["nominal_rmse_mps"], fit.metrics["augmented_rmse_mps"]
         progress(f"fit {sel}: held-out rows nominal {_fmt(nom)} -> augmented {_fmt(aug)} m/s")
+        for check in (fit.check, fit.structure_check):
+            if check is not None:
+                progress(f"fit {sel}: {check.describe()}")
+        if not fit.may_fly:
+            progress(f"fit {sel}: {refusal(fit.model)}; its flights fly the nominal planner")
+        elif not fit.gp_earns_its_place:
+            progress(f"fit {sel}: the GP does not beat its structure; the structure flies alone")
+    flying = {sel: fit.model if fit.may_fly else None for sel, fit in fits.items()}
     if config.compile_augmented:
         progress("compiling the augmented planners (once per model, cached on disk)")
-        models = [fits[sel].model for sel in config.selections]
+        models = [m for m in flying.values() if m is not None]
         list(pool.map(warm_up_planner, [config.nmpc] * len(models), models))
     aug_jobs = [
         FlightJob(
@@ -86,7 +99,7 @@ def run_paper000(
             config.repeats + seed,
             config.vehicle,
             config.nmpc,
-            fits[sel].model,
+            flying[sel],
             config.compile_augmented,
         )
         for sel in config.selections
@@ -117,7 +130,7 @@ def identified_lag_settings(config: StudyConfig, fit: TrainingResult) -> NmpcSet
     """The nominal NMPC on the fit's identified first_order_lag (no GP), or None when the
     learned model is not an identified lag."""
     features = fit.model.features
-    if not make_model(features.nominal_model).velocity_in_state:
+    if not make_model(features.nominal_model).carries_velocity:
         return None
     return replace(
         config.nmpc, nominal_model=features.nominal_model, nominal_params=features.nominal_params

@@ -1,7 +1,10 @@
 """Paper 004's view: trial-to-trial learning on one repeated path.
 
 Trial 1 flies the nominal NMPC; after every trial the residual model is refitted on all trials
-so far and the next trial flies augmented with it (a new seed each trial). The tracking error
+so far (the augmented ones too, so the model covers where the augmented planner flies) and the
+next trial flies augmented with it (a new seed each trial), provided it predicts the held-out
+trials better over the NMPC horizon than the model it would replace (gp.prediction_check);
+otherwise the previous model flies again. The tracking error
 per trial shows whether experience pays off, as in [Ostafew16], Fig. 10.
 """
 
@@ -13,6 +16,7 @@ from dataclasses import dataclass
 from experiments.study.config import StudyConfig
 from experiments.study.fitting import fit_residual
 from experiments.study.jobs import FlightJob, FlightSummary, run_flight_job
+from gp.prediction_check import Predictor, refusal
 from planners.bspline import BSplineReference
 from planners.trajectory_generator import TrajectorySpec, generate_trajectories
 
@@ -30,7 +34,11 @@ class TrialsResult:
 
 def run_trials(config: StudyConfig, progress: Callable[[str], None]) -> TrialsResult:
     """Fly ``config.n_trials`` trials in this process (each refit needs the previous trial)."""
-    spec = TrajectorySpec(length_range_m=config.length_range_m, max_speed_mps=config.max_speed_mps)
+    spec = TrajectorySpec(
+        length_range_m=config.length_range_m,
+        max_speed_mps=config.max_speed_mps,
+        max_acc_mps2=config.max_acc_mps2,
+    )
     seed = config.trajectory_seed + TRIAL_PATH_SEED_OFFSET
     reference = generate_trajectories(1, seed, spec)[0]
     selection = config.selections[0]
@@ -63,6 +71,10 @@ def run_trials(config: StudyConfig, progress: Callable[[str], None]) -> TrialsRe
                 features=config.features,
                 m=config.m,
                 restarts=config.gp_restarts,
+                incumbent=None if model is None else Predictor.of_residual_model(model, "previous"),
             )
-            model = fit.model
+            if fit.may_fly:
+                model = fit.model
+            else:
+                progress(f"trial {trial + 1}: {refusal(fit.model)}; keeping the previous model")
     return TrialsResult(reference, selection, trials)

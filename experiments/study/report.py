@@ -40,6 +40,7 @@ def render_report(
     lines = [
         "# Residual-learning study",
         "",
+        f"Regime `{config.regime}` (see experiments/study/regimes.py). "
         f"Vehicle `{config.vehicle}`; NMPC on `{model}` (N={nmpc.horizon_steps}, "
         f"dt={nmpc.dt_s:g} s, loop {1 / nmpc.period_s:g} Hz, command limit "
         f"{nmpc.speed_limit_mps:g} m/s). Learned model: `{config.learned_model}` "

@@ -199,3 +199,24 @@ def test_command_delay_shifts_the_response_by_the_delay():
     np.testing.assert_allclose(v_late[:shift], 0.0, atol=1e-6)
     np.testing.assert_allclose(v_late[shift:], v_base[:-shift], atol=1e-6)
     assert v_base[shift] > 0.02  # the undelayed vehicle was already moving
+
+
+def test_wind_field_pushes_only_where_the_path_crosses_it():
+    """Flying north across a jet blowing east (hidden strength and width, seeded), the east
+    velocity departs from zero only near the jet's centre line."""
+    import numpy as np
+    from sim_flying import fly, hovering
+
+    from vehicle_sim.effects import RotorDrag, WindField
+
+    rng = np.random.default_rng(18)
+    speed, width = rng.uniform(3.0, 6.0), rng.uniform(1.5, 3.0)
+    field = WindField(vel_ned_mps=(0.0, speed, 0.0), center_n_m=12.0, half_width_m=width)
+    sim = hovering([RotorDrag(), field], settle_s=4.0)
+    states = fly(sim, (2.0, 0.0, 0.0), 12.0)
+    north = np.array([s.pos_ned_m[0] for s in states])
+    east_vel = np.array([s.vel_ned_mps[1] for s in states])
+    far = np.abs(north - 12.0) > 4.0 * width
+    near = np.abs(north - 12.0) < width
+    assert near.any() and far.any()
+    assert np.max(np.abs(east_vel[near])) > 3.0 * np.max(np.abs(east_vel[far & (north < 12.0)]))

@@ -38,11 +38,13 @@ from vehicle_sim.effects.motor_lag import MotorLag
 from vehicle_sim.effects.payload import Payload
 from vehicle_sim.effects.rotor_drag import RotorDrag
 from vehicle_sim.effects.wind import Wind
+from vehicle_sim.effects.wind_field import WindField
 
 EFFECT_CLASSES: dict[str, type] = {
     cls.name: cls
     for cls in (
-        RotorDrag, BodyDrag, Wind, Gusts, Payload, BatterySag, GroundEffect, MotorLag, CommandDelay
+        RotorDrag, BodyDrag, Wind, Gusts, Payload, BatterySag, GroundEffect, MotorLag, CommandDelay,
+        WindField,
     )
 }  # fmt: skip
 EFFECT_NAMES: tuple[str, ...] = tuple(EFFECT_CLASSES)

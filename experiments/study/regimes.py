@@ -1,0 +1,59 @@
+"""The study's regimes: where identified structure alone is (and is not) enough.
+
+Each regime is a set of StudyConfig overrides with its physics written down.
+
+    paper000: [Kulathunga23]'s low-speed task. 40-60 m random B-splines at 1.5 m/s (accelerations
+        up to 1 m/s^2), command limit 2.5 m/s, on iris_study. At these speeds the velocity
+        loop is close to linear (PX4's velocity P of 1.8 1/s, no tilt or acceleration limit
+        reached) and the drag is small and removed by the velocity integrator, so a
+        first-order lag with identified time constants explains most of what the kinematic
+        model misses.
+    agile: 60-100 m random B-splines at up to 6 m/s with accelerations up to 4 m/s^2, command
+        limit 8 m/s, on iris_study. Now the response is nonlinear: quadratic body drag
+        (0.05 N/(m/s)^2: 1.8 N at 6 m/s) on top of rotor drag (2.1 N at 6 m/s) needs
+        integrator action that lags; commanding a speed step of several m/s saturates the
+        acceleration the 45 deg tilt limit (MPC_TILTMAX_AIR) allows, so the velocity follows a
+        ramp, not an exponential; the velocity error the lag leaves grows with speed and with
+        the command gap, which the GP's state_input features (velocity, command) can carry.
+    wind_field: 40-60 m random B-splines from the start at 2.5 m/s (accelerations up to
+        2 m/s^2), command limit 4 m/s, on iris_wind_field: a 4 m/s jet along the line through
+        the start, 5 m half-width. Every path crosses the jet's shear layer, where the wind
+        changes by 4 m/s within a few metres: a disturbance that depends on where the vehicle
+        is, not on its velocity; the GP gets the horizontal position as features
+        (position_state), the paths are flown three times each with different gusts, and the
+        augmented flights fly the same paths as the nominal ones ([Ostafew16]'s repeated path).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+from experiments.study.config import StudyConfig
+
+REGIMES: dict[str, dict[str, object]] = {
+    "paper000": {},
+    "agile": {
+        "length_range_m": (60.0, 100.0),
+        "max_speed_mps": 6.0,
+        "max_acc_mps2": 4.0,
+        "command_limit_mps": 8.0,
+    },
+    "wind_field": {
+        "vehicle": "iris_wind_field",
+        "max_speed_mps": 2.5,
+        "max_acc_mps2": 2.0,
+        "command_limit_mps": 4.0,
+        "features": "position_state",
+    },
+}
+
+
+def with_regime(config: StudyConfig, regime: str) -> StudyConfig:
+    """``config`` with the overrides of ``regime``; a bad name raises ValueError."""
+    if regime not in REGIMES:
+        raise ValueError(f"unknown regime {regime!r}; choose one of {', '.join(REGIMES)}")
+    overrides = dict(REGIMES[regime])
+    limit = overrides.pop("command_limit_mps", None)
+    if limit is not None:
+        overrides["nmpc"] = replace(config.nmpc, speed_limit_mps=float(limit))
+    return replace(config, regime=regime, **overrides)

@@ -1,0 +1,205 @@
+"""Never worse than not learning: a learned model's multi-step prediction on held-out logs.
+
+Before a learned model flies it must predict the vehicle better than the model it would
+replace, over the horizon the NMPC plans on (N x dt, 2 s for [Kulathunga23]'s 20 x 0.1 s).
+From every ``stride``-th row k of a clean segment of a held-out log, each model is rolled out
+open loop under the *logged* commands u(k..k+H-1), starting from the measured state at k
+(one RK4 step per log row, of that row's dt, residual g(z) evaluated at every stage as in the
+NMPC), and the predicted position is compared with the measured one:
+
+    e = sqrt(mean over starts k and steps h = 1..H of |p_hat(k+h) - p(k+h)|^2)     [m]
+
+with H = round(horizon_s / dt). Position, because position tracking is what the NMPC is asked
+for, and it integrates every velocity error over the horizon ([Ostafew16] judges its learned
+model the same way: by the path-tracking error it leads to). The candidate passes when its error
+is below the incumbent's (strictly); a refusal is one line naming both errors.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from flightlog.schema import FlightLog
+from gp.datasets import DatasetConfig, split_segments
+from gp.errors import DatasetError
+from gp.features import feature_definition
+from gp.log_signals import model_input, model_state
+from gp.model_io import ResidualModel
+from planners.nominal_models import NominalModel
+from planners.residual import ResidualTerm
+
+_POS = ("pos_n_m", "pos_e_m", "pos_d_m")
+# Rollouts step with each row's own dt, so a late telemetry row (a MAVLink log on a busy
+# computer) need not end the segment; only a real gap (mode change, dropout) does.
+CHECK_MAX_GAP_FACTOR = 5.0
+
+
+@dataclass(frozen=True, eq=False)
+class Predictor:
+    """A model as it would fly: a nominal model and, optionally, a learned residual on it."""
+
+    name: str
+    model: NominalModel
+    residual: ResidualModel | None = None
+
+    @classmethod
+    def of_residual_model(cls, residual: ResidualModel, name: str = "learned") -> Predictor:
+        """The residual model on the nominal model it was trained against."""
+        return cls(name, residual.features.nominal(), residual)
+
+    def step_function(self) -> ca.Function:
+        """(x, u, dt [s]) -> x_next, one RK4 step with the residual's mean, if any."""
+        x = ca.SX.sym("x", self.model.nx)
+        u = ca.SX.sym("u", self.model.nu)
+        dt = ca.SX.sym("dt")
+        term = None
+        if self.residual is not None:
+            mean = self.residual.flight_mean_function()
+            term = ResidualTerm(mean, self.residual.features.planner_map(self.model))
+        return ca.Function("step", [x, u, dt], [self.model.rk4_step(x, u, dt, term)])
+
+
+@dataclass(frozen=True)
+class PredictionCheck:
+    """The verdict: both models' horizon position-prediction RMSE on the held-out logs.
+
+    Attributes:
+        candidate, incumbent: the models' names.
+        candidate_rmse_m, incumbent_rmse_m: prediction RMSE over the horizon [m].
+        horizon_s: prediction horizon [s]; n_starts: rollouts per model.
+    """
+
+    candidate: str
+    incumbent: str
+    candidate_rmse_m: float
+    incumbent_rmse_m: float
+    horizon_s: float
+    n_starts: int
+
+    @property
+    def passed(self) -> bool:
+        return self.candidate_rmse_m < self.incumbent_rmse_m
+
+    @property
+    def gain(self) -> float:
+        """incumbent / candidate RMSE (> 1: the candidate predicts better)."""
+        return self.incumbent_rmse_m / max(self.candidate_rmse_m, 1e-12)
+
+    def describe(self) -> str:
+        """One line: the verdict and both errors."""
+        verdict = "beats" if self.passed else "does NOT beat"
+        return (
+            f"{self.candidate} {verdict} {self.incumbent} over a {self.horizon_s:g} s horizon on "
+            f"held-out logs: position prediction RMSE {self.candidate_rmse_m:.4f} m vs "
+            f"{self.incumbent_rmse_m:.4f} m ({self.n_starts} rollouts)"
+        )
+
+    def to_dict(self) -> dict[str, object]:
+        return {
+            "candidate": self.candidate,
+            "incumbent": self.incumbent,
+            "candidate_rmse_m": self.candidate_rmse_m,
+            "incumbent_rmse_m": self.incumbent_rmse_m,
+            "horizon_s": self.horizon_s,
+            "n_starts": self.n_starts,
+            "passed": self.passed,
+        }
+
+
+def horizon_prediction_rmse(
+    predictor: Predictor,
+    logs: Sequence[FlightLog],
+    horizon_s: float,
+    modes: tuple[str, ...] | None = None,
+    stride: int = 5,
+) -> tuple[float, int]:
+    """(RMSE [m] of the predicted position over the horizon, number of rollouts).
+
+    Raises:
+        DatasetError: no clean segment is longer than the horizon.
+    """
+    config = DatasetConfig(
+        feature_definition("velocity"), max_gap_factor=CHECK_MAX_GAP_FACTOR, modes=modes
+    )
+    sq_sum, count, starts = 0.0, 0, 0
+    for log in logs:
+        for seg in split_segments(log, config):
+            t = seg["t_s"]
+            dt = float(np.median(np.diff(t)))
+            steps = int(round(horizon_s / dt))
+            k0 = np.arange(0, seg.n_rows - steps, stride)
+            if steps < 1 or k0.size == 0:
+                continue
+            x = model_state(predictor.model, seg)[k0].T
+            u_all = model_input(predictor.model, seg)
+            pos = seg.stack(*_POS)
+            step = predictor.step_function().map(k0.size)
+            p_index = [predictor.model.state_names.index(c) for c in _POS]
+            for h in range(steps):
+                x = step(x, u_all[k0 + h].T, (t[k0 + h + 1] - t[k0 + h])[None, :])
+                err = np.asarray(x)[p_index].T - pos[k0 + h + 1]
+                sq_sum += float(np.sum(err**2))
+                count += k0.size
+            starts += k0.size
+    if count == 0:
+        raise DatasetError(
+            f"no clean segment of the held-out logs is longer than the {horizon_s:g} s horizon; "
+            "hold out longer flights"
+        )
+    return float(np.sqrt(sq_sum / count)), starts
+
+
+def check_prediction(
+    candidate: Predictor,
+    incumbent: Predictor,
+    logs: Sequence[FlightLog],
+    horizon_s: float,
+    modes: tuple[str, ...] | None = None,
+) -> PredictionCheck:
+    """Compare ``candidate`` with the ``incumbent`` it would replace on held-out ``logs``."""
+    cand, n = horizon_prediction_rmse(candidate, logs, horizon_s, modes)
+    inc, _ = horizon_prediction_rmse(incumbent, logs, horizon_s, modes)
+    return PredictionCheck(candidate.name, incumbent.name, cand, inc, horizon_s, n)
+
+
+def split_logs(
+    logs: Sequence[FlightLog], fraction: float = 0.25, modes: tuple[str, ...] | None = None
+) -> tuple[list[FlightLog], list[FlightLog]]:
+    """(training, held-out) logs: every round(1/fraction)-th log is held out when there are at
+    least 1/fraction + 1 of them; otherwise each log is cut in time, the last ``fraction`` of
+    its rows in ``modes`` (all rows if None) held out (a single flight still gets a check it was
+    not trained on)."""
+    every = max(2, int(round(1.0 / fraction)))
+    if len(logs) > every:
+        held = [log for i, log in enumerate(logs) if i % every == every - 1]
+        train = [log for i, log in enumerate(logs) if i % every != every - 1]
+        return train, held
+    train, held = [], []
+    for log in logs:
+        rows = np.arange(log.n_rows)
+        if modes is not None and log.has("mode"):
+            rows = np.flatnonzero(np.isin(log["mode"], modes))
+        if rows.size == 0:
+            train.append(log)
+            continue
+        first, last = int(rows[0]), int(rows[-1]) + 1
+        cut = first + int(round((1.0 - fraction) * (last - first)))
+        train.append(log.slice(0, cut))
+        held.append(log.slice(cut, log.n_rows))
+    return train, held
+
+
+def refusal(model: ResidualModel) -> str | None:
+    """One line refusing ``model`` if its file records a failed prediction check, else None."""
+    check = model.training.get("prediction_check")
+    if not isinstance(check, dict) or check.get("passed", True):
+        return None
+    return (
+        f"refusing the learned model: it predicts worse than {check['incumbent']} over "
+        f"{check['horizon_s']:g} s on held-out logs ({check['candidate_rmse_m']:.4f} m vs "
+        f"{check['incumbent_rmse_m']:.4f} m); fly without it or learn from more flights"
+    )

@@ -1,0 +1,27 @@
+"""The study's regimes are StudyConfig overrides with a name."""
+
+import pytest
+
+from experiments.study.config import StudyConfig
+from experiments.study.regimes import REGIMES, with_regime
+
+
+def test_agile_raises_speeds_and_the_command_limit_and_keeps_the_rest():
+    base = StudyConfig(n_trajectories=3)
+    agile = with_regime(base, "agile")
+    assert agile.regime == "agile" and agile.n_trajectories == 3
+    assert agile.max_speed_mps > 3.0 and agile.nmpc.speed_limit_mps > agile.max_speed_mps
+    assert agile.nmpc.period_s == base.nmpc.period_s
+
+
+def test_wind_field_flies_the_wind_field_vehicle_with_position_features():
+    from vehicle_sim import load_sim_config
+
+    wind = with_regime(StudyConfig(), "wind_field")
+    assert "wind_field" in load_sim_config(wind.vehicle).effect_names
+    assert wind.features == "position_state"
+
+
+def test_an_unknown_regime_is_refused_with_the_valid_names():
+    with pytest.raises(ValueError, match=", ".join(REGIMES)):
+        with_regime(StudyConfig(), "fast")

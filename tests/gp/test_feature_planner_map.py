@@ -1,0 +1,50 @@
+"""The NMPC's feature vector comes from the same FeatureDefinition the dataset reads."""
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from gp.features import feature_definition
+
+
+def test_state_input_map_matches_the_logged_columns_order():
+    fd = feature_definition("state_input", "first_order_lag", tau_s=0.4)
+    model = fd.nominal()
+    rng = np.random.default_rng(3)
+    x, u = rng.normal(size=model.nx), rng.normal(size=model.nu)
+    z = np.asarray(ca.DM(fd.planner_map(model)(ca.DM(x), ca.DM(u)))).ravel()
+    # columns: vel (the lag model's velocity state x[3:6]), cmd_vel (u[:3]), cmd_yaw_rate (u[3])
+    np.testing.assert_allclose(z, np.concatenate([x[3:6], u[:3], u[3:4]]))
+
+
+def test_velocity_map_on_the_kinematic_model_is_the_command():
+    fd = feature_definition("velocity", "kinematic_4dof", residual_dt_s=0.02)
+    model = fd.nominal()
+    u = np.array([0.3, -0.2, 0.1, 0.0])
+    z = np.asarray(ca.DM(fd.planner_map(model)(ca.DM.zeros(4), ca.DM(u)))).ravel()
+    np.testing.assert_allclose(z, u[:3])
+
+
+@pytest.mark.parametrize(
+    ("features", "nominal", "words"),
+    [("history", "first_order_lag", "lagged"), ("state_input", "kinematic_4dof", "velocity state")],
+)
+def test_features_the_planner_cannot_build_are_refused_in_one_line(features, nominal, words):
+    fd = feature_definition(features, nominal)
+    with pytest.raises(ValueError, match=words) as info:
+        fd.planner_map(fd.nominal())
+    assert "\n" not in str(info.value)
+
+
+def test_only_velocity_loop_models_carry_velocity():
+    assert feature_definition("velocity", "first_order_lag").nominal().carries_velocity
+    assert not feature_definition("velocity", "kinematic_4dof").nominal().carries_velocity
+
+
+def test_position_state_map_takes_the_position_from_the_model_state():
+    fd = feature_definition("position_state", "first_order_lag", tau_s=0.4)
+    model = fd.nominal()
+    x = np.arange(1.0, 8.0)  # pos (1, 2, 3), vel (4, 5, 6), yaw 7
+    u = np.array([0.5, 0.6, 0.7, 0.8])
+    z = np.asarray(ca.DM(fd.planner_map(model)(ca.DM(x), ca.DM(u)))).ravel()
+    np.testing.assert_allclose(z, [1.0, 2.0, 4.0, 5.0, 6.0, 0.5, 0.6, 0.7, 0.8])

@@ -1,0 +1,100 @@
+"""The multi-step prediction check: a learned model flies only if it predicts better."""
+
+import numpy as np
+import pytest
+
+from flightlog.schema import FlightLogRecorder
+from gp.prediction_check import Predictor, check_prediction, refusal, split_logs
+from gp.training import TrainingConfig, train_residual_model
+from planners.nominal_models import first_order_lag, kinematic_4dof
+
+
+def lag_plant_log(seed, tau_s, drag_per_m, n_rows=900, dt_s=0.02, noise_mps=0.005):
+    """A velocity loop with lag ``tau_s`` and quadratic drag, positions integrated: what the
+    check must predict. Commands: random smooth sweeps up to about 3 m/s."""
+    rng = np.random.default_rng(seed)
+    amp, freq, phase = rng.uniform(1.0, 3.0, 3), rng.uniform(0.2, 0.6, 3), rng.uniform(0, 6, 3)
+    amp[2] *= 0.2
+    rec = FlightLogRecorder({"source": "synthetic-lag"})
+    pos, vel = np.array([0.0, 0.0, -5.0]), np.zeros(3)
+    decay = np.exp(-dt_s / tau_s)
+    for k in range(n_rows):
+        cmd = amp * np.sin(freq * k * dt_s + phase)
+        rec.append({
+            "t_s": k * dt_s,
+            "pos_n_m": pos[0], "pos_e_m": pos[1], "pos_d_m": pos[2],
+            "vel_n_mps": vel[0], "vel_e_mps": vel[1], "vel_d_mps": vel[2],
+            "q_w": 1.0, "q_x": 0.0, "q_y": 0.0, "q_z": 0.0,
+            "cmd_vel_n_mps": cmd[0], "cmd_vel_e_mps": cmd[1], "cmd_vel_d_mps": cmd[2],
+            "cmd_yaw_rate_radps": 0.0,
+        })  # fmt: skip
+        new = cmd + (vel - cmd) * decay - dt_s * drag_per_m * vel * np.abs(vel)
+        pos = pos + dt_s * 0.5 * (vel + new)
+        vel = new + noise_mps * rng.normal(size=3)
+    return rec.to_log()
+
+
+@pytest.fixture(scope="module")
+def hidden_plant_logs():
+    rng = np.random.default_rng(17)
+    tau_s, drag = rng.uniform(0.25, 0.6), rng.uniform(0.05, 0.2)
+    return [lag_plant_log(s, tau_s, drag) for s in range(5)]
+
+
+def test_a_learned_lag_plus_gp_beats_the_kinematic_model_it_replaces(hidden_plant_logs):
+    config = TrainingConfig(
+        features="state_input", nominal="first_order_lag", m=20, restarts=1, check_horizon_s=2.0
+    )
+    result = train_residual_model(hidden_plant_logs, config)
+    assert result.check is not None and result.may_fly, result.check.describe()
+    assert result.check.gain > 2.0
+    assert result.model.training["prediction_check"]["passed"] is True
+    assert refusal(result.model) is None
+
+
+def test_a_model_that_predicts_worse_is_refused_in_one_line(hidden_plant_logs):
+    _, held = split_logs(hidden_plant_logs)
+    truthish = Predictor("lag", first_order_lag(0.4))
+    worse = Predictor("kinematic", kinematic_4dof())
+    check = check_prediction(worse, truthish, held, horizon_s=2.0)
+    assert not check.passed and "does NOT beat" in check.describe()
+
+
+def test_split_logs_holds_out_whole_logs_or_each_log_tail(hidden_plant_logs):
+    train, held = split_logs(hidden_plant_logs, 0.25)
+    assert len(train) == 4 and len(held) == 1
+    train, held = split_logs(hidden_plant_logs[:1], 0.25)
+    assert train[0].n_rows + held[0].n_rows == hidden_plant_logs[0].n_rows
+    assert held[0]["t_s"][0] > train[0]["t_s"][-1]
+
+
+def test_the_companion_refuses_a_model_file_that_failed_its_check(hidden_plant_logs):
+    from dataclasses import replace
+
+    from companion.nmpc_planner import check_residual_model
+    from gp.errors import ModelFileError
+
+    config = TrainingConfig(features="state_input", nominal="first_order_lag", m=10, restarts=1)
+    model = train_residual_model(hidden_plant_logs[:2], config).model
+    failed = {"candidate": "learned", "incumbent": "nominal kinematic_4dof", "passed": False,
+              "candidate_rmse_m": 0.5, "incumbent_rmse_m": 0.4, "horizon_s": 2.0}  # fmt: skip
+    bad = replace(model, training={**model.training, "prediction_check": failed})
+    with pytest.raises(ModelFileError, match="refusing the learned model") as info:
+        check_residual_model(bad, period_s=0.02)
+    assert "\n" not in str(info.value)
+    check_residual_model(model, period_s=0.02)  # an unchecked model is not refused
+
+
+def test_a_gp_that_does_not_beat_its_structure_flies_without_it(hidden_plant_logs):
+    from dataclasses import replace
+
+    from companion.nmpc_planner import structure_only
+
+    config = TrainingConfig(features="state_input", nominal="first_order_lag", m=10, restarts=1)
+    model = train_residual_model(hidden_plant_logs[:2], config).model
+    assert not structure_only(model)
+    worse = {"candidate": "learned", "incumbent": "first_order_lag alone", "passed": False,
+             "candidate_rmse_m": 0.2, "incumbent_rmse_m": 0.03, "horizon_s": 2.0}  # fmt: skip
+    assert structure_only(
+        replace(model, training={**model.training, "prediction_check_structure": worse})
+    )
