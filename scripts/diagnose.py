@@ -20,8 +20,8 @@ from diagnosis.diagnosis import diagnose
 from diagnosis.extend_config import write_extended_config
 from diagnosis.forces import ForceDataError
 from diagnosis.report import write_report
-from flightlog.schema import FlightLogError, read_flight_log
-from flightlog.ulog import read_ulog
+from flightlog.reader import read_log, require_rates
+from flightlog.schema import FlightLogError
 from vehicle_sim import SimConfigError, load_sim_config
 
 EXIT_OK = 0
@@ -65,7 +65,9 @@ def main(argv: list[str] | None = None) -> int:
 
     try:
         sim_config = load_sim_config(args.sim_config)
-        logs = [read_ulog(p) if p.suffix == ".ulg" else read_flight_log(p) for p in args.logs]
+        logs = [read_log(p) for p in args.logs]
+        for log in logs:
+            require_rates(log, "diagnose")
         progress(f"read {len(logs)} log(s), {sum(log.n_rows for log in logs)} rows")
         result = diagnose(logs, sim_config, progress=progress)
     except (SimConfigError, FlightLogError, ForceDataError) as exc:
