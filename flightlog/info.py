@@ -14,7 +14,11 @@ def mode_spans(log: FlightLog) -> list[tuple[str, float, float]]:
         return []
     mode, t = log["mode"], log["t_s"]
     cuts = [0, *(np.flatnonzero(mode[1:] != mode[:-1]) + 1).tolist(), len(mode)]
-    return [(str(mode[a]), float(t[a]), float(t[b - 1])) for a, b in zip(cuts, cuts[1:]) if b > a]
+    return [
+        (str(mode[a]), float(t[a]), float(t[b - 1]))
+        for a, b in zip(cuts[:-1], cuts[1:], strict=True)
+        if b > a
+    ]
 
 
 def describe_log(log: FlightLog) -> list[str]:

@@ -87,6 +87,11 @@ def read_ulog(path: str | Path) -> FlightLog:
     path = Path(path)
     if not path.is_file():
         raise FlightLogError(f"{path}: no such file; pass a PX4 .ulg or a schema-v1 CSV")
+    if not is_ulog(path):
+        raise FlightLogError(
+            f"{path}: not a ULog file (it does not start with the ULog magic bytes); "
+            "copy the .ulg again from the vehicle, or pass a schema-v1 CSV"
+        )
     cut = truncated_at(path)
     if cut is not None:
         raise FlightLogError(
