@@ -5,13 +5,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from px4_topics import topics_of
 
 from diagnosis.excitation import schedule_from_mapping
 from diagnosis.fly_schedule import fly_schedule
 from flightlog.reader import require_modes, require_rates
 from flightlog.schema import FlightLogError
 from flightlog.ulog import flight_log_from_topics
-from px4_topics import topics_of
 from vehicle_sim import load_sim_config
 
 SCHEDULE = schedule_from_mapping(
