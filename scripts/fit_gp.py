@@ -124,7 +124,8 @@ WORSE_MARGIN = 0.02
 
 def model_doubts(metrics: dict[str, list[float]], lag: dict[str, object] | None) -> list[str]:
     """Why the fitted model should not be trusted: worse than nominal on held-out rows on
-    some axis (by more than WORSE_MARGIN), or an identified time constant on its search bound (TAU_BOUNDS_S)."""
+    some axis (by more than WORSE_MARGIN), or an identified time constant on its search
+    bound (TAU_BOUNDS_S)."""
     doubts = []
     for axis, nom, aug in zip(
         "ned", metrics["nominal_rmse_mps"], metrics["augmented_rmse_mps"], strict=False
