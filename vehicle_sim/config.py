@@ -3,7 +3,8 @@
 A config file has the sections ``[vehicle]``, ``[rotors]``, ``[battery]``, optional ``[sim]``,
 optional ``[px4_params]`` (PX4-named flight-control parameters overriding PX4's defaults, see
 vehicle_sim/params.py) and optional ``[effects.<name>]`` tables (see ``presets/iris.toml``).
-Every numeric key carries its unit in its name; ``[sim] backend`` names the physics backend (one of ``BACKEND_NAMES``).
+Every numeric key carries its unit in its name; ``[sim] backend`` names the physics backend
+(one of ``BACKEND_NAMES``).
 Any problem raises :class:`SimConfigError` with one line naming the key and the fix.
 """
 
