@@ -4,7 +4,8 @@ Topics and fields per firmware version ([PX4-msgs] msg/*.msg, v1.9 to v1.16):
 
 - ``vehicle_local_position`` (all versions): the time base. x, y, z, vx, vy, vz, ax, ay, az;
   validity flags xy_valid, z_valid, v_xy_valid, v_z_valid (all versions); dead_reckoning
-  (v1.13+). Rows the estimator marks invalid are dropped and counted.
+  (absent from the v1.11-era msg/vehicle_local_position.msg, present in the v1.15 fixture; used
+  when present). Rows the estimator marks invalid are dropped and counted.
 - ``vehicle_attitude`` (all): q[0..3], body FRD to NED; interpolated and renormalised.
 - Velocity command: ``vehicle_local_position_setpoint`` vx, vy, vz, yawspeed (all versions) is
   what PX4's velocity controller was given in every position-controlled mode (POSCTL, AUTO.*,
@@ -252,7 +253,7 @@ def _keep_rows(topics, pos, rows, cols, t_all, vehicle):
     for flag in ("xy_valid", "z_valid", "v_xy_valid", "v_z_valid"):
         if flag in pos:
             valid &= np.asarray(pos[flag])[rows] > 0
-    if "dead_reckoning" in pos:  # v1.13+
+    if "dead_reckoning" in pos:  # newer versions only (see module docstring)
         valid &= np.asarray(pos["dead_reckoning"])[rows] == 0
     cmd = np.column_stack([cols[f"cmd_vel_{a}_mps"] for a in "ned"])
     has_cmd = np.all(np.isfinite(cmd), axis=1)
