@@ -61,3 +61,15 @@ def test_mode_filter_on_ulog_and_refused_on_a_log_without_modes(tmp_path, capsys
     assert not (tmp_path / "n.json").exists()
     assert fit_gp_cli.main([str(AUTO), "--out", str(tmp_path / "o"), "--mode", "offboard"]) == 2
     assert "no rows in mode OFFBOARD; the logs hold HOLD, RTL, TAKEOFF" in capsys.readouterr().err
+
+
+def test_two_hz_log_refused_with_the_rate_needed(tmp_path, capsys):
+    log = read_log(AUTO)
+    slow = FlightLog({k: v[::5] for k, v in log.columns.items()}, {"source": "csv"})
+    csv = write_flight_log(tmp_path / "slow.csv", slow)
+    assert fit_gp_cli.main([str(csv), "--out", str(tmp_path / "m"), "--no-plots"]) == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert (
+        "velocity_command at 2 Hz (needs >= 5 Hz)" in line and "log vehicle_local_position" in line
+    )
+    assert not (tmp_path / "m.json").exists()

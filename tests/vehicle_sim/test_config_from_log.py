@@ -62,3 +62,19 @@ def test_px4_params_section_is_validated():
         config_from_mapping({**base, "px4_params": {"MPC_XY_VEL_P_AC": 2.0}}, "t")
     with pytest.raises(SimConfigError, match="MPC_THR_HOVER: follows from vehicle.mass_kg"):
         config_from_mapping({**base, "px4_params": {"MPC_THR_HOVER": 0.4}}, "t")
+
+
+def test_log_without_thrust_or_parameters_refused(tmp_path, capsys):
+    from flightlog.schema import FlightLog, write_flight_log
+
+    log = read_log(AUTO)
+    cols = {k: v for k, v in log.columns.items() if k != "thrust_norm"}
+    csv = write_flight_log(tmp_path / "bare.csv", FlightLog(cols, {"source": "csv"}))
+    out = tmp_path / "v.toml"
+    assert vehicle_sim_cli.main(["config-from-log", str(csv), "--out", str(out)]) == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert (
+        "no MPC_THR_HOVER parameter and no produced thrust" in line
+        and "log actuator_motors" in line
+    )
+    assert not out.exists()
