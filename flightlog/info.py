@@ -60,7 +60,7 @@ def describe_log(log: FlightLog) -> list[str]:
         lines.append("thrust: none")
     for command in NEEDS_HZ:
         short = rate_shortfalls(log, command)
-        verdict = "too slow: " + "; ".join(short) if short else "usable"
+        verdict = "too slow: " + "; ".join(short) if short else "rates sufficient"
         lines.append(f"{command}: {verdict}")
     has_thrust = log.has("thrust_n") or log.has("thrust_norm")
     if not has_thrust:

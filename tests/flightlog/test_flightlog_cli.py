@@ -37,7 +37,7 @@ def test_info_names_vehicle_firmware_rates_modes_validity_and_uses(capsys):
         "mode RTL:",
         "dropped estimator invalid: 96 of 311 rows",
         "thrust: produced from actuator_motors",
-        "fit-gp: usable",
+        "fit-gp: rates sufficient",
     ):
         assert line in out
 
