@@ -20,7 +20,8 @@ import numpy as np
 import tomli_w
 
 from companion.app import CompanionConfig, run_companion
-from flightlog.schema import FlightLog, read_flight_log
+from flightlog.reader import read_log
+from flightlog.schema import FlightLog
 from vehicle_sim.config import PRESET_DIR
 
 MISSION = Path(__file__).resolve().parent.parent / "missions" / "square.toml"
@@ -111,7 +112,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             if result.log_path is None or result.outcome.status != "completed":
                 print(f"demo: the {name} flight did not complete: {result.outcome.detail}")
                 return 1
-            logs[name] = read_flight_log(result.log_path)
+            logs[name] = read_log(result.log_path)
     figure = config.out_dir / "square.png"
     plot(logs, figure)
     print("| flight | tracking RMSE [m] | max error [m] |")

@@ -1,11 +1,26 @@
-"""PX4 ULog files mapped onto flight-log schema v1 (read with pyulog).
+"""PX4 ULog files mapped onto flight-log schema v1 (read with pyulog), knowing PX4.
 
-Topics: ``vehicle_local_position`` (time base: x, y, z, vx, vy, vz, ax, ay, az),
-``vehicle_attitude`` (q[0..3], body FRD to NED), ``trajectory_setpoint`` (velocity[0..2] or
-vx/vy/vz, yawspeed), optional ``vehicle_angular_velocity`` (xyz[0..2]), ``battery_status``
-(voltage_v) and ``vehicle_thrust_setpoint`` (xyz[2], normalised, up negative -> ``thrust_norm``).
-Continuous signals are interpolated onto the local-position times, setpoints held (zero-order),
-quaternions renormalised. Rows before every required topic has a sample are dropped.
+Topics and fields per firmware version ([PX4-msgs] msg/*.msg, v1.9 to v1.16):
+
+- ``vehicle_local_position`` (all versions): the time base. x, y, z, vx, vy, vz, ax, ay, az;
+  validity flags xy_valid, z_valid, v_xy_valid, v_z_valid (all versions); dead_reckoning
+  (absent from the v1.11-era msg/vehicle_local_position.msg, present in the v1.15 fixture; used
+  when present). Rows the estimator marks invalid are dropped and counted.
+- ``vehicle_attitude`` (all): q[0..3], body FRD to NED; interpolated and renormalised.
+- Velocity command: ``vehicle_local_position_setpoint`` vx, vy, vz, yawspeed (all versions) is
+  what PX4's velocity controller was given in every position-controlled mode (POSCTL, AUTO.*,
+  OFFBOARD); ``trajectory_setpoint`` (velocity[0..2] v1.13+, vx/vy/vz before) is used only
+  when the former is absent (then it is what reached the controller, e.g. OFFBOARD logs).
+  Rows outside position-controlled modes, or whose command is NaN (position-only), are dropped.
+- ``vehicle_status`` (all): nav_state -> ``mode``, arming_state -> ``armed``; is_vtol and
+  vehicle_type (v1.13+) or is_rotary_wing (v1.9-v1.12) for the VTOL phase.
+- ``vehicle_land_detected`` (all): landed -> ``landed``.
+- Thrust, best source first (see :func:`_thrust`), recorded in ``metadata['thrust_source']``.
+- ``vehicle_angular_velocity`` xyz[0..2] (v1.10+), ``battery_status`` voltage_v (all).
+
+Continuous signals are interpolated onto the local-position times, setpoints and states held
+(zero-order). Initial parameters go to ``metadata['px4_params']``, rates per signal to
+``metadata['rates_hz']``, dropped-row counts to ``metadata['dropped_rows']``.
 """
 
 from __future__ import annotations
@@ -14,51 +29,132 @@ from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
-from pyulog import ULog
 
+from flightlog import px4
 from flightlog.schema import FlightLog, FlightLogError, validate_flight_log
 
 Topics = Mapping[str, Mapping[str, np.ndarray]]
+ULOG_MAGIC = b"ULog\x01\x12\x35"
 TOPICS = (
-    "vehicle_local_position", "vehicle_attitude", "trajectory_setpoint",
+    "vehicle_local_position", "vehicle_attitude", "vehicle_local_position_setpoint",
+    "trajectory_setpoint", "vehicle_status", "vehicle_land_detected",
     "vehicle_angular_velocity", "battery_status", "vehicle_thrust_setpoint",
+    "actuator_controls_0", "actuator_motors", "actuator_outputs", "esc_status",
 )  # fmt: skip
-REQUIRED_TOPICS = TOPICS[:3]
+COMMAND_TOPICS = ("vehicle_local_position_setpoint", "trajectory_setpoint")
+MOTOR_COUNT = {2: 4, 13: 6, 14: 8, 15: 3, 3: 2}  # MAV_TYPE -> motors (actuator_outputs)
+FLY_HINT = (
+    "fly a multirotor in a position-controlled mode (POSCTL, AUTO.MISSION/LOITER, OFFBOARD) "
+    "with the default logging profile"
+)
+
+
+def is_ulog(path: str | Path) -> bool:
+    """True if the file starts with the ULog magic bytes (whatever its extension)."""
+    try:
+        with Path(path).open("rb") as fh:
+            return fh.read(len(ULOG_MAGIC)) == ULOG_MAGIC
+    except OSError:
+        return False
+
+
+def truncated_at(path: str | Path) -> int | None:
+    """Byte offset of an incomplete last message (a truncated ULog), else None.
+
+    ULog ([ULog-format]): a 16-byte header, then messages of (uint16 size, uint8 type, size
+    bytes). A file cut mid-message leaves a last message longer than the bytes remaining.
+    """
+    data = Path(path).read_bytes()
+    if len(data) < 16:
+        return len(data)
+    offset = 16
+    while offset + 3 <= len(data):
+        size = int.from_bytes(data[offset : offset + 2], "little")
+        if offset + 3 + size > len(data):
+            return offset
+        offset += 3 + size
+    return offset if offset != len(data) else None
 
 
 def read_ulog(path: str | Path) -> FlightLog:
     """Read a PX4 ULog file as a schema-v1 log.
 
     Raises:
-        FlightLogError: unreadable file or a required topic missing (one line).
+        FlightLogError: unreadable or truncated file, not a multirotor, no valid motion (one
+            line naming what is wrong and what to fly or log instead).
     """
+    from pyulog import ULog  # imported here: the CSV path needs no pyulog
+
     path = Path(path)
+    if not path.is_file():
+        raise FlightLogError(f"{path}: no such file; pass a PX4 .ulg or a schema-v1 CSV")
+    if not is_ulog(path):
+        raise FlightLogError(
+            f"{path}: not a ULog file (it does not start with the ULog magic bytes); "
+            "copy the .ulg again from the vehicle, or pass a schema-v1 CSV"
+        )
+    cut = truncated_at(path)
+    if cut is not None:
+        raise FlightLogError(
+            f"{path}: ULog is truncated (last message incomplete at byte {cut} of "
+            f"{path.stat().st_size}); copy the complete .ulg from the vehicle's SD card"
+        )
     try:
         ulog = ULog(str(path), message_name_filter_list=list(TOPICS))
     except Exception as exc:  # pyulog raises several types for corrupt files
-        raise FlightLogError(f"{path}: not a readable ULog file ({exc})") from None
-    topics = {d.name: d.data for d in ulog.data_list if d.multi_id == 0}
-    log = flight_log_from_topics(topics, str(path))
-    return FlightLog(log.columns, {**log.metadata, "ulog": path.name}, path)
-
-
-def flight_log_from_topics(topics: Topics, where: str = "ulog") -> FlightLog:
-    """Map ULog topics (name -> field -> array, ``timestamp`` in us) onto schema v1."""
-    missing = [t for t in REQUIRED_TOPICS if t not in topics]
-    if missing:
-        raise FlightLogError(f"{where}: ULog lacks topic(s) {', '.join(missing)}")
-    pos = topics["vehicle_local_position"]
-    att = topics["vehicle_attitude"]
-    sp = topics["trajectory_setpoint"]
-    t_us = np.asarray(pos["timestamp"], dtype=float)
-    start = max(float(att["timestamp"][0]), float(sp["timestamp"][0]))
-    rows = t_us >= start
-    t_us = t_us[rows]
-    if len(t_us) < 2:
         raise FlightLogError(
-            f"{where}: fewer than 2 rows where position, attitude and setpoint overlap"
+            f"{path}: not a readable ULog file ({type(exc).__name__}: {exc}); "
+            "copy the .ulg again from the vehicle's SD card"
+        ) from None
+    topics = {d.name: d.data for d in ulog.data_list if d.multi_id == 0}
+    if "vehicle_local_position" not in topics and ulog.file_corruption is not False:
+        raise FlightLogError(f"{path}: ULog is corrupt or truncated and holds no local position")
+    params = {k: float(v) for k, v in ulog.initial_parameters.items()}
+    info = ulog.msg_info_dict
+    meta = {
+        "ulog": path.name,
+        "firmware": px4.firmware_version(info.get("ver_sw_release")),
+        "sys_name": info.get("sys_name"),
+        "hardware": info.get("ver_hw"),
+        "duration_s": round((ulog.last_timestamp - ulog.start_timestamp) * 1e-6, 3),
+    }
+    where = str(path)
+    if not topics:
+        raise FlightLogError(
+            f"{path}: ULog holds no data messages (truncated after its header?); "
+            "copy the complete .ulg from the vehicle"
         )
-    cols: dict[str, np.ndarray] = {"t_s": (t_us - t_us[0]) * 1e-6}
+    log = flight_log_from_topics(topics, where, params)
+    return FlightLog(log.columns, {**log.metadata, **meta}, path)
+
+
+def flight_log_from_topics(
+    topics: Topics, where: str = "ulog", params: Mapping[str, float] | None = None
+) -> FlightLog:
+    """Map ULog topics (name -> field -> array, ``timestamp`` in us) onto schema v1.
+
+    Args:
+        topics: first instance of each topic.
+        where: file name for error messages.
+        params: PX4 parameters (MAV_TYPE, THR_MDL_FAC, PWM_MIN/MAX, ...); may be empty.
+    """
+    params = dict(params or {})
+    vehicle = _vehicle(topics, params, where)
+    for name in ("vehicle_local_position", "vehicle_attitude"):
+        if name not in topics:
+            raise FlightLogError(f"{where}: ULog lacks topic {name}; {FLY_HINT}")
+    cmd_name = next((n for n in COMMAND_TOPICS if n in topics), None)
+    if cmd_name is None:
+        flown = _modes_flown(topics)
+        raise FlightLogError(
+            f"{where}: ULog lacks topic(s) vehicle_local_position_setpoint or "
+            f"trajectory_setpoint (no velocity command{flown}); {FLY_HINT}"
+        )
+    pos, att, sp = topics["vehicle_local_position"], topics["vehicle_attitude"], topics[cmd_name]
+    t_us = np.asarray(pos["timestamp"], dtype=float)
+    rows = t_us >= max(float(att["timestamp"][0]), float(sp["timestamp"][0]))
+    t_all = t_us[rows]
+    cols: dict[str, np.ndarray] = {"t_s": t_all}
     for name, field in zip(("pos_n_m", "pos_e_m", "pos_d_m"), "xyz", strict=True):
         cols[name] = np.asarray(pos[field], dtype=float)[rows]
     for axis, field in zip("ned", ("vx", "vy", "vz"), strict=True):
@@ -66,27 +162,188 @@ def flight_log_from_topics(topics: Topics, where: str = "ulog") -> FlightLog:
     if all(f in pos for f in ("ax", "ay", "az")):
         for axis, field in zip("ned", ("ax", "ay", "az"), strict=True):
             cols[f"acc_{axis}_mps2"] = np.asarray(pos[field], dtype=float)[rows]
-    q = np.column_stack([_interp(att, f"q[{i}]", t_us) for i in range(4)])
+    q = np.column_stack([_interp(att, f"q[{i}]", t_all) for i in range(4)])
     q /= np.linalg.norm(q, axis=1, keepdims=True)
     for i, name in enumerate(("q_w", "q_x", "q_y", "q_z")):
         cols[name] = q[:, i]
     fields = ("velocity[0]", "velocity[1]", "velocity[2]")
     if not all(f in sp for f in fields):
-        fields = ("vx", "vy", "vz")
+        fields = ("vx", "vy", "vz")  # vehicle_local_position_setpoint; trajectory_setpoint <1.13
     for axis, field in zip("ned", fields, strict=True):
-        cols[f"cmd_vel_{axis}_mps"] = np.nan_to_num(_hold(sp, field, t_us))
-    cols["cmd_yaw_rate_radps"] = np.nan_to_num(_hold(sp, "yawspeed", t_us))
-    rates = topics.get("vehicle_angular_velocity")
-    if rates is not None:
+        cols[f"cmd_vel_{axis}_mps"] = _hold(sp, field, t_all)
+    cols["cmd_yaw_rate_radps"] = np.nan_to_num(_hold(sp, "yawspeed", t_all))
+    rates_topic = topics.get("vehicle_angular_velocity")
+    if rates_topic is not None:
         for axis, i in zip("xyz", range(3), strict=True):
-            cols[f"rate_{axis}_radps"] = _interp(rates, f"xyz[{i}]", t_us)
+            cols[f"rate_{axis}_radps"] = _interp(rates_topic, f"xyz[{i}]", t_all)
     if "battery_status" in topics:
-        cols["battery_v"] = _interp(topics["battery_status"], "voltage_v", t_us)
-    if "vehicle_thrust_setpoint" in topics:
-        cols["thrust_norm"] = -_hold(topics["vehicle_thrust_setpoint"], "xyz[2]", t_us)
-    log = FlightLog(cols, {"source": "px4_ulog"})
+        cols["battery_v"] = _interp(topics["battery_status"], "voltage_v", t_all)
+    thrust, thrust_source = _thrust(topics, params, t_all)
+    if thrust is not None:
+        cols["thrust_norm"] = thrust
+    keep, dropped, segments = _keep_rows(topics, pos, rows, cols, t_all, vehicle)
+    if keep.sum() < 2:
+        counts = ", ".join(f"{n} {why}" for why, n in dropped.items() if n) or "none usable"
+        raise FlightLogError(
+            f"{where}: no valid motion: of {len(t_all)} rows, dropped {counts}; {FLY_HINT}"
+        )
+    cols = {k: v[keep] for k, v in cols.items()}
+    t0 = cols["t_s"][0]
+    rates_hz = {
+        "local_position": _rate(pos, t_all),
+        "attitude": _rate(att, t_all),
+        "velocity_command": _rate(sp, t_all),
+    }
+    for key, name in (("angular_rate", "vehicle_angular_velocity"), ("battery", "battery_status")):
+        if name in topics:
+            rates_hz[key] = _rate(topics[name], t_all)
+    if thrust_source:
+        rates_hz["thrust"] = _rate(topics[thrust_source["topic"]], t_all)
+    cols["t_s"] = (cols["t_s"] - t0) * 1e-6
+    meta: dict[str, object] = {
+        "source": "px4_ulog",
+        "vehicle": vehicle,
+        "command_topic": cmd_name,
+        "rates_hz": rates_hz,
+        "dropped_rows": dropped,
+        "rows_in_log": int(len(t_all)),
+        "thrust_source": thrust_source or {"topic": None, "kind": "none"},
+        "px4_params": params,
+    }
+    if "esc_status" in topics:
+        meta["esc_rpm_available"] = True
+    if segments:
+        meta["vtol_multicopter_segments_s"] = [
+            [round((a - t0) * 1e-6, 3), round((b - t0) * 1e-6, 3)] for a, b in segments
+        ]
+    log = FlightLog(cols, meta)
     validate_flight_log(log)
     return log
+
+
+def _vehicle(topics: Topics, params: Mapping[str, float], where: str) -> dict[str, object]:
+    """Vehicle type from MAV_TYPE and vehicle_status; refuses non-multirotors in one line."""
+    status = topics.get("vehicle_status", {})
+    is_vtol = bool("is_vtol" in status and np.any(np.asarray(status["is_vtol"]) > 0))
+    mav_type = int(params["MAV_TYPE"]) if "MAV_TYPE" in params else None
+    if mav_type is not None and mav_type in px4.MAV_TYPE_VTOL:
+        is_vtol = True
+    name = px4.MAV_TYPE_NAMES.get(mav_type, f"MAV_TYPE {mav_type}") if mav_type else None
+    refuse = mav_type is not None and not is_vtol and mav_type not in px4.MAV_TYPE_MULTIROTOR
+    if not is_vtol and "vehicle_type" in status:
+        vt = np.asarray(status["vehicle_type"])
+        refuse |= bool(np.all(vt == px4.VEHICLE_TYPE_FIXED_WING))
+        name = name or "fixed wing"
+    if refuse:
+        raise FlightLogError(
+            f"{where}: a {name} log (MAV_TYPE {mav_type}), not a multirotor; these tools model "
+            "multirotors: use a log of a quad/hexa/octocopter (or a VTOL in multicopter phase)"
+        )
+    return {
+        "mav_type": mav_type,
+        "type": name or "multirotor (MAV_TYPE not logged)",
+        "is_vtol": is_vtol,
+    }
+
+
+def _keep_rows(topics, pos, rows, cols, t_all, vehicle):
+    """Rows to keep and why the others were dropped; VTOL multicopter segments (us)."""
+    n = len(t_all)
+    valid = np.ones(n, dtype=bool)
+    for flag in ("xy_valid", "z_valid", "v_xy_valid", "v_z_valid"):
+        if flag in pos:
+            valid &= np.asarray(pos[flag])[rows] > 0
+    if "dead_reckoning" in pos:  # newer versions only (see module docstring)
+        valid &= np.asarray(pos["dead_reckoning"])[rows] == 0
+    cmd = np.column_stack([cols[f"cmd_vel_{a}_mps"] for a in "ned"])
+    has_cmd = np.all(np.isfinite(cmd), axis=1)
+    pos_ctrl = np.ones(n, dtype=bool)
+    rotary = np.ones(n, dtype=bool)
+    status = topics.get("vehicle_status")
+    if status is not None:
+        nav = _hold(status, "nav_state", t_all).astype(int)
+        cols["mode"] = px4.mode_names(nav)
+        cols["armed"] = (_hold(status, "arming_state", t_all) == px4.ARMING_STATE_ARMED) * 1.0
+        pos_ctrl = np.isin(nav, list(px4.POSITION_CONTROLLED_NAV_STATES))
+        if vehicle["is_vtol"]:
+            if "vehicle_type" in status:  # v1.13+
+                rotary = _hold(status, "vehicle_type", t_all) == px4.VEHICLE_TYPE_ROTARY_WING
+            elif "is_rotary_wing" in status:  # v1.9-v1.12
+                rotary = _hold(status, "is_rotary_wing", t_all) > 0
+            if "in_transition_mode" in status:
+                rotary &= _hold(status, "in_transition_mode", t_all) == 0
+    if "vehicle_land_detected" in topics:
+        cols["landed"] = (_hold(topics["vehicle_land_detected"], "landed", t_all) > 0) * 1.0
+    dropped = {
+        "estimator_invalid": int(np.sum(~valid)),
+        "not_multicopter_phase": int(np.sum(valid & ~rotary)),
+        "not_position_controlled": int(np.sum(valid & rotary & ~pos_ctrl)),
+        "no_velocity_command": int(np.sum(valid & rotary & pos_ctrl & ~has_cmd)),
+    }
+    keep = valid & rotary & pos_ctrl & has_cmd
+    segments = []
+    if vehicle["is_vtol"]:
+        edges = np.flatnonzero(np.diff(np.r_[0, rotary.astype(int), 0]))
+        segments = [(t_all[a], t_all[b - 1]) for a, b in zip(edges[::2], edges[1::2], strict=True)]
+    return keep, dropped, segments
+
+
+def _thrust(topics: Topics, params: Mapping[str, float], t_us: np.ndarray):
+    """Total thrust as a fraction of the maximum, from the best source present.
+
+    1. ``actuator_motors`` control[i] (v1.14+), produced: each motor through PX4's thrust
+       curve THR_MDL_FAC, averaged over CA_ROTOR_COUNT motors.
+    2. ``actuator_outputs`` output[i] PWM (all versions), produced: normalised with PWM_MIN/MAX
+       (v1.9-v1.12) or PWM_MAIN_MIN/MAX (v1.13+), then the thrust curve; motors counted from
+       MAV_TYPE.
+    3. ``vehicle_thrust_setpoint`` -xyz[2] (v1.13+) or ``actuator_controls_0`` control[3]
+       (v1.9-v1.13): commanded, not produced, thrust (kind ``commanded``).
+    ``esc_status`` RPM (all versions) needs the vehicle's thrust coefficient, which a log does
+    not hold: it is flagged (``esc_rpm_available``) for a consumer that has a config.
+    """
+    fac = float(params.get("THR_MDL_FAC", 0.0))
+    motors = topics.get("actuator_motors")
+    n_rot = int(params.get("CA_ROTOR_COUNT", 0))
+    if motors is not None and n_rot > 0:
+        u = np.column_stack([_interp(motors, f"control[{i}]", t_us) for i in range(n_rot)])
+        if np.all(np.isfinite(u)):
+            detail = f"{n_rot} motors through THR_MDL_FAC={fac:g}"
+            thrust = px4.motor_thrust_fraction(u, fac).mean(axis=1)
+            return thrust, {"topic": "actuator_motors", "kind": "produced", "detail": detail}
+    outputs = topics.get("actuator_outputs")
+    n_mot = MOTOR_COUNT.get(int(params.get("MAV_TYPE", -1)), 0)
+    lo = params.get("PWM_MAIN_MIN", params.get("PWM_MIN"))
+    hi = params.get("PWM_MAIN_MAX", params.get("PWM_MAX"))
+    if outputs is not None and n_mot and lo is not None and hi is not None and hi > lo:
+        pwm = np.column_stack([_interp(outputs, f"output[{i}]", t_us) for i in range(n_mot)])
+        u = (pwm - lo) / (hi - lo)
+        detail = f"{n_mot} PWM outputs in [{lo:g}, {hi:g}] us through THR_MDL_FAC={fac:g}"
+        thrust = px4.motor_thrust_fraction(u, fac).mean(axis=1)
+        return thrust, {"topic": "actuator_outputs", "kind": "produced", "detail": detail}
+    if "vehicle_thrust_setpoint" in topics:
+        thrust = -_hold(topics["vehicle_thrust_setpoint"], "xyz[2]", t_us)
+        return thrust, {"topic": "vehicle_thrust_setpoint", "kind": "commanded"}
+    if "actuator_controls_0" in topics:
+        thrust = _hold(topics["actuator_controls_0"], "control[3]", t_us)
+        return thrust, {"topic": "actuator_controls_0", "kind": "commanded"}
+    return None, None
+
+
+def _modes_flown(topics: Topics) -> str:
+    status = topics.get("vehicle_status")
+    if status is None:
+        return ""
+    names = list(dict.fromkeys(px4.mode_names(np.asarray(status["nav_state"]))))
+    return f"; flown in {', '.join(names)}"
+
+
+def _rate(topic: Mapping[str, np.ndarray], t_span_us: np.ndarray) -> float:
+    """Samples per second of a topic over the span of the time base [Hz]."""
+    t = np.asarray(topic["timestamp"], float)
+    t = t[(t >= t_span_us[0]) & (t <= t_span_us[-1])]
+    if len(t) < 2:
+        return 0.0
+    return round((len(t) - 1) / ((t[-1] - t[0]) * 1e-6), 2)
 
 
 def _interp(topic: Mapping[str, np.ndarray], field: str, t_us: np.ndarray) -> np.ndarray:

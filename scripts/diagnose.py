@@ -29,8 +29,8 @@ from diagnosis.report import write_report
 from experiments.batch_diagnose import DiagnosisJob, diagnose_each
 from experiments.executors import SchedulerError, check_scheduler_address, job_executor
 from flightlog.atomic_output import OutputError, atomic_output_dir, check_writable_dir
-from flightlog.schema import FlightLog, FlightLogError, read_flight_log
-from flightlog.ulog import read_ulog
+from flightlog.reader import read_log, require_rates
+from flightlog.schema import FlightLog, FlightLogError
 from vehicle_sim import SimConfig, SimConfigError, load_sim_config
 
 EXIT_OK = 0
@@ -102,7 +102,9 @@ def main(argv: list[str] | None = None) -> int:
     try:
         check_writable_dir(args.out_dir)  # before minutes of work, not after
         sim_config = load_sim_config(args.sim_config)
-        logs = [read_ulog(p) if p.suffix == ".ulg" else read_flight_log(p) for p in args.logs]
+        logs = [read_log(p) for p in args.logs]
+        for log in logs:
+            require_rates(log, "diagnose")
         progress(f"read {len(logs)} log(s), {sum(log.n_rows for log in logs)} rows")
         if args.batch:
             return _run_batch(args, logs, sim_config, progress)

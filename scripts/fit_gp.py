@@ -30,10 +30,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from flightlog.atomic_output import OutputError
-from flightlog.schema import FlightLogError, read_flight_log
+from flightlog.reader import read_log, require_modes, require_rates
+from flightlog.schema import FlightLogError
 from gp.errors import DatasetError, GPInputError, ModelFileError
 from gp.features import FEATURE_SETS
 from gp.inducing import STRATEGIES
+from gp.lag_identification import TAU_BOUNDS_S
 from gp.model_io import save_model
 from gp.plots import plot_residuals
 from gp.prediction_check import refusal
@@ -49,6 +51,7 @@ class FitGpConfig:
     out: Path
     training: TrainingConfig
     plots: bool = True
+    force: bool = False
 
 
 class _Parser(argparse.ArgumentParser):
@@ -61,7 +64,9 @@ class _Parser(argparse.ArgumentParser):
 def parse_args(argv: list[str] | None) -> FitGpConfig:
     """Parse the command line into a FitGpConfig (exits with code 2 on bad arguments)."""
     parser = _Parser(prog="fit-gp", description="Fit a sparse-GP residual model from flight logs.")
-    parser.add_argument("logs", nargs="+", type=Path, help="schema-v1 flight log CSV files")
+    parser.add_argument(
+        "logs", nargs="+", type=Path, help="flight logs: schema-v1 CSV or PX4 ULog (.ulg)"
+    )
     parser.add_argument("--out", required=True, type=Path, help="model file (MODEL.npz)")
     parser.add_argument("--features", default="velocity", choices=list(FEATURE_SETS))
     parser.add_argument("--nominal", default="kinematic_4dof", choices=list(MODELS))
@@ -90,6 +95,11 @@ def parse_args(argv: list[str] | None) -> FitGpConfig:
         type=float,
         default=None,
         help="check the multi-step prediction over this horizon on held-out logs first",
+    )
+    parser.add_argument(
+        "--force",
+        action="store_true",
+        help="write the model even if it is worse than nominal or a time constant is on its bound",
     )
     args = parser.parse_args(argv)
     if args.check_horizon_s is not None and not args.check_horizon_s > 0:
@@ -120,7 +130,39 @@ def parse_args(argv: list[str] | None) -> FitGpConfig:
         seed=args.seed,
         check_horizon_s=args.check_horizon_s,
     )
-    return FitGpConfig(tuple(args.logs), args.out, training, plots=not args.no_plots)
+    return FitGpConfig(
+        tuple(args.logs), args.out, training, plots=not args.no_plots, force=args.force
+    )
+
+
+EXIT_DOUBTFUL = 3
+# Held-out RMSE this much above nominal counts as worse (ties are within the split's noise).
+WORSE_MARGIN = 0.02
+
+
+def model_doubts(metrics: dict[str, list[float]], lag: dict[str, object] | None) -> list[str]:
+    """Why the fitted model should not be trusted: worse than nominal on held-out rows on
+    some axis (by more than WORSE_MARGIN), or an identified time constant on its search
+    bound (TAU_BOUNDS_S)."""
+    doubts = []
+    for axis, nom, aug in zip(
+        "ned", metrics["nominal_rmse_mps"], metrics["augmented_rmse_mps"], strict=False
+    ):
+        if aug > nom * (1.0 + WORSE_MARGIN):
+            doubts.append(
+                f"axis {axis}: held-out RMSE {aug:.4f} m/s with the GP, {nom:.4f} m/s without; "
+                "the model is worse than nominal"
+            )
+    lo, hi = TAU_BOUNDS_S
+    for key in ("tau_s", "tau_d_s"):
+        tau = None if lag is None else lag.get(key)
+        if tau is not None and (tau <= lo * 1.05 or tau >= hi * 0.95):
+            doubts.append(
+                f"identified {key}={float(tau):.3f} s sits on its bound [{lo:g}, {hi:g}] s; "
+                "the logs do not determine it (excite steps in velocity, or pass "
+                f"--nominal-param {key}=...)"
+            )
+    return doubts
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -137,12 +179,23 @@ def main(argv: list[str] | None = None) -> int:
     try:
         logs = []
         for path in config.logs:
-            logs.append(read_flight_log(path))
+            logs.append(read_log(path))
+            require_rates(logs[-1], "fit-gp")
             progress(f"read {path} ({logs[-1].n_rows} rows)")
+        require_modes(logs, config.training.modes)
         result = train_residual_model(logs, config.training, progress)
         if not result.may_fly:
             print(f"fit-gp: {refusal(result.model)}", file=sys.stderr)
             return 1
+        doubts = model_doubts(result.metrics, result.model.training.get("identified_lag"))
+        for doubt in doubts:
+            print(f"fit-gp: warning: {doubt}", file=sys.stderr)
+        if doubts and not config.force:
+            print(
+                "fit-gp: no model written; fix the data or pass --force to write it anyway",
+                file=sys.stderr,
+            )
+            return EXIT_DOUBTFUL
         model_file = save_model(config.out, result.model)
         progress(f"wrote {model_file}")
         if config.plots:

@@ -10,6 +10,7 @@ Usage:
     vehicle-sim --vehicle m100 --speed 2 --effect rotor_drag --effect wind.vel_ned_mps=[3,0,0]
     vehicle-sim --vehicle my_quad.toml --signing-key link.key
     vehicle-sim --vehicle f450 --backend jsbsim          # JSBSim's F450 under the same control
+    vehicle-sim config-from-log flight.ulg --out my_vehicle.toml   # your tuning, your hover
 """
 
 from __future__ import annotations
@@ -202,6 +203,11 @@ def _stop(endpoint: MavlinkEndpoint) -> str:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    args = list(sys.argv[1:] if argv is None else argv)
+    if args[:1] == ["config-from-log"]:
+        from scripts.config_from_log_cli import main as config_from_log_main
+
+        return config_from_log_main(args[1:])
     try:
         config = parse_args(argv)
     except UsageError as exc:

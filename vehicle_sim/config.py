@@ -1,8 +1,10 @@
 """Simulator configuration: vehicle preset + effects, loaded from TOML and validated.
 
-A config file has the sections ``[vehicle]``, ``[rotors]``, ``[battery]``, optional ``[sim]``
-and optional ``[effects.<name>]`` tables (see ``presets/iris.toml``). Every numeric key carries
-its unit in its name; ``[sim] backend`` names the physics backend (one of ``BACKEND_NAMES``).
+A config file has the sections ``[vehicle]``, ``[rotors]``, ``[battery]``, optional ``[sim]``,
+optional ``[px4_params]`` (PX4-named flight-control parameters overriding PX4's defaults, see
+vehicle_sim/params.py) and optional ``[effects.<name>]`` tables (see ``presets/iris.toml``).
+Every numeric key carries its unit in its name; ``[sim] backend`` names the physics backend
+(one of ``BACKEND_NAMES``).
 Any problem raises :class:`SimConfigError` with one line naming the key and the fix.
 """
 
@@ -98,6 +100,8 @@ class SimConfig:
         physics_dt_s: physics and control step [s].
         backend: physics backend the simulator flies when not told otherwise (one of
             ``BACKEND_NAMES``).
+        px4_params: (name, value) PX4 parameters the flight controller uses instead of its
+            defaults (MPC_THR_HOVER excluded: it follows from mass and rotors).
     """
 
     preset_name: str
@@ -105,6 +109,7 @@ class SimConfig:
     effects: tuple[Effect, ...] = ()
     physics_dt_s: float = 0.002
     backend: str = "builtin"
+    px4_params: tuple[tuple[str, float], ...] = ()
     effect_names: tuple[str, ...] = field(init=False)
 
     def __post_init__(self) -> None:
@@ -198,9 +203,9 @@ def load_sim_config(
 def config_from_mapping(doc: Mapping[str, Any], preset_name: str) -> SimConfig:
     """Validate a parsed config document (see module docstring) and build the config."""
     for section in doc:
-        if section not in _SCHEMA and section != "effects":
+        if section not in _SCHEMA and section not in ("effects", "px4_params"):
             raise SimConfigError(
-                f"{section}: unknown section; use {', '.join([*_SCHEMA, 'effects'])}"
+                f"{section}: unknown section; use {', '.join([*_SCHEMA, 'px4_params', 'effects'])}"
             )
     values = {s: _section(doc, s) for s in _SCHEMA}
     veh, rot, bat = values["vehicle"], values["rotors"], values["battery"]
@@ -225,7 +230,35 @@ def config_from_mapping(doc: Mapping[str, Any], preset_name: str) -> SimConfig:
         effects=_build_effects(effects_doc),
         physics_dt_s=values["sim"].get("physics_dt_s", 0.002),
         backend=values["sim"].get("backend", "builtin"),
+        px4_params=_px4_params(doc.get("px4_params", {})),
     )
+
+
+def _px4_params(table: Any) -> tuple[tuple[str, float], ...]:
+    """Validate ``[px4_params]``: known PX4 names, finite numbers; MPC_THR_HOVER refused."""
+    from vehicle_sim.params import PX4_DEFAULTS
+
+    if not isinstance(table, Mapping):
+        raise SimConfigError("px4_params: expected a table of NAME = number")
+    out = []
+    for name, value in table.items():
+        if name == "MPC_THR_HOVER":
+            raise SimConfigError(
+                "px4_params.MPC_THR_HOVER: follows from vehicle.mass_kg and the rotors; "
+                "set the mass instead"
+            )
+        if name not in PX4_DEFAULTS:
+            near = difflib.get_close_matches(name, list(PX4_DEFAULTS), n=1)
+            hint = f"did you mean {near[0]}? " if near else ""
+            raise SimConfigError(f"px4_params.{name}: unknown parameter; {hint}see params.py")
+        if (
+            isinstance(value, bool)
+            or not isinstance(value, (int, float))
+            or not math.isfinite(value)
+        ):
+            raise SimConfigError(f"px4_params.{name}: {value!r} is not a finite number")
+        out.append((name, float(value)))
+    return tuple(sorted(out))
 
 
 def _build_effects(

@@ -55,7 +55,9 @@ class Simulator:
         self.physics_dt_s = config.physics_dt_s
         self.backend_name = backend_name(backend, config)
         self._plant = make_backend(backend, config)
-        self._params = Px4Params({"MPC_THR_HOVER": config.vehicle.hover_thrust_norm})
+        self._params = Px4Params(
+            {"MPC_THR_HOVER": config.vehicle.hover_thrust_norm, **dict(config.px4_params)}
+        )
         self._cp = self._params.control_vector(GRAVITY_MPS2)
         self._cp_version = self._params.version
         v = config.vehicle

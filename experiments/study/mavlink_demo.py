@@ -25,7 +25,8 @@ from experiments.sim_endpoint import SimEndpoint
 from experiments.study.config import STUDY_VEHICLE
 from experiments.study.fitting import fit_residual
 from experiments.study.metrics import residual_rmse_mps, tracking_errors_m, tracking_rmse_m
-from flightlog.schema import FlightLog, read_flight_log
+from flightlog.reader import read_log
+from flightlog.schema import FlightLog
 from gp.model_io import save_model
 from gp.plots import plot_residuals
 from gp.prediction_check import refusal
@@ -120,7 +121,7 @@ def _fly(
         result: CompanionResult = run_companion(companion, progress)
     if result.outcome.status != "completed" or result.log_path is None:
         raise DemoError(f"the {name} flight did not complete: {result.outcome.detail}")
-    return read_flight_log(result.log_path)
+    return read_log(result.log_path)
 
 
 def _figures(name: str, log: FlightLog) -> FlightFigures:

@@ -60,7 +60,7 @@ def test_missing_topic_and_unreadable_file_are_one_line_errors(tmp_path):
         flight_log_from_topics({"vehicle_local_position": {}, "vehicle_attitude": {}})
     bad = tmp_path / "flight.ulg"
     bad.write_bytes(b"not a ulog at all")
-    with pytest.raises(FlightLogError, match="not a readable ULog"):
+    with pytest.raises(FlightLogError, match="not a ULog file"):
         read_ulog(bad)
 
 

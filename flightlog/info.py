@@ -1,0 +1,68 @@
+"""What a flight log holds, as lines a user reads (the core of ``flightlog info``)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from flightlog.reader import NEEDS_HZ, log_rates_hz, rate_shortfalls
+from flightlog.schema import FlightLog
+
+
+def mode_spans(log: FlightLog) -> list[tuple[str, float, float]]:
+    """(mode, start_s, end_s) for each contiguous run of one mode; [] without a mode column."""
+    if not log.has("mode"):
+        return []
+    mode, t = log["mode"], log["t_s"]
+    cuts = [0, *(np.flatnonzero(mode[1:] != mode[:-1]) + 1).tolist(), len(mode)]
+    return [
+        (str(mode[a]), float(t[a]), float(t[b - 1]))
+        for a, b in zip(cuts[:-1], cuts[1:], strict=True)
+        if b > a
+    ]
+
+
+def describe_log(log: FlightLog) -> list[str]:
+    """Lines: vehicle, firmware, duration, rates, modes, validity, thrust, what commands can do."""
+    meta = log.metadata
+    t = log["t_s"]
+    lines = [f"file: {log._where()}", f"source: {meta.get('source', 'csv')}"]
+    vehicle = meta.get("vehicle")
+    if isinstance(vehicle, dict):
+        vtol = " (VTOL)" if vehicle.get("is_vtol") else ""
+        lines.append(f"vehicle: {vehicle.get('type')}{vtol}")
+    if meta.get("firmware"):
+        lines.append(f"firmware: PX4 {meta['firmware']} on {meta.get('hardware')}")
+    if "duration_s" in meta:
+        lines.append(f"log duration: {meta['duration_s']:.1f} s")
+    lines.append(f"usable rows: {log.n_rows} over {t[-1] - t[0]:.1f} s")
+    for name, hz in log_rates_hz(log).items():
+        lines.append(f"rate {name}: {hz:g} Hz")
+    if meta.get("command_topic"):
+        lines.append(f"velocity command from: {meta['command_topic']}")
+    spans = mode_spans(log)
+    for mode, a, b in spans:
+        lines.append(f"mode {mode}: {a:.1f} s to {b:.1f} s")
+    if not spans:
+        lines.append("modes: not recorded (--mode filters cannot be used)")
+    dropped = meta.get("dropped_rows")
+    if isinstance(dropped, dict):
+        total = meta.get("rows_in_log")
+        for why, n in dropped.items():
+            lines.append(f"dropped {why.replace('_', ' ')}: {n} of {total} rows")
+    for seg in meta.get("vtol_multicopter_segments_s", []) or []:
+        lines.append(f"VTOL multicopter phase: {seg[0]:.1f} s to {seg[1]:.1f} s")
+    thrust = meta.get("thrust_source")
+    if isinstance(thrust, dict):
+        lines.append(f"thrust: {thrust.get('kind')} from {thrust.get('topic')}")
+    elif log.has("thrust_n") or log.has("thrust_norm"):
+        lines.append("thrust: " + ("thrust_n" if log.has("thrust_n") else "thrust_norm"))
+    else:
+        lines.append("thrust: none")
+    for command in NEEDS_HZ:
+        short = rate_shortfalls(log, command)
+        verdict = "too slow: " + "; ".join(short) if short else "rates sufficient"
+        lines.append(f"{command}: {verdict}")
+    has_thrust = log.has("thrust_n") or log.has("thrust_norm")
+    if not has_thrust:
+        lines.append("diagnose: thrust-related causes (mass, payload, thrust) cannot be examined")
+    return lines

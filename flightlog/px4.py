@@ -1,0 +1,67 @@
+"""What PX4 means by the numbers it logs: navigation states, vehicle types, thrust curve.
+
+Enumerations from PX4's uORB message definitions ([PX4-msgs] msg/vehicle_status.msg,
+msg/vehicle_local_position.msg) and its MAVLink vehicle types ([MAVLink] MAV_TYPE). Which
+firmware versions carry which field is written beside each use in flightlog/ulog.py.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+# vehicle_status.nav_state, v1.9 to v1.16 [PX4-msgs] vehicle_status.msg. Names follow the
+# MAVLink mode names our simulator and logs use (HOLD is PX4's AUTO.LOITER). Values 6, 7, 11,
+# 16 were retired states (RCRECOVER, RTGS, UNUSED, RATTITUDE) in some versions.
+NAV_STATE_NAMES: dict[int, str] = {
+    0: "MANUAL", 1: "ALTCTL", 2: "POSCTL", 3: "MISSION", 4: "HOLD", 5: "RTL",
+    6: "AUTO_RCRECOVER", 7: "AUTO_RTGS", 8: "AUTO_LANDENGFAIL", 9: "AUTO_LANDGPSFAIL",
+    10: "ACRO", 11: "UNUSED", 12: "DESCEND", 13: "TERMINATION", 14: "OFFBOARD",
+    15: "STAB", 16: "RATTITUDE", 17: "TAKEOFF", 18: "LAND", 19: "FOLLOW_TARGET",
+    20: "PRECLAND", 21: "ORBIT", 22: "VTOL_TAKEOFF",
+}  # fmt: skip
+
+# Modes in which PX4's position controller runs and so receives a velocity setpoint
+# (POSCTL, AUTO.*, OFFBOARD, ORBIT, DESCEND); ALTCTL/STAB/ACRO/MANUAL give no horizontal one.
+POSITION_CONTROLLED_NAV_STATES = frozenset({2, 3, 4, 5, 8, 9, 12, 14, 17, 18, 19, 20, 21, 22})
+
+# vehicle_status.arming_state: ARMED is 2 in every version v1.9 to v1.16 (STANDBY/DISARMED 1).
+ARMING_STATE_ARMED = 2
+
+# vehicle_status.vehicle_type (v1.13+; earlier versions carry is_rotary_wing instead).
+VEHICLE_TYPE_ROTARY_WING = 1
+VEHICLE_TYPE_FIXED_WING = 2
+
+# [MAVLink] MAV_TYPE (parameter MAV_TYPE in PX4): multirotors and VTOLs.
+MAV_TYPE_MULTIROTOR: dict[int, str] = {
+    2: "quadrotor", 3: "coaxial", 4: "helicopter", 13: "hexarotor", 14: "octorotor",
+    15: "tricopter", 29: "dodecarotor", 35: "decarotor",
+}  # fmt: skip
+MAV_TYPE_VTOL = frozenset({19, 20, 21, 22, 23, 24, 25})
+MAV_TYPE_NAMES: dict[int, str] = {
+    **MAV_TYPE_MULTIROTOR, 1: "fixed wing", 10: "ground rover", 11: "surface boat",
+    12: "submarine", 19: "VTOL tailsitter duo", 20: "VTOL tailsitter quad",
+    21: "VTOL tiltrotor", 22: "VTOL standard", 23: "VTOL tailsitter",
+}  # fmt: skip
+
+
+def mode_names(nav_state: np.ndarray) -> np.ndarray:
+    """nav_state integers -> mode names (``NAV_STATE_<n>`` for unknown values), dtype str."""
+    return np.asarray([NAV_STATE_NAMES.get(int(s), f"NAV_STATE_{int(s)}") for s in nav_state])
+
+
+def motor_thrust_fraction(command: np.ndarray, thr_mdl_fac: float) -> np.ndarray:
+    """Normalised motor command u in [0, 1] -> thrust as a fraction of that motor's maximum.
+
+    PX4 linearises thrust with the model T = fac * u^2 + (1 - fac) * u ([PX4-params]
+    THR_MDL_FAC); fac = 0 means thrust proportional to the command.
+    """
+    u = np.clip(command, 0.0, 1.0)
+    return thr_mdl_fac * u**2 + (1.0 - thr_mdl_fac) * u
+
+
+def firmware_version(ver_sw_release: int | None) -> str | None:
+    """PX4's ver_sw_release (0xAABBCCTT) -> 'vAA.BB.CC' (None if absent or 0)."""
+    if not ver_sw_release:
+        return None
+    v = int(ver_sw_release)
+    return f"v{(v >> 24) & 0xFF}.{(v >> 16) & 0xFF}.{(v >> 8) & 0xFF}"

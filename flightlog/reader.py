@@ -1,0 +1,83 @@
+"""One reader for every command: schema-v1 CSV or PX4 ULog, chosen by the file's content.
+
+A file that starts with the ULog magic bytes is read as a ULog whatever its name; a ``.ulg``
+without them is refused (it is not a ULog); anything else is read as schema-v1 CSV.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import numpy as np
+
+from flightlog.schema import FlightLog, FlightLogError, read_flight_log
+from flightlog.ulog import is_ulog, read_ulog
+
+# What each command needs of a log [Hz]: the velocity command and the time base (positions /
+# velocities) at least this fast, so one control step is resolved.
+NEEDS_HZ: dict[str, dict[str, float]] = {
+    "fit-gp": {"velocity_command": 5.0, "local_position": 10.0},
+    "diagnose": {"velocity_command": 5.0, "local_position": 10.0},
+}
+
+
+def read_log(path: str | Path) -> FlightLog:
+    """Read a flight log (CSV schema v1 or PX4 ULog, by content). Raises FlightLogError."""
+    path = Path(path)
+    if is_ulog(path):
+        return read_ulog(path)
+    if path.suffix.lower() == ".ulg" and path.is_file():
+        raise FlightLogError(
+            f"{path}: named .ulg but does not start with the ULog magic bytes; "
+            "copy the log again from the vehicle (or pass a schema-v1 CSV)"
+        )
+    return read_flight_log(path)
+
+
+def log_rates_hz(log: FlightLog) -> dict[str, float]:
+    """Rates per signal [Hz]: a ULog's recorded rates, else the CSV's time base for all."""
+    rates = log.metadata.get("rates_hz")
+    if isinstance(rates, Mapping):
+        return {str(k): float(v) for k, v in rates.items()}
+    dt = np.diff(log["t_s"])
+    base = round(1.0 / float(np.median(dt)), 2) if dt.size else 0.0
+    return {"local_position": base, "velocity_command": base}
+
+
+def rate_shortfalls(log: FlightLog, command: str) -> list[str]:
+    """Signals slower than ``command`` needs, as 'name at X Hz (needs >= Y Hz)'."""
+    rates = log_rates_hz(log)
+    return [
+        f"{name} at {rates.get(name, 0.0):g} Hz (needs >= {need:g} Hz)"
+        for name, need in NEEDS_HZ[command].items()
+        if rates.get(name, 0.0) < need
+    ]
+
+
+def require_rates(log: FlightLog, command: str) -> None:
+    """Raise FlightLogError naming the signals too slow for ``command`` and the rate needed."""
+    short = rate_shortfalls(log, command)
+    if short:
+        raise FlightLogError(
+            f"{log._where()}: {command} needs faster signals: {'; '.join(short)}; log "
+            "vehicle_local_position and vehicle_local_position_setpoint faster (SDLOG_PROFILE "
+            "default or high rate) or record the companion's own log"
+        )
+
+
+def require_modes(logs: Sequence[FlightLog], modes: Sequence[str] | None) -> None:
+    """--mode filters need a ``mode`` column and at least one row in a named mode."""
+    if not modes:
+        return
+    for log in logs:
+        if not log.has("mode"):
+            raise FlightLogError(
+                f"{log._where()}: --mode {','.join(modes)} given but the log has no mode "
+                "column; drop --mode or use a log that records modes (a PX4 ULog has them)"
+            )
+    flown = sorted({str(m) for log in logs for m in np.unique(log["mode"])})
+    if not any(m in flown for m in modes):
+        raise FlightLogError(
+            f"no rows in mode {', '.join(modes)}; the logs hold {', '.join(flown)}"
+        )

@@ -1,0 +1,87 @@
+"""flightlog: show what a flight log holds, convert a PX4 ULog to schema-v1 CSV.
+
+    flightlog info LOG          vehicle, firmware, rates, modes, validity, what commands can do
+    flightlog convert LOG.ulg --out FLIGHT.csv   (writes FLIGHT.csv and FLIGHT.csv.json)
+
+LOG is a schema-v1 CSV or a PX4 ULog (chosen by content). Exit codes: 0 done, 2 bad input.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+from flightlog.info import describe_log
+from flightlog.reader import read_log
+from flightlog.schema import FlightLogError, sidecar_path, write_flight_log
+
+EXIT_BAD_INPUT = 2
+
+
+@dataclass(frozen=True)
+class FlightlogArgs:
+    """Parsed command line: subcommand, the log, and the output path for convert."""
+
+    command: str
+    log: Path
+    out: Path | None
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> None:  # type: ignore[override]
+        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message}; see --help\n")
+
+
+def parse_args(argv: list[str] | None) -> FlightlogArgs:
+    parser = _Parser(prog="flightlog", description="Inspect and convert flight logs.")
+    sub = parser.add_subparsers(dest="command", required=True)
+    info = sub.add_parser("info", help="what a log holds and what each command can do with it")
+    info.add_argument("log", type=Path)
+    conv = sub.add_parser("convert", help="PX4 ULog -> schema-v1 CSV + JSON sidecar")
+    conv.add_argument("log", type=Path)
+    conv.add_argument("--out", required=True, type=Path, help="CSV path to write")
+    args = parser.parse_args(argv)
+    return FlightlogArgs(args.command, args.log, getattr(args, "out", None))
+
+
+def convert(log_path: Path, out: Path) -> Path:
+    """Read any log and write it as schema-v1 CSV + sidecar, atomically (temp, then rename)."""
+    log = read_log(log_path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
+    os.close(fd)
+    tmp_path = Path(tmp)
+    try:
+        write_flight_log(tmp_path, log)
+        os.replace(sidecar_path(tmp_path), sidecar_path(out))
+        os.replace(tmp_path, out)
+    finally:
+        for p in (tmp_path, sidecar_path(tmp_path)):
+            p.unlink(missing_ok=True)
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    try:
+        args = parse_args(argv)
+    except SystemExit as exc:
+        return int(exc.code or 0)
+    try:
+        if args.command == "info":
+            print("\n".join(describe_log(read_log(args.log))))
+        else:
+            assert args.out is not None
+            out = convert(args.log, args.out)
+            print(f"wrote {out} and {sidecar_path(out)}", file=sys.stderr)
+    except FlightLogError as exc:
+        print(f"flightlog: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,81 @@
+"""Every command on real ULog fixtures: what each returns, and bad input as one line, exit 2,
+nothing written."""
+
+from __future__ import annotations
+
+import json
+import re
+import shutil
+from pathlib import Path
+
+import pytest
+
+from flightlog.reader import read_log
+from scripts import diagnose as diagnose_cli
+from scripts import fit_gp as fit_gp_cli
+from scripts import flightlog_cli
+
+FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "ulog"
+AUTO = FIXTURES / "quad_sitl_v1_15_auto.ulg"
+
+BAD = {
+    "truncated.ulg": "ULog is truncated .* copy the complete .ulg",
+    "vtol_manual_v1_11.ulg": "no velocity command; flown in MANUAL.*position-controlled mode",
+    "quad_manual_v1_6.ulg": "no velocity command; flown in MANUAL.*position-controlled mode",
+}
+
+
+def test_info_names_vehicle_firmware_rates_modes_validity_and_uses(capsys):
+    assert flightlog_cli.main(["info", str(AUTO)]) == 0
+    out = capsys.readouterr().out
+    for line in (
+        "vehicle: quadrotor",
+        "firmware: PX4 v1.15.0 on PX4_SITL",
+        "rate local_position: 10 Hz",
+        "velocity command from: vehicle_local_position_setpoint",
+        "mode TAKEOFF: 0.0 s to",
+        "mode RTL:",
+        "dropped estimator invalid: 96 of 311 rows",
+        "thrust: produced from actuator_motors",
+        "fit-gp: rates sufficient",
+    ):
+        assert line in out
+
+
+def test_convert_writes_csv_and_sidecar_that_read_back_the_same(tmp_path):
+    out = tmp_path / "flight.csv"
+    assert flightlog_cli.main(["convert", str(AUTO), "--out", str(out)]) == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["flight.csv", "flight.csv.json"]
+    a, b = read_log(AUTO), read_log(out)
+    assert list(a.columns) == list(b.columns)
+    for name in a.columns:
+        assert (a[name] == b[name]).all() if name == "mode" else abs(a[name] - b[name]).max() < 1e-9
+    meta = json.loads((tmp_path / "flight.csv.json").read_text())
+    assert meta["thrust_source"]["topic"] == "actuator_motors"
+    assert meta["px4_params"]["MC_ROLLRATE_P"] > 0
+
+
+def test_ulog_is_recognised_by_content_not_name(tmp_path):
+    renamed = tmp_path / "flight.bin"
+    shutil.copy(AUTO, renamed)
+    assert read_log(renamed).metadata["source"] == "px4_ulog"
+    fake = tmp_path / "fake.ulg"
+    fake.write_text("t_s,pos_n_m\n0,0\n")
+    assert flightlog_cli.main(["info", str(fake)]) == 2
+
+
+@pytest.mark.parametrize("name", sorted(BAD))
+def test_bad_real_logs_one_line_exit_2_nothing_written(name, tmp_path, capsys):
+    log = str(FIXTURES / name)
+    out = tmp_path / "out"
+    runs = [
+        ("flightlog", lambda: flightlog_cli.main(["convert", log, "--out", str(out / "f.csv")])),
+        ("fit-gp", lambda: fit_gp_cli.main([log, "--out", str(out / "model"), "--no-plots"])),
+        ("diagnose", lambda: diagnose_cli.main([log, "--sim-config", "iris", "--out", str(out)])),
+    ]
+    for prog, run in runs:
+        assert run() == 2, prog
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith(prog), err
+        assert re.search(BAD[name], err[0]), err[0]
+        assert not out.exists()

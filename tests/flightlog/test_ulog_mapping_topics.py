@@ -1,0 +1,127 @@
+"""The ULog mapping on PX4 topics built from a simulated flight: command source per mode,
+validity drops, VTOL phases, vehicle type refusals, thrust sources, slow setpoints."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from px4_topics import topics_of
+
+from diagnosis.excitation import schedule_from_mapping
+from diagnosis.fly_schedule import fly_schedule
+from flightlog.reader import require_modes, require_rates
+from flightlog.schema import FlightLogError
+from flightlog.ulog import flight_log_from_topics
+from vehicle_sim import load_sim_config
+
+SCHEDULE = schedule_from_mapping(
+    {
+        "segment": [
+            {"kind": "hover", "duration_s": 3.0},
+            {"kind": "velocity", "duration_s": 3.0, "speed_mps": 2.0, "heading_deg": 30.0},
+            {"kind": "hover", "duration_s": 2.0},
+        ]
+    }
+)
+
+
+@pytest.fixture(scope="module")
+def flight():
+    return fly_schedule(load_sim_config("iris"), SCHEDULE)
+
+
+def test_offboard_command_comes_from_the_controllers_setpoint_not_trajectory_setpoint(flight):
+    topics = topics_of(flight)
+    t = topics["vehicle_local_position_setpoint"]["timestamp"]
+    topics["trajectory_setpoint"] = {
+        "timestamp": t, "yawspeed": 0 * t, **{f"velocity[{i}]": 9.0 + 0 * t for i in range(3)}
+    }  # fmt: skip
+    log = flight_log_from_topics(topics)
+    assert log.metadata["command_topic"] == "vehicle_local_position_setpoint"
+    np.testing.assert_allclose(log["cmd_vel_n_mps"], flight["cmd_vel_n_mps"])
+    assert set(log["mode"]) == {"OFFBOARD"}
+    del topics["vehicle_local_position_setpoint"]
+    fallback = flight_log_from_topics(topics)
+    assert fallback.metadata["command_topic"] == "trajectory_setpoint"
+    assert np.all(fallback["cmd_vel_n_mps"] == 9.0)
+
+
+def test_posctl_kept_manual_dropped_and_mode_filters(flight):
+    topics = topics_of(flight, nav_state=2)
+    t = topics["vehicle_local_position"]["timestamp"]
+    mid = t[len(t) // 2]
+    topics["vehicle_status"] = {
+        "timestamp": np.array([t[0], mid]), "nav_state": np.array([2, 0]),
+        "arming_state": np.array([2, 2]), "is_vtol": np.array([0, 0]),
+    }  # fmt: skip
+    log = flight_log_from_topics(topics)
+    assert set(log["mode"]) == {"POSCTL"}
+    assert log.metadata["dropped_rows"]["not_position_controlled"] == int(np.sum(t >= mid))
+    require_modes([log], ["POSCTL"])
+    with pytest.raises(FlightLogError, match="no rows in mode OFFBOARD; the logs hold POSCTL"):
+        require_modes([log], ["OFFBOARD"])
+
+
+def test_estimator_invalid_rows_are_dropped_with_a_count(flight):
+    topics = topics_of(flight)
+    pos = topics["vehicle_local_position"]
+    pos["v_xy_valid"] = pos["v_xy_valid"].copy()
+    pos["v_xy_valid"][10:40] = 0
+    pos["dead_reckoning"] = np.zeros(len(pos["timestamp"]))
+    pos["dead_reckoning"][60:65] = 1
+    log = flight_log_from_topics(topics)
+    assert log.metadata["dropped_rows"]["estimator_invalid"] == 35
+    assert log.n_rows == len(pos["timestamp"]) - 35
+    for flag in ("xy_valid", "z_valid", "v_xy_valid", "v_z_valid"):
+        pos[flag] = np.zeros(len(pos["timestamp"]))
+    with pytest.raises(FlightLogError, match=r"no valid motion: .* estimator_invalid; fly") as err:
+        flight_log_from_topics(topics)
+    assert "\n" not in str(err.value)
+
+
+def test_fixed_wing_refused_vtol_multicopter_phase_kept_with_segments(flight):
+    topics = topics_of(flight)
+    with pytest.raises(FlightLogError, match="fixed wing log .MAV_TYPE 1., not a multirotor"):
+        flight_log_from_topics(topics, params={"MAV_TYPE": 1})
+    t = topics["vehicle_local_position"]["timestamp"]
+    third = t[len(t) // 3]
+    topics["vehicle_status"] = {
+        "timestamp": np.array([t[0], third]), "nav_state": np.array([3, 3]),
+        "arming_state": np.array([2, 2]), "is_vtol": np.array([1, 1]),
+        "vehicle_type": np.array([1, 2]), "in_transition_mode": np.array([0, 0]),
+    }  # fmt: skip
+    log = flight_log_from_topics(topics, params={"MAV_TYPE": 22})
+    assert log.metadata["vehicle"]["is_vtol"] is True
+    assert log.metadata["dropped_rows"]["not_multicopter_phase"] == int(np.sum(t >= third))
+    (segment,) = log.metadata["vtol_multicopter_segments_s"]
+    assert segment[0] == 0.0 and segment[1] < (third - t[0]) * 1e-6
+
+
+def test_thrust_sources_in_order_and_marked(flight):
+    topics = topics_of(flight)
+    log = flight_log_from_topics(topics)
+    assert log.metadata["thrust_source"] == {
+        "topic": "vehicle_thrust_setpoint",
+        "kind": "commanded",
+    }
+    t = topics["vehicle_local_position"]["timestamp"]
+    u = 0.6 + 0 * t
+    topics["actuator_outputs"] = {
+        "timestamp": t,
+        **{f"output[{i}]": 1000 + 1000 * u for i in range(4)},
+    }
+    params = {"MAV_TYPE": 2, "PWM_MAIN_MIN": 1000, "PWM_MAIN_MAX": 2000, "THR_MDL_FAC": 0.3}
+    log = flight_log_from_topics(topics, params=params)
+    assert log.metadata["thrust_source"]["kind"] == "produced"
+    np.testing.assert_allclose(log["thrust_norm"], 0.3 * 0.36 + 0.7 * 0.6)
+    del topics["vehicle_thrust_setpoint"], topics["actuator_outputs"]
+    log = flight_log_from_topics(topics)
+    assert log.metadata["thrust_source"] == {"topic": None, "kind": "none"}
+    assert not log.has("thrust_norm")
+
+
+def test_two_hz_setpoints_refused_with_the_rate_needed(flight):
+    log = flight_log_from_topics(topics_of(flight, setpoint_hz=2.0))
+    assert log.metadata["rates_hz"]["velocity_command"] == pytest.approx(2.0, rel=0.05)
+    with pytest.raises(FlightLogError, match=r"velocity_command at 2 Hz \(needs >= 5 Hz\)"):
+        require_rates(log, "fit-gp")

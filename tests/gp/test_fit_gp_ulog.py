@@ -1,0 +1,75 @@
+"""fit-gp on a real PX4 ULog: same result as on its `flightlog convert` CSV; honest refusal
+when the model is worse than nominal or a time constant sits on its bound; --mode rules."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from flightlog.reader import read_log
+from flightlog.schema import FlightLog, write_flight_log
+from scripts import fit_gp as fit_gp_cli
+from scripts import flightlog_cli
+
+AUTO = Path(__file__).resolve().parents[1] / "fixtures" / "ulog" / "quad_sitl_v1_15_auto.ulg"
+FAST = ["--no-plots", "--m", "10", "--restarts", "1", "--force"]
+
+
+def test_ulog_and_its_converted_csv_give_the_same_model(tmp_path, capsys):
+    csv = tmp_path / "flight.csv"
+    assert flightlog_cli.main(["convert", str(AUTO), "--out", str(csv)]) == 0
+    capsys.readouterr()
+    assert fit_gp_cli.main([str(AUTO), "--out", str(tmp_path / "a"), *FAST]) == 0
+    from_ulog = capsys.readouterr().out
+    assert fit_gp_cli.main([str(csv), "--out", str(tmp_path / "b"), *FAST]) == 0
+    assert capsys.readouterr().out == from_ulog
+    a = json.loads((tmp_path / "a.json").read_text())
+    b = json.loads((tmp_path / "b.json").read_text())
+    assert a["hyperparameters"] == b["hyperparameters"]
+    for key in ("n_rows", "residual_mean", "residual_std", "nominal_rmse_mps"):
+        assert a["training_data"][key] == b["training_data"][key]
+
+
+def test_worse_than_nominal_warns_exits_3_and_writes_nothing(tmp_path, capsys):
+    code = fit_gp_cli.main([str(AUTO), "--out", str(tmp_path / "m"), *FAST[:-1]])
+    err = capsys.readouterr().err
+    assert code == fit_gp_cli.EXIT_DOUBTFUL
+    assert "the model is worse than nominal" in err and "pass --force" in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_time_constant_on_its_bound_is_a_doubt():
+    metrics = {"nominal_rmse_mps": [0.3, 0.3, 0.1], "augmented_rmse_mps": [0.1, 0.1, 0.05]}
+    assert fit_gp_cli.model_doubts(metrics, {"tau_s": 0.4, "tau_d_s": 0.6}) == []
+    (doubt,) = fit_gp_cli.model_doubts(metrics, {"tau_s": 0.4, "tau_d_s": 10.0})
+    assert "tau_d_s=10.000 s sits on its bound" in doubt
+
+
+def test_mode_filter_on_ulog_and_refused_on_a_log_without_modes(tmp_path, capsys):
+    code = fit_gp_cli.main([str(AUTO), "--out", str(tmp_path / "m"), "--mode", "rtl", *FAST])
+    assert code == 0
+    data = json.loads((tmp_path / "m.json").read_text())["training_data"]
+    assert data["n_rows"] + data["held_out"]["n_rows"] < read_log(AUTO).n_rows - 3
+    log = read_log(AUTO)
+    bare = FlightLog({k: v for k, v in log.columns.items() if k != "mode"}, {})
+    csv = write_flight_log(tmp_path / "bare.csv", bare)
+    capsys.readouterr()
+    assert fit_gp_cli.main([str(csv), "--out", str(tmp_path / "n"), "--mode", "rtl"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    (line,) = [e for e in err if e.startswith("fit-gp: error")]
+    assert "has no mode column; drop --mode" in line
+    assert not (tmp_path / "n.json").exists()
+    assert fit_gp_cli.main([str(AUTO), "--out", str(tmp_path / "o"), "--mode", "offboard"]) == 2
+    assert "no rows in mode OFFBOARD; the logs hold HOLD, RTL, TAKEOFF" in capsys.readouterr().err
+
+
+def test_two_hz_log_refused_with_the_rate_needed(tmp_path, capsys):
+    log = read_log(AUTO)
+    slow = FlightLog({k: v[::5] for k, v in log.columns.items()}, {"source": "csv"})
+    csv = write_flight_log(tmp_path / "slow.csv", slow)
+    assert fit_gp_cli.main([str(csv), "--out", str(tmp_path / "m"), "--no-plots"]) == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert (
+        "velocity_command at 2 Hz (needs >= 5 Hz)" in line and "log vehicle_local_position" in line
+    )
+    assert not (tmp_path / "m.json").exists()

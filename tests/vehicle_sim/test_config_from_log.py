@@ -1,0 +1,80 @@
+"""vehicle-sim config-from-log on a real PX4 ULog: the log's tuning and hover thrust in the sim,
+the rest assumed and listed; bad logs one line, exit 2, nothing written."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from flightlog.reader import read_log
+from scripts import vehicle_sim_cli
+from vehicle_sim import SimConfigError, Simulator, load_sim_config
+from vehicle_sim.config import config_from_mapping
+
+FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "ulog"
+AUTO = FIXTURES / "quad_sitl_v1_15_auto.ulg"
+
+
+def test_config_uses_the_logs_tuning_and_hovers_at_its_hover_thrust(tmp_path, capsys):
+    out = tmp_path / "my_vehicle.toml"
+    assert vehicle_sim_cli.main(["config-from-log", str(AUTO), "--out", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "assumed: inertia_kgm2, rotor geometry" in err and "from preset 'iris'" in err
+    text = out.read_text()
+    assert "# Assumed (the log cannot tell):" in text
+    config = load_sim_config(out)
+    params = read_log(AUTO).metadata["px4_params"]
+    sim = Simulator(config)
+    assert sim.get_param("COM_OF_LOSS_T") == params["COM_OF_LOSS_T"] == 5.0  # not PX4's default 1.0
+    assert sim.get_param("MPC_XY_VEL_P_ACC") == pytest.approx(params["MPC_XY_VEL_P_ACC"], rel=1e-6)
+    log = read_log(AUTO)
+    speed = np.linalg.norm(log.stack("vel_n_mps", "vel_e_mps", "vel_d_mps"), axis=1)
+    measured = float(np.median(log["thrust_norm"][(speed < 0.3) & (log["landed"] == 0)]))
+    assert config.vehicle.hover_thrust_norm == pytest.approx(measured, rel=0.02)
+    assert sim.get_param("MPC_THR_HOVER") == pytest.approx(measured, rel=0.02)
+
+
+def test_bad_log_one_line_exit_2_nothing_written(tmp_path, capsys):
+    out = tmp_path / "v.toml"
+    log = FIXTURES / "vtol_manual_v1_11.ulg"
+    assert vehicle_sim_cli.main(["config-from-log", str(log), "--out", str(out)]) == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert "no velocity command" in line
+    assert not out.exists()
+
+
+def test_px4_params_section_is_validated():
+    base = {
+        "vehicle": {
+            "mass_kg": 1.5, "inertia_kgm2": [0.03, 0.03, 0.05], "rotor_max_speed_radps": 1100.0,
+            "thrust_coeff_n_per_radps2": 5.84e-6, "torque_coeff_nm_per_radps2": 3.5e-7,
+            "motor_time_constant_s": 0.02,
+        },
+        "rotors": {
+            "positions_frd_m": [[0.1, 0.1, 0], [-0.1, -0.1, 0], [0.1, -0.1, 0], [-0.1, 0.1, 0]],
+            "spin": [1, 1, -1, -1],
+        },
+        "battery": {"full_v": 16.8, "empty_v": 14.0},
+    }  # fmt: skip
+    with pytest.raises(SimConfigError, match="MPC_XY_VEL_P_AC: unknown parameter; did you mean"):
+        config_from_mapping({**base, "px4_params": {"MPC_XY_VEL_P_AC": 2.0}}, "t")
+    with pytest.raises(SimConfigError, match="MPC_THR_HOVER: follows from vehicle.mass_kg"):
+        config_from_mapping({**base, "px4_params": {"MPC_THR_HOVER": 0.4}}, "t")
+
+
+def test_log_without_thrust_or_parameters_refused(tmp_path, capsys):
+    from flightlog.schema import FlightLog, write_flight_log
+
+    log = read_log(AUTO)
+    cols = {k: v for k, v in log.columns.items() if k != "thrust_norm"}
+    csv = write_flight_log(tmp_path / "bare.csv", FlightLog(cols, {"source": "csv"}))
+    out = tmp_path / "v.toml"
+    assert vehicle_sim_cli.main(["config-from-log", str(csv), "--out", str(out)]) == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert (
+        "no MPC_THR_HOVER parameter and no produced thrust" in line
+        and "log actuator_motors" in line
+    )
+    assert not out.exists()

@@ -1,0 +1,110 @@
+"""A simulation config from a flight log: the vehicle's own PX4 tuning, a mass consistent with
+its hover thrust, and the rest from the nearest preset, listed as assumed.
+
+The log tells: the flight-control parameters ([PX4-params] MPC_*, MC_*) and the hover thrust
+(MPC_THR_HOVER, or the median produced thrust while hovering). It cannot tell inertia, rotor
+geometry, rotor speed or thrust coefficient: those come from the preset, and the mass follows
+from hover thrust x the preset's maximum thrust / g, so the simulated vehicle hovers at the
+log's hover thrust.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from flightlog.schema import FlightLog
+from vehicle_sim.config import GRAVITY_MPS2, config_from_mapping, load_sim_config
+from vehicle_sim.params import PX4_DEFAULTS
+
+HOVER_SPEED_MPS = 0.3  # rows slower than this (and not landed) count as hovering
+
+
+@dataclass(frozen=True)
+class ConfigFromLog:
+    """The TOML text, and what came from the log and what was assumed (one line each)."""
+
+    toml: str
+    from_log: tuple[str, ...]
+    assumed: tuple[str, ...]
+
+
+def config_from_log(log: FlightLog, preset: str = "iris") -> ConfigFromLog:
+    """Build a sim config TOML from ``log``'s PX4 parameters and hover thrust.
+
+    Raises:
+        ValueError: the log holds no PX4 parameters and no hover thrust (one line).
+    """
+    params = log.metadata.get("px4_params")
+    params = dict(params) if isinstance(params, Mapping) else {}
+    base = load_sim_config(preset)
+    hover, hover_how = _hover_thrust(log, params)
+    if hover is None:
+        raise ValueError(
+            f"{log._where()}: no MPC_THR_HOVER parameter and no produced thrust while "
+            "hovering; use a PX4 ULog (it records parameters) or log actuator_motors"
+        )
+    v = base.vehicle
+    mass_kg = hover * 4 * v.max_rotor_thrust_n / GRAVITY_MPS2
+    tuned = {n: float(f"{float(params[n]):.7g}") for n in sorted(PX4_DEFAULTS) if n in params}
+    tuned.pop("MPC_THR_HOVER", None)
+    defaults = [n for n in sorted(PX4_DEFAULTS) if n not in params and n != "MPC_THR_HOVER"]
+    from_log = [
+        f"mass_kg = {mass_kg:.4f}: hover thrust {hover:.3f} ({hover_how}) x the preset's "
+        f"maximum thrust {4 * v.max_rotor_thrust_n:.2f} N / g",
+        f"{len(tuned)} PX4 parameters: {', '.join(tuned) or 'none'}",
+    ]
+    assumed = [
+        f"inertia_kgm2, rotor geometry, rotor speed, thrust and torque coefficients, motor "
+        f"time constant, battery voltages: from preset {preset!r}",
+    ]
+    if defaults:
+        assumed.append(f"PX4 defaults for {', '.join(defaults)} (not in the log)")
+    lines = [f"# Built from {log._where()} by vehicle-sim config-from-log.", "# From the log:"]
+    lines += [f"#   {s}" for s in from_log]
+    lines += ["# Assumed (the log cannot tell):"] + [f"#   {s}" for s in assumed]
+    lines += [
+        "",
+        "[vehicle]",
+        f"mass_kg = {mass_kg:.6g}  # from the log's hover thrust",
+        f"inertia_kgm2 = {list(v.inertia_kgm2)}  # assumed ({preset})",
+        f"rotor_max_speed_radps = {v.rotor_max_speed_radps!r}  # assumed ({preset})",
+        f"thrust_coeff_n_per_radps2 = {v.thrust_coeff_n_per_radps2!r}  # assumed ({preset})",
+        f"torque_coeff_nm_per_radps2 = {v.torque_coeff_nm_per_radps2!r}  # assumed ({preset})",
+        f"motor_time_constant_s = {v.motor_time_constant_s!r}  # assumed ({preset})",
+        "",
+        "[rotors]  # assumed (" + preset + ")",
+        f"positions_frd_m = {[list(p) for p in v.rotor_positions_frd_m]}",
+        f"spin = {list(v.rotor_spin)}",
+        "",
+        "[battery]  # assumed (" + preset + ")",
+        f"full_v = {v.battery_full_v!r}",
+        f"empty_v = {v.battery_empty_v!r}",
+        "",
+        "[px4_params]  # from the log",
+        *(f"{n} = {x!r}" for n, x in tuned.items()),
+        "",
+    ]
+    text = "\n".join(lines)
+
+    config_from_mapping(tomllib.loads(text), preset_name="from_log")  # valid before written
+    return ConfigFromLog(text, tuple(from_log), tuple(assumed))
+
+
+def _hover_thrust(log: FlightLog, params: Mapping[str, float]) -> tuple[float | None, str]:
+    """Hover thrust (normalised): measured if the log has produced thrust, else MPC_THR_HOVER."""
+    source = log.metadata.get("thrust_source")
+    produced = isinstance(source, Mapping) and source.get("kind") == "produced"
+    if produced and log.has("thrust_norm"):
+        speed = np.linalg.norm(log.stack("vel_n_mps", "vel_e_mps", "vel_d_mps"), axis=1)
+        rows = speed < HOVER_SPEED_MPS
+        if log.has("landed"):
+            rows &= log["landed"] == 0
+        if rows.sum() >= 10:
+            return float(np.median(log["thrust_norm"][rows])), "median produced thrust in hover"
+    if "MPC_THR_HOVER" in params:
+        return float(params["MPC_THR_HOVER"]), "MPC_THR_HOVER parameter"
+    return None, ""
