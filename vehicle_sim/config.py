@@ -236,7 +236,7 @@ def config_from_mapping(doc: Mapping[str, Any], preset_name: str) -> SimConfig:
 
 def _px4_params(table: Any) -> tuple[tuple[str, float], ...]:
     """Validate ``[px4_params]``: known PX4 names, finite numbers; MPC_THR_HOVER refused."""
-    from vehicle_sim.params import PX4_DEFAULTS
+    from vehicle_sim.params import PX4_PARAMS
 
     if not isinstance(table, Mapping):
         raise SimConfigError("px4_params: expected a table of NAME = number")
@@ -247,8 +247,8 @@ def _px4_params(table: Any) -> tuple[tuple[str, float], ...]:
                 "px4_params.MPC_THR_HOVER: follows from vehicle.mass_kg and the rotors; "
                 "set the mass instead"
             )
-        if name not in PX4_DEFAULTS:
-            near = difflib.get_close_matches(name, list(PX4_DEFAULTS), n=1)
+        if name not in PX4_PARAMS:
+            near = difflib.get_close_matches(name, list(PX4_PARAMS), n=1)
             hint = f"did you mean {near[0]}? " if near else ""
             raise SimConfigError(f"px4_params.{name}: unknown parameter; {hint}see params.py")
         if (

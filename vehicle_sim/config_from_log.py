@@ -18,7 +18,7 @@ import numpy as np
 
 from flightlog.schema import FlightLog
 from vehicle_sim.config import GRAVITY_MPS2, config_from_mapping, load_sim_config
-from vehicle_sim.params import PX4_DEFAULTS
+from vehicle_sim.params import PX4_PARAMS
 
 HOVER_SPEED_MPS = 0.3  # rows slower than this (and not landed) count as hovering
 
@@ -49,9 +49,9 @@ def config_from_log(log: FlightLog, preset: str = "iris") -> ConfigFromLog:
         )
     v = base.vehicle
     mass_kg = hover * 4 * v.max_rotor_thrust_n / GRAVITY_MPS2
-    tuned = {n: float(f"{float(params[n]):.7g}") for n in sorted(PX4_DEFAULTS) if n in params}
+    tuned = {n: float(f"{float(params[n]):.7g}") for n in sorted(PX4_PARAMS) if n in params}
     tuned.pop("MPC_THR_HOVER", None)
-    defaults = [n for n in sorted(PX4_DEFAULTS) if n not in params and n != "MPC_THR_HOVER"]
+    defaults = [n for n in sorted(PX4_PARAMS) if n not in params and n != "MPC_THR_HOVER"]
     from_log = [
         f"mass_kg = {mass_kg:.4f}: hover thrust {hover:.3f} ({hover_how}) x the preset's "
         f"maximum thrust {4 * v.max_rotor_thrust_n:.2f} N / g",

@@ -3,11 +3,11 @@ when the model is worse than nominal or a time constant sits on its bound; --mod
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 from flightlog.reader import read_log
 from flightlog.schema import FlightLog, write_flight_log
+from gp.model_io import read_model_header
 from scripts import fit_gp as fit_gp_cli
 from scripts import flightlog_cli
 
@@ -23,8 +23,8 @@ def test_ulog_and_its_converted_csv_give_the_same_model(tmp_path, capsys):
     from_ulog = capsys.readouterr().out
     assert fit_gp_cli.main([str(csv), "--out", str(tmp_path / "b"), *FAST]) == 0
     assert capsys.readouterr().out == from_ulog
-    a = json.loads((tmp_path / "a.json").read_text())
-    b = json.loads((tmp_path / "b.json").read_text())
+    a = read_model_header(tmp_path / "a.npz")
+    b = read_model_header(tmp_path / "b.npz")
     assert a["hyperparameters"] == b["hyperparameters"]
     for key in ("n_rows", "residual_mean", "residual_std", "nominal_rmse_mps"):
         assert a["training_data"][key] == b["training_data"][key]
@@ -48,7 +48,7 @@ def test_time_constant_on_its_bound_is_a_doubt():
 def test_mode_filter_on_ulog_and_refused_on_a_log_without_modes(tmp_path, capsys):
     code = fit_gp_cli.main([str(AUTO), "--out", str(tmp_path / "m"), "--mode", "rtl", *FAST])
     assert code == 0
-    data = json.loads((tmp_path / "m.json").read_text())["training_data"]
+    data = read_model_header(tmp_path / "m.npz")["training_data"]
     assert data["n_rows"] + data["held_out"]["n_rows"] < read_log(AUTO).n_rows - 3
     log = read_log(AUTO)
     bare = FlightLog({k: v for k, v in log.columns.items() if k != "mode"}, {})
@@ -58,7 +58,7 @@ def test_mode_filter_on_ulog_and_refused_on_a_log_without_modes(tmp_path, capsys
     err = capsys.readouterr().err.strip().splitlines()
     (line,) = [e for e in err if e.startswith("fit-gp: error")]
     assert "has no mode column; drop --mode" in line
-    assert not (tmp_path / "n.json").exists()
+    assert not (tmp_path / "n.npz").exists()
     assert fit_gp_cli.main([str(AUTO), "--out", str(tmp_path / "o"), "--mode", "offboard"]) == 2
     assert "no rows in mode OFFBOARD; the logs hold HOLD, RTL, TAKEOFF" in capsys.readouterr().err
 
@@ -72,4 +72,4 @@ def test_two_hz_log_refused_with_the_rate_needed(tmp_path, capsys):
     assert (
         "velocity_command at 2 Hz (needs >= 5 Hz)" in line and "log vehicle_local_position" in line
     )
-    assert not (tmp_path / "m.json").exists()
+    assert not (tmp_path / "m.npz").exists()
