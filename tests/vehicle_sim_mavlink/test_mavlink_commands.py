@@ -99,3 +99,15 @@ def test_request_message_and_message_interval(ctx):
     assert handle_command(511, params(32, 100_000), ctx).result == MAV_RESULT_ACCEPTED
     interval = handle_command(510, params(32), ctx).replies[0]
     assert (interval.message_id, interval.interval_us) == (32, 100_000)
+
+
+def test_gps_global_origin_on_request_is_home(ctx):
+    outcome = handle_command(512, params(49), ctx)  # GPS_GLOBAL_ORIGIN
+    assert outcome.result == MAV_RESULT_ACCEPTED
+    origin, home = outcome.replies[0], ctx.telemetry.origin
+    assert origin.get_type() == "GPS_GLOBAL_ORIGIN"
+    assert (origin.latitude, origin.longitude) == (
+        round(home.lat_deg * 1e7),
+        round(home.lon_deg * 1e7),
+    )
+    assert origin.altitude == round(home.alt_amsl_m * 1000.0)

@@ -162,6 +162,18 @@ def home_position(state: VehicleState, ctx: TelemetryContext) -> mavlink2.MAVLin
     )
 
 
+def gps_global_origin(state: VehicleState, ctx: TelemetryContext) -> mavlink2.MAVLink_message:
+    """GPS_GLOBAL_ORIGIN: the geodetic position of local NED (0, 0, 0), which is home here,
+    as PX4 SITL reports it (MAVSDK's Telemetry.get_gps_global_origin requests it)."""
+    origin = ctx.origin
+    return _FACTORY.gps_global_origin_encode(
+        latitude=int(round(origin.lat_deg * 1e7)),
+        longitude=int(round(origin.lon_deg * 1e7)),
+        altitude=int(round(origin.alt_amsl_m * 1000.0)),
+        time_usec=int(state.t_s * 1e6),
+    )
+
+
 def global_position_int(state: VehicleState, ctx: TelemetryContext) -> mavlink2.MAVLink_message:
     lat_deg, lon_deg, alt_amsl_m = ctx.origin.to_global(tuple(state.pos_ned_m))
     vel_cmps = [int(round(float(v) * 100.0)) for v in state.vel_ned_mps]
@@ -262,6 +274,7 @@ TELEMETRY_BUILDERS: dict[int, Builder] = {
     mavlink2.MAVLINK_MSG_ID_HEARTBEAT: heartbeat,
     mavlink2.MAVLINK_MSG_ID_SYS_STATUS: sys_status,
     mavlink2.MAVLINK_MSG_ID_HOME_POSITION: home_position,
+    mavlink2.MAVLINK_MSG_ID_GPS_GLOBAL_ORIGIN: gps_global_origin,
     mavlink2.MAVLINK_MSG_ID_GLOBAL_POSITION_INT: global_position_int,
     mavlink2.MAVLINK_MSG_ID_LOCAL_POSITION_NED: local_position_ned,
     mavlink2.MAVLINK_MSG_ID_ATTITUDE: attitude,
