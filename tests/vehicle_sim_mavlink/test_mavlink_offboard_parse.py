@@ -83,3 +83,12 @@ def test_global_int_terrain_frame_and_acceleration_are_rejected_with_a_reason():
     assert terrain.setpoint is None and "global frame 11 unsupported" in terrain.reason
     accel = parse_global_setpoint(6, 0b100000111000, 0, 0, 3.0, (0, 0, 0), 0.0, 0.0, home)
     assert accel.setpoint is None and "acceleration" in accel.reason
+
+
+def test_global_int_relative_altitude_counts_from_home_not_the_origin():
+    home = GeodeticOrigin()
+    lat, lon = round(home.lat_deg * 1e7), round(home.lon_deg * 1e7)
+    result = parse_global_setpoint(
+        6, 0b100111111000, lat, lon, 3.0, (0, 0, 0), 0.0, 0.0, home, home_above_origin_m=1.0
+    )
+    assert result.setpoint.pos_ned_m == pytest.approx((0.0, 0.0, -4.0), abs=1e-6)

@@ -150,7 +150,7 @@ class Dispatcher:
         if msg.frame in _GLOBAL_FRAMES:
             x, y = x / 1e7, y / 1e7
             if msg.frame in _RELATIVE_ALT_FRAMES:
-                z += self._telemetry.origin.alt_amsl_m
+                z += self._telemetry.origin.alt_amsl_m + self._sim.state.home_alt_amsl_offset_m
         else:
             x, y = x / 1e4, y / 1e4
         p = (msg.param1, msg.param2, msg.param3, msg.param4, x, y, z)
@@ -224,6 +224,7 @@ class Dispatcher:
             msg.yaw,
             msg.yaw_rate,
             self._telemetry.origin,
+            self._sim.state.home_alt_amsl_offset_m,
         )
         return self._fly_setpoint(msg, result)
 

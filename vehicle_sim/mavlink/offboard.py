@@ -117,15 +117,18 @@ def parse_global_setpoint(
     yaw_rad: float,
     yaw_rate_radps: float,
     origin: GeodeticOrigin,
+    home_above_origin_m: float = 0.0,
 ) -> SetpointResult:
     """A SET_POSITION_TARGET_GLOBAL_INT as a local NED setpoint: latitude/longitude [degE7]
-    and altitude [m] (AMSL, or above home in the relative frames) mapped around the home
-    ``origin``; velocity is NED [m/s]. Same type_mask rules as :func:`parse_setpoint`."""
+    and altitude [m] (AMSL, or above home in the relative frames) mapped around the local
+    ``origin``, home being ``home_above_origin_m`` above it; velocity is NED [m/s]. Same
+    type_mask rules as :func:`parse_setpoint`."""
     if coordinate_frame not in GLOBAL_FRAMES:
         return SetpointResult(
             None, f"Offboard: global frame {coordinate_frame} unsupported, use 5 or 6"
         )
-    alt_amsl_m = float(alt_m) + (origin.alt_amsl_m if GLOBAL_FRAMES[coordinate_frame] else 0.0)
+    home_amsl_m = origin.alt_amsl_m + home_above_origin_m
+    alt_amsl_m = float(alt_m) + (home_amsl_m if GLOBAL_FRAMES[coordinate_frame] else 0.0)
     pos_ned_m = (0.0, 0.0, 0.0)
     if (type_mask & IGNORE_POSITION) == 0:
         pos_ned_m = origin.to_local(lat_e7 / 1e7, lon_e7 / 1e7, alt_amsl_m)  # type: ignore[assignment]

@@ -146,14 +146,15 @@ def sys_status(state: VehicleState, ctx: TelemetryContext) -> mavlink2.MAVLink_m
 
 
 def home_position(state: VehicleState, ctx: TelemetryContext) -> mavlink2.MAVLink_message:
-    origin = ctx.origin
+    lat_deg, lon_deg, alt_amsl_m = ctx.origin.to_global(tuple(state.home_ned_m))
+    x, y, z = (float(v) for v in state.home_ned_m)
     return _FACTORY.home_position_encode(
-        latitude=int(round(origin.lat_deg * 1e7)),
-        longitude=int(round(origin.lon_deg * 1e7)),
-        altitude=int(round(origin.alt_amsl_m * 1000.0)),
-        x=0.0,
-        y=0.0,
-        z=0.0,
+        latitude=int(round(lat_deg * 1e7)),
+        longitude=int(round(lon_deg * 1e7)),
+        altitude=int(round(alt_amsl_m * 1000.0)),
+        x=x,
+        y=y,
+        z=z,
         q=(1.0, 0.0, 0.0, 0.0),
         approach_x=0.0,
         approach_y=0.0,
@@ -183,7 +184,7 @@ def global_position_int(state: VehicleState, ctx: TelemetryContext) -> mavlink2.
         lat=int(round(lat_deg * 1e7)),
         lon=int(round(lon_deg * 1e7)),
         alt=int(round(alt_amsl_m * 1000.0)),
-        relative_alt=int(round(-float(state.pos_ned_m[2]) * 1000.0)),
+        relative_alt=int(round(-float(state.pos_ned_m[2] - state.home_ned_m[2]) * 1000.0)),
         vx=_clip_int16(vel_cmps[0]),
         vy=_clip_int16(vel_cmps[1]),
         vz=_clip_int16(vel_cmps[2]),
