@@ -282,6 +282,11 @@ class Commander:
             self._set_mode(FlightMode.LAND)
             self.events.append((SEVERITY_INFO, "RTL: landing at home"))
 
+    @property
+    def home_ned_m(self) -> np.ndarray:
+        """(3,) home in local NED [m]: where the vehicle last armed."""
+        return self._home.copy()
+
     def on_setpoint(self, t: float) -> None:
         """A setpoint arrived (proof of life for offboard)."""
         self._last_sp_t = t

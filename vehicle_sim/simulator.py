@@ -303,6 +303,7 @@ class Simulator:
             armed=self._commander.armed,
             mode=self._commander.mode,
             landed_state=self._commander.landed_state(contact, x[ph.VEL + 2] < -0.1),
+            home_ned_m=self._commander.home_ned_m,
         )
 
     def log_row(self, cmd: VelocitySetpoint | None = None) -> dict[str, float | str]:

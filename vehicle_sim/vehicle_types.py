@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import enum
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Literal
 
 import numpy as np
@@ -135,6 +135,8 @@ class VehicleState:
         motor_speeds_norm: (4,) normalised motor outputs in [0, 1].
         battery_v: battery voltage [V].
         armed, mode, landed_state: the flight controller's view.
+        home_ned_m: (3,) home, where the vehicle last armed, in local NED [m] (the origin
+            before the first arming), as PX4 reports it in HOME_POSITION.
     """
 
     t_s: float
@@ -149,6 +151,13 @@ class VehicleState:
     armed: bool
     mode: FlightMode
     landed_state: LandedState
+    home_ned_m: np.ndarray = field(default_factory=lambda: np.zeros(3))
+
+    @property
+    def home_alt_amsl_offset_m(self) -> float:
+        """Height of home above the local origin [m]: add it to the origin's AMSL altitude to
+        get home's (relative-altitude MAVLink frames count from home)."""
+        return -float(self.home_ned_m[2])
 
     @property
     def yaw_rad(self) -> float:

@@ -179,6 +179,22 @@ def test_reposition_flies_to_the_point_and_holds_there():
         sim.reposition((float("inf"), 0.0, 0.0))
 
 
+def test_home_is_where_the_vehicle_last_armed():
+    sim = hovering(settle_s=1.0)
+    np.testing.assert_allclose(sim.state.home_ned_m, 0.0, atol=1e-6)
+    assert sim.reposition((8.0, -4.0, float("nan"))).accepted
+    sim.step(20.0)
+    assert sim.land().accepted
+    for _ in range(60):
+        if not sim.step(0.5).armed:
+            break
+    assert not sim.state.armed
+    landed_ned_m = sim.state.pos_ned_m.copy()
+    assert sim.arm().accepted
+    np.testing.assert_allclose(sim.state.home_ned_m, landed_ned_m)
+    assert np.hypot(*sim.state.home_ned_m[:2]) > 8.0
+
+
 def test_a_failsafe_holds_for_com_fail_act_t_then_acts_unless_the_pilot_takes_over():
     sim = hovering(settle_s=1.0)
     sim.set_param("COM_OBL_RC_ACT", 4)  # land

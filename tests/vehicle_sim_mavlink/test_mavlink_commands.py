@@ -17,6 +17,7 @@ from vehicle_sim.mavlink.commands import (
 )
 from vehicle_sim.mavlink.scheduler import RateScheduler
 from vehicle_sim.mavlink.telemetry import DEFAULT_RATES_HZ, TelemetryContext
+from vehicle_sim.mission_plan import NAV_WAYPOINT, MissionItem
 
 NAN7 = (math.nan,) * 7
 
@@ -99,3 +100,52 @@ def test_request_message_and_message_interval(ctx):
     assert handle_command(511, params(32, 100_000), ctx).result == MAV_RESULT_ACCEPTED
     interval = handle_command(510, params(32), ctx).replies[0]
     assert (interval.message_id, interval.interval_us) == (32, 100_000)
+
+
+def test_gps_global_origin_on_request_is_home(ctx):
+    outcome = handle_command(512, params(49), ctx)  # GPS_GLOBAL_ORIGIN
+    assert outcome.result == MAV_RESULT_ACCEPTED
+    origin, home = outcome.replies[0], ctx.telemetry.origin
+    assert origin.get_type() == "GPS_GLOBAL_ORIGIN"
+    assert (origin.latitude, origin.longitude) == (
+        round(home.lat_deg * 1e7),
+        round(home.lon_deg * 1e7),
+    )
+    assert origin.altitude == round(home.alt_amsl_m * 1000.0)
+
+
+def _three_waypoints(ctx) -> None:
+    points = ((5.0, 0.0, -3.0), (5.0, 5.0, -3.0), (0.0, 5.0, -3.0))
+    ctx.sim.set_mission(tuple(MissionItem(NAV_WAYPOINT, p) for p in points))
+
+
+def test_mission_start_from_an_item_switches_to_auto_mission(ctx):
+    _three_waypoints(ctx)
+    handle_command(400, params(1), ctx)
+    assert handle_command(300, params(1, 2), ctx).result == MAV_RESULT_ACCEPTED
+    assert ctx.sim.state.mode == FlightMode.MISSION and ctx.sim.mission_current == 1
+    ctx.sim.step(3.0)
+    assert ctx.sim.state.mode == FlightMode.MISSION  # flying it, not refused
+
+
+def test_mission_start_without_a_mission_or_with_a_bad_item_is_refused(ctx):
+    handle_command(400, params(1), ctx)
+    assert handle_command(300, params(math.nan), ctx).result == MAV_RESULT_DENIED
+    _three_waypoints(ctx)
+    bad = handle_command(300, params(7), ctx)
+    assert bad.result == MAV_RESULT_DENIED
+    assert any("mission item 7 does not exist" in text for _, text in bad.notices)
+    assert ctx.sim.state.mode != FlightMode.MISSION
+
+
+def test_do_set_mission_current_selects_keeps_resets_and_refuses(ctx):
+    _three_waypoints(ctx)
+    assert handle_command(224, params(2), ctx).result == MAV_RESULT_ACCEPTED
+    assert ctx.sim.mission_current == 2
+    assert handle_command(224, params(-1), ctx).result == MAV_RESULT_ACCEPTED
+    assert ctx.sim.mission_current == 2
+    assert handle_command(224, params(-1, 1), ctx).result == MAV_RESULT_ACCEPTED
+    assert ctx.sim.mission_current == 0
+    assert handle_command(224, params(3), ctx).result == MAV_RESULT_DENIED
+    assert handle_command(224, params(0.5), ctx).result == MAV_RESULT_DENIED
+    assert ctx.sim.mission_current == 0

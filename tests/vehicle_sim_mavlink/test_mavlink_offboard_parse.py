@@ -6,7 +6,8 @@ import math
 
 import pytest
 
-from vehicle_sim.mavlink.offboard import parse_setpoint
+from vehicle_sim.mavlink.geodetic import GeodeticOrigin
+from vehicle_sim.mavlink.offboard import parse_global_setpoint, parse_setpoint
 from vehicle_sim.vehicle_types import VelocitySetpoint
 
 MASK_MAVSDK_VELOCITY_NED = 2503  # velocity + yaw
@@ -63,3 +64,31 @@ def test_position_setpoints_carry_the_position_and_the_feed_forward(mask, vel_ff
     assert result.reason == ""
     assert result.setpoint.pos_ned_m == (4.0, -2.0, -3.0)
     assert result.setpoint.vel_mps == vel_ff and result.setpoint.yaw_rad == 0.3
+
+
+@pytest.mark.parametrize(("frame", "alt_m"), [(5, 491.0), (6, 3.0)], ids=["amsl", "relative"])
+def test_global_int_position_maps_to_local_ned_around_home(frame, alt_m):
+    home = GeodeticOrigin()
+    lat, lon, _ = home.to_global((10.0, -5.0, 0.0))
+    result = parse_global_setpoint(
+        frame, 0b100111111000, round(lat * 1e7), round(lon * 1e7), alt_m, (0, 0, 0), 0.0, 0.0, home
+    )
+    assert result.reason == ""
+    assert result.setpoint.pos_ned_m == pytest.approx((10.0, -5.0, -3.0), abs=0.02)
+
+
+def test_global_int_terrain_frame_and_acceleration_are_rejected_with_a_reason():
+    home = GeodeticOrigin()
+    terrain = parse_global_setpoint(11, 0b100111111000, 0, 0, 3.0, (0, 0, 0), 0.0, 0.0, home)
+    assert terrain.setpoint is None and "global frame 11 unsupported" in terrain.reason
+    accel = parse_global_setpoint(6, 0b100000111000, 0, 0, 3.0, (0, 0, 0), 0.0, 0.0, home)
+    assert accel.setpoint is None and "acceleration" in accel.reason
+
+
+def test_global_int_relative_altitude_counts_from_home_not_the_origin():
+    home = GeodeticOrigin()
+    lat, lon = round(home.lat_deg * 1e7), round(home.lon_deg * 1e7)
+    result = parse_global_setpoint(
+        6, 0b100111111000, lat, lon, 3.0, (0, 0, 0), 0.0, 0.0, home, home_above_origin_m=1.0
+    )
+    assert result.setpoint.pos_ned_m == pytest.approx((0.0, 0.0, -4.0), abs=1e-6)

@@ -114,3 +114,16 @@ def test_every_builder_encodes():
     state = make_state()
     for msg_id in TELEMETRY_BUILDERS:
         assert on_the_wire(msg_id, state).get_msgId() == msg_id
+
+
+def test_home_position_is_where_the_vehicle_armed_and_relative_alt_counts_from_it():
+    home_ned_m = np.array([12.0, -7.0, -1.5])
+    state = make_state(home_ned_m=home_ned_m, pos_ned_m=np.array([12.0, -7.0, -4.0]))
+    ctx = TelemetryContext()
+    home = on_the_wire(mavlink2.MAVLINK_MSG_ID_HOME_POSITION, state, ctx)
+    lat, lon, alt = ctx.origin.to_global(tuple(home_ned_m))
+    assert (home.latitude, home.longitude) == (round(lat * 1e7), round(lon * 1e7))
+    assert home.altitude == round(alt * 1000.0)
+    assert (home.x, home.y, home.z) == pytest.approx(tuple(home_ned_m))
+    position = on_the_wire(mavlink2.MAVLINK_MSG_ID_GLOBAL_POSITION_INT, state, ctx)
+    assert position.relative_alt == 2500  # 2.5 m above home, 4 m above the origin

@@ -2,7 +2,8 @@
 
 Each test does what one of MAVSDK-Python's example scripts does, through MAVSDK's documented
 API (the native 4.x binding): takeoff_and_land (reads RTL_RETURN_ALT), goto (DO_REPOSITION),
-return to launch, mission (upload, start, progress, RTL at the end), offboard_position_ned and
+return to launch, mission (upload, start, progress, RTL at the end), offboard_position_ned (and
+its global variant, set_position_global) and
 offboard_velocity_body. Real time, a real UDP
 endpoint, MAVSDK's own mavlink stack; deadlines are generous so a busy CPU does not matter.
 """
@@ -14,11 +15,18 @@ import socket
 import time
 from collections.abc import Callable, Iterator
 
+import numpy as np
 import pytest
 from mavsdk import ComponentType, Configuration, ConnectionResult, Mavsdk, log_subscribe
 from mavsdk.plugins.action import Action
 from mavsdk.plugins.mission import Mission, MissionItem, MissionPlan
-from mavsdk.plugins.offboard import Offboard, PositionNedYaw, VelocityBodyYawspeed, VelocityNedYaw
+from mavsdk.plugins.offboard import (
+    Offboard,
+    PositionGlobalYaw,
+    PositionNedYaw,
+    VelocityBodyYawspeed,
+    VelocityNedYaw,
+)
 from mavsdk.plugins.param import Param
 from mavsdk.plugins.telemetry import Telemetry
 
@@ -146,6 +154,22 @@ def test_offboard_position_ned(drone: Drone) -> None:
             30.0,
             f"position ({north}, {east})",
         )
+    assert drone.state.mode is FlightMode.OFFBOARD
+    drone.offboard.stop()
+    land_and_disarm(drone)
+
+
+def test_offboard_position_global_relative_to_home(drone: Drone) -> None:
+    take_off(drone)
+    lat, lon = _offset(drone, north_m=-6.0, east_m=3.0)
+    target = PositionGlobalYaw(lat, lon, 4.0, 0.0, PositionGlobalYaw.AltitudeType.REL_HOME)
+    drone.offboard.set_position_global(target)
+    drone.offboard.start()
+    wait(
+        lambda: bool(np.linalg.norm(drone.state.pos_ned_m - (-6.0, 3.0, -4.0)) < 0.3),
+        30.0,
+        "position 6 m south, 3 m east, 4 m up",
+    )
     assert drone.state.mode is FlightMode.OFFBOARD
     drone.offboard.stop()
     land_and_disarm(drone)

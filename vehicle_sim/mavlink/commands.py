@@ -38,6 +38,8 @@ CMD_NAV_LAND = mavlink2.MAV_CMD_NAV_LAND
 CMD_NAV_TAKEOFF = mavlink2.MAV_CMD_NAV_TAKEOFF
 CMD_DO_SET_MODE = mavlink2.MAV_CMD_DO_SET_MODE
 CMD_DO_REPOSITION = mavlink2.MAV_CMD_DO_REPOSITION
+CMD_MISSION_START = mavlink2.MAV_CMD_MISSION_START
+CMD_DO_SET_MISSION_CURRENT = mavlink2.MAV_CMD_DO_SET_MISSION_CURRENT
 CMD_COMPONENT_ARM_DISARM = mavlink2.MAV_CMD_COMPONENT_ARM_DISARM
 CMD_GET_HOME_POSITION = mavlink2.MAV_CMD_GET_HOME_POSITION
 CMD_GET_MESSAGE_INTERVAL = mavlink2.MAV_CMD_GET_MESSAGE_INTERVAL
@@ -162,6 +164,39 @@ def reposition(p: Params, ctx: CommandContext) -> CommandOutcome:
     return _from_sim(ctx.sim.reposition((north, east, down)))
 
 
+def _mission_item(value: float, ctx: CommandContext) -> int | None:
+    """A mission item index from a command parameter: None for NaN or negative ("no change");
+    ValueError for anything that is not an item of the uploaded mission."""
+    if math.isnan(value) or value < 0:
+        return None
+    count = len(ctx.sim.mission)
+    if value != int(value) or not value < count:
+        raise ValueError(f"mission item {value:g} does not exist (mission has {count})")
+    return int(value)
+
+
+def mission_start(p: Params, ctx: CommandContext) -> CommandOutcome:
+    """MISSION_START: param1 the first item (NaN or -1: the current one), then AUTO.MISSION
+    as PX4's commander does; param2 (last item) is not honoured: the mission runs to its end."""
+    first = _mission_item(p[0], ctx)
+    if first is not None:
+        selected = ctx.sim.set_mission_current(first)
+        if not selected.accepted:
+            return _from_sim(selected)
+    return _from_sim(ctx.sim.set_mode(FlightMode.MISSION))
+
+
+def set_mission_current(p: Params, ctx: CommandContext) -> CommandOutcome:
+    """DO_SET_MISSION_CURRENT (what MAVSDK's set_current_mission_item sends): param1 the item
+    (-1: keep), param2 1 restarts the mission from item 0; MISSION_CURRENT follows on change."""
+    seq = _mission_item(p[0], ctx)
+    if p[1] == 1.0 and seq is None:
+        seq = 0 if ctx.sim.mission else None
+    if seq is None:
+        return CommandOutcome(MAV_RESULT_ACCEPTED)
+    return _from_sim(ctx.sim.set_mission_current(seq))
+
+
 def _message_id(value: float) -> int | None:
     if math.isfinite(value) and value >= 0 and value == int(value):
         return int(value)
@@ -209,6 +244,8 @@ def get_message_interval(p: Params, ctx: CommandContext) -> CommandOutcome:
 COMMAND_HANDLERS: dict[int, Handler] = {
     CMD_NAV_RETURN_TO_LAUNCH: return_to_launch,
     CMD_DO_REPOSITION: reposition,
+    CMD_MISSION_START: mission_start,
+    CMD_DO_SET_MISSION_CURRENT: set_mission_current,
     CMD_NAV_LAND: land,
     CMD_NAV_TAKEOFF: takeoff,
     CMD_DO_SET_MODE: set_mode,

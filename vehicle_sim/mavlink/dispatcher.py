@@ -27,7 +27,7 @@ from vehicle_sim.mavlink.commands import (
     handle_command,
 )
 from vehicle_sim.mavlink.mission_protocol import MissionProtocol, MissionReply
-from vehicle_sim.mavlink.offboard import SetpointResult, parse_setpoint
+from vehicle_sim.mavlink.offboard import SetpointResult, parse_global_setpoint, parse_setpoint
 from vehicle_sim.mavlink.scheduler import RateScheduler
 from vehicle_sim.mavlink.stats import StatsCounter
 from vehicle_sim.mavlink.telemetry import TelemetryContext
@@ -97,6 +97,7 @@ class Dispatcher:
             "COMMAND_LONG": self._command_long,
             "COMMAND_INT": self._command_int,
             "SET_POSITION_TARGET_LOCAL_NED": self._setpoint,
+            "SET_POSITION_TARGET_GLOBAL_INT": self._global_setpoint,
             "PARAM_REQUEST_LIST": self._param_request_list,
             "PARAM_REQUEST_READ": self._param_request_read,
             "PARAM_SET": self._param_set,
@@ -149,7 +150,7 @@ class Dispatcher:
         if msg.frame in _GLOBAL_FRAMES:
             x, y = x / 1e7, y / 1e7
             if msg.frame in _RELATIVE_ALT_FRAMES:
-                z += self._telemetry.origin.alt_amsl_m
+                z += self._telemetry.origin.alt_amsl_m + self._sim.state.home_alt_amsl_offset_m
         else:
             x, y = x / 1e4, y / 1e4
         p = (msg.param1, msg.param2, msg.param3, msg.param4, x, y, z)
@@ -210,6 +211,24 @@ class Dispatcher:
             msg.yaw_rate,
             (msg.x, msg.y, msg.z),
         )
+        return self._fly_setpoint(msg, result)
+
+    def _global_setpoint(self, msg, _scheduler, _now_ns) -> list[Outgoing]:
+        result = parse_global_setpoint(
+            msg.coordinate_frame,
+            msg.type_mask,
+            msg.lat_int,
+            msg.lon_int,
+            msg.alt,
+            (msg.vx, msg.vy, msg.vz),
+            msg.yaw,
+            msg.yaw_rate,
+            self._telemetry.origin,
+            self._sim.state.home_alt_amsl_offset_m,
+        )
+        return self._fly_setpoint(msg, result)
+
+    def _fly_setpoint(self, msg, result: SetpointResult) -> list[Outgoing]:
         if result.setpoint is not None:
             try:
                 self._sim.set_velocity_setpoint(result.setpoint)

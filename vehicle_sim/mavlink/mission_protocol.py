@@ -150,7 +150,8 @@ class MissionProtocol:
             return MissionItem(msg.command, params=params)
         lat = msg.x / 1e7 if msg.x != 0 or msg.y != 0 else math.nan
         lon = msg.y / 1e7 if msg.x != 0 or msg.y != 0 else math.nan
-        alt = msg.z + (self._origin.alt_amsl_m if _GLOBAL_FRAMES[msg.frame] else 0.0)
+        home_amsl_m = self._origin.alt_amsl_m + self._sim.state.home_alt_amsl_offset_m
+        alt = msg.z + (home_amsl_m if _GLOBAL_FRAMES[msg.frame] else 0.0)
         here = self._origin.to_global(tuple(self._sim.state.pos_ned_m))
         north, east, down = self._origin.to_local(
             lat if math.isfinite(lat) else here[0],

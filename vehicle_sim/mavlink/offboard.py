@@ -5,7 +5,9 @@ type_mask bits (1 = ignore): 0-2 position, 3-5 velocity, 6-8 acceleration, 9 for
 Velocity setpoints, position setpoints and position + velocity feed-forward (each with yaw or
 yaw rate) are flown; acceleration, force and partial setpoints are rejected with a reason a
 STATUSTEXT can carry. The value limits are the vehicle's one set of setpoint
-rules, :func:`vehicle_sim.vehicle_types.check_setpoint`. Pure: no I/O.
+rules, :func:`vehicle_sim.vehicle_types.check_setpoint`. SET_POSITION_TARGET_GLOBAL_INT
+(frames 5/6, and the float-named 0/3) is mapped to local NED around home and then follows the
+same rules. Pure: no I/O.
 """
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import common as mavlink2
 
+from vehicle_sim.mavlink.geodetic import GeodeticOrigin
 from vehicle_sim.vehicle_types import VelocitySetpoint, check_setpoint
 
 FRAME_LOCAL_NED = mavlink2.MAV_FRAME_LOCAL_NED
@@ -93,3 +96,42 @@ def parse_setpoint(
     except ValueError as exc:
         return SetpointResult(None, f"Offboard: {exc}")
     return SetpointResult(setpoint)
+
+
+# SET_POSITION_TARGET_GLOBAL_INT frames: value -> altitude is relative to home (True) or AMSL.
+GLOBAL_FRAMES: dict[int, bool] = {
+    mavlink2.MAV_FRAME_GLOBAL: False,
+    mavlink2.MAV_FRAME_GLOBAL_INT: False,
+    mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT: True,
+    mavlink2.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT: True,
+}
+
+
+def parse_global_setpoint(
+    coordinate_frame: int,
+    type_mask: int,
+    lat_e7: int,
+    lon_e7: int,
+    alt_m: float,
+    vel_ned_mps: tuple[float, float, float],
+    yaw_rad: float,
+    yaw_rate_radps: float,
+    origin: GeodeticOrigin,
+    home_above_origin_m: float = 0.0,
+) -> SetpointResult:
+    """A SET_POSITION_TARGET_GLOBAL_INT as a local NED setpoint: latitude/longitude [degE7]
+    and altitude [m] (AMSL, or above home in the relative frames) mapped around the local
+    ``origin``, home being ``home_above_origin_m`` above it; velocity is NED [m/s]. Same
+    type_mask rules as :func:`parse_setpoint`."""
+    if coordinate_frame not in GLOBAL_FRAMES:
+        return SetpointResult(
+            None, f"Offboard: global frame {coordinate_frame} unsupported, use 5 or 6"
+        )
+    home_amsl_m = origin.alt_amsl_m + home_above_origin_m
+    alt_amsl_m = float(alt_m) + (home_amsl_m if GLOBAL_FRAMES[coordinate_frame] else 0.0)
+    pos_ned_m = (0.0, 0.0, 0.0)
+    if (type_mask & IGNORE_POSITION) == 0:
+        pos_ned_m = origin.to_local(lat_e7 / 1e7, lon_e7 / 1e7, alt_amsl_m)  # type: ignore[assignment]
+    return parse_setpoint(
+        FRAME_LOCAL_NED, type_mask, vel_ned_mps, yaw_rad, yaw_rate_radps, pos_ned_m
+    )

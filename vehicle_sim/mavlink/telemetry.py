@@ -146,18 +146,31 @@ def sys_status(state: VehicleState, ctx: TelemetryContext) -> mavlink2.MAVLink_m
 
 
 def home_position(state: VehicleState, ctx: TelemetryContext) -> mavlink2.MAVLink_message:
-    origin = ctx.origin
+    lat_deg, lon_deg, alt_amsl_m = ctx.origin.to_global(tuple(state.home_ned_m))
+    x, y, z = (float(v) for v in state.home_ned_m)
     return _FACTORY.home_position_encode(
-        latitude=int(round(origin.lat_deg * 1e7)),
-        longitude=int(round(origin.lon_deg * 1e7)),
-        altitude=int(round(origin.alt_amsl_m * 1000.0)),
-        x=0.0,
-        y=0.0,
-        z=0.0,
+        latitude=int(round(lat_deg * 1e7)),
+        longitude=int(round(lon_deg * 1e7)),
+        altitude=int(round(alt_amsl_m * 1000.0)),
+        x=x,
+        y=y,
+        z=z,
         q=(1.0, 0.0, 0.0, 0.0),
         approach_x=0.0,
         approach_y=0.0,
         approach_z=0.0,
+        time_usec=int(state.t_s * 1e6),
+    )
+
+
+def gps_global_origin(state: VehicleState, ctx: TelemetryContext) -> mavlink2.MAVLink_message:
+    """GPS_GLOBAL_ORIGIN: the geodetic position of local NED (0, 0, 0), which is home here,
+    as PX4 SITL reports it (MAVSDK's Telemetry.get_gps_global_origin requests it)."""
+    origin = ctx.origin
+    return _FACTORY.gps_global_origin_encode(
+        latitude=int(round(origin.lat_deg * 1e7)),
+        longitude=int(round(origin.lon_deg * 1e7)),
+        altitude=int(round(origin.alt_amsl_m * 1000.0)),
         time_usec=int(state.t_s * 1e6),
     )
 
@@ -171,7 +184,7 @@ def global_position_int(state: VehicleState, ctx: TelemetryContext) -> mavlink2.
         lat=int(round(lat_deg * 1e7)),
         lon=int(round(lon_deg * 1e7)),
         alt=int(round(alt_amsl_m * 1000.0)),
-        relative_alt=int(round(-float(state.pos_ned_m[2]) * 1000.0)),
+        relative_alt=int(round(-float(state.pos_ned_m[2] - state.home_ned_m[2]) * 1000.0)),
         vx=_clip_int16(vel_cmps[0]),
         vy=_clip_int16(vel_cmps[1]),
         vz=_clip_int16(vel_cmps[2]),
@@ -262,6 +275,7 @@ TELEMETRY_BUILDERS: dict[int, Builder] = {
     mavlink2.MAVLINK_MSG_ID_HEARTBEAT: heartbeat,
     mavlink2.MAVLINK_MSG_ID_SYS_STATUS: sys_status,
     mavlink2.MAVLINK_MSG_ID_HOME_POSITION: home_position,
+    mavlink2.MAVLINK_MSG_ID_GPS_GLOBAL_ORIGIN: gps_global_origin,
     mavlink2.MAVLINK_MSG_ID_GLOBAL_POSITION_INT: global_position_int,
     mavlink2.MAVLINK_MSG_ID_LOCAL_POSITION_NED: local_position_ned,
     mavlink2.MAVLINK_MSG_ID_ATTITUDE: attitude,
