@@ -169,3 +169,17 @@ class LocalisationQuality:
         )
         blur = 1.0 / (1.0 + (speed_mps / self.blur_speed_mps) ** 2)
         return self.max_features * lighting * persp * blur
+
+
+def project_arc_length(
+    path: TaughtPath, xy_m: np.ndarray, hint: int, window: int = 60
+) -> np.ndarray:
+    """Arc length (n,) of the nearest vertex plus along-track offset for points (n, 2)."""
+    lo = max(0, hint - 5)
+    hi = min(len(path), hint + window + 1)
+    seg = path.xy_m[lo:hi]
+    d2 = np.sum((xy_m[:, None, :] - seg[None, :, :]) ** 2, axis=2)
+    idx = lo + np.argmin(d2, axis=1)
+    th = path.heading_rad[idx]
+    delta = xy_m - path.xy_m[idx]
+    return path.s_m[idx] + np.cos(th) * delta[:, 0] + np.sin(th) * delta[:, 1]

@@ -43,7 +43,7 @@ class UnicycleNmpcConfig:
     r_omega: float = 1.0
     r_delta: float = 3.0
     omega_max_radps: float = 1.5
-    iterations: int = 3
+    iterations: int = 2
 
     def __post_init__(self) -> None:
         if self.horizon < 1 or not self.dt_s > 0 or self.iterations < 1:
