@@ -25,7 +25,7 @@ PAPER_BINS = ExperienceBinsConfig(
 )
 QUERY_NAMES = ("s_m", "v_act_prev_mps", "w_act_prev_radps", "v_cmd_mps", "w_cmd_radps",
                "w_cmd_prev_radps")  # fmt: skip
-_LENGTHSCALES = np.array([0.6, 0.3, 0.4, 0.3, 0.4, 0.4])
+_LENGTHSCALES = np.array([0.5, 1.0, 1.5, 0.5, 0.8, 1.5])
 _SIGNAL_STD = (0.15, 0.15, 0.4)
 _NOISE_STD = (0.06, 0.06, 0.1)
 

@@ -81,8 +81,8 @@ def experiment_1(seed: int = 0) -> RoverScenario:
     )  # fmt: skip
     return RoverScenario(
         "rover_exp1", "husky_50kg", path, effects, np.ones(len(path)), trials=20,
-        fixed_speed_mps=0.4, nmpc=UnicycleNmpcConfig(q_lat=30.0, q_head=10.0, r_omega=1.0,
-                                                     r_delta=2.0, omega_max_radps=1.5),
+        fixed_speed_mps=0.4, nmpc=UnicycleNmpcConfig(q_lat=40.0, q_head=1.0, r_omega=1.0,
+                                                     r_delta=8.0, omega_max_radps=1.5),
         seed=seed,
     )  # fmt: skip
 
