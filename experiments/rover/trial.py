@@ -171,6 +171,8 @@ def run_trials(sc: RoverScenario, gp: LocalGP | None = None) -> list[TrialRecord
         r = run_trial(sc, gp, schedule, j)
         out.append(r)
         if sc.scheduler is not None:
-            schedule = next_schedule(schedule, r.vertex_e_lat_m, r.vertex_e_head_rad,
-                                     r.vertex_w_cmd_radps, r.vertex_features, sc.scheduler)  # fmt: skip
+            schedule = next_schedule(
+                schedule, r.vertex_e_lat_m, r.vertex_e_head_rad, r.vertex_w_cmd_radps,
+                r.vertex_features, sc.scheduler,
+            )  # fmt: skip
     return out
