@@ -72,4 +72,11 @@ def run(progress: Callable[[str], None] = print, quick: bool = False) -> dict[st
     progress("loop: flying the augmented NMPC at 50 Hz on the wall clock")
     points = _PACED_POINTS_QUICK if quick else _PACED_POINTS
     miss = paced_deadline_miss_fraction(config, model, points, progress)
-    return {**result.headline, "loop_deadline_miss_fraction": miss}
+    from experiments.bench import rover  # [Ostafew16] on its own robot (issue 16)
+
+    rover_figures = rover.run(progress, quick)
+    return {
+        **result.headline,
+        "loop_deadline_miss_fraction": miss,
+        "rover_exp1_max_lateral_reduction": rover_figures["rover_exp1_max_lateral_reduction"],
+    }
