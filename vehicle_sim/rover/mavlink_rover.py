@@ -2,7 +2,7 @@
 
 Small and separate from vehicle_sim.mavlink (the multirotor endpoint): HEARTBEAT with
 MAV_TYPE_GROUND_ROVER and the PX4 custom mode (main mode 6 = OFFBOARD), COMMAND_LONG
-MAV_CMD_COMPONENT_ARM_DISARM and MAV_CMD_DO_SET_MODE (acknowledged), SET_MODE, and offboard
+MAV_CMD_COMPONENT_ARM_DISARM and MAV_CMD_DO_SET_MODE (acknowledged; MANUAL, AUTO = hold, OFFBOARD), SET_MODE, and offboard
 SET_POSITION_TARGET_LOCAL_NED with velocity + yaw rate: in MAV_FRAME_BODY_NED vx is the forward
 speed; in MAV_FRAME_LOCAL_NED the speed is (vx, vy) projected on the heading. Telemetry at
 ``telemetry_hz``: HEARTBEAT, LOCAL_POSITION_NED, ATTITUDE. Offboard without a setpoint for
@@ -24,6 +24,7 @@ from vehicle_sim.rover.simulator import RoverSim
 
 _PX4_MAIN_OFFBOARD = 6
 _PX4_MAIN_MANUAL = 1
+_PX4_MAIN_AUTO = 4
 _MAV = mavutil.mavlink
 
 
@@ -85,7 +86,7 @@ class RoverMavlinkEndpoint:
                 return False  # PX4 refuses OFFBOARD without a setpoint stream
             self.offboard = True
             return True
-        if main_mode == _PX4_MAIN_MANUAL:
+        if main_mode in (_PX4_MAIN_MANUAL, _PX4_MAIN_AUTO):  # manual, or AUTO (hold)
             self.offboard = False
             self.sim.set_setpoint(0.0, 0.0)
             return True
