@@ -2,7 +2,8 @@
 
 Small and separate from vehicle_sim.mavlink (the multirotor endpoint): HEARTBEAT with
 MAV_TYPE_GROUND_ROVER and the PX4 custom mode (main mode 6 = OFFBOARD), COMMAND_LONG
-MAV_CMD_COMPONENT_ARM_DISARM and MAV_CMD_DO_SET_MODE (acknowledged; MANUAL, AUTO = hold, OFFBOARD), SET_MODE, and offboard
+MAV_CMD_COMPONENT_ARM_DISARM and MAV_CMD_DO_SET_MODE (acknowledged; MANUAL, AUTO = hold,
+OFFBOARD), SET_MODE, and offboard
 SET_POSITION_TARGET_LOCAL_NED with velocity + yaw rate: in MAV_FRAME_BODY_NED vx is the forward
 speed; in MAV_FRAME_LOCAL_NED the speed is (vx, vy) projected on the heading. Telemetry at
 ``telemetry_hz``: HEARTBEAT, LOCAL_POSITION_NED, ATTITUDE. Offboard without a setpoint for
