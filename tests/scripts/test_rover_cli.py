@@ -1,4 +1,4 @@
-"""`study --regime ...` / scripts.rover: bad input exits 2; the section 3.4 example writes Fig. 4."""
+"""study --regime / scripts.rover: bad input exits 2; the section 3.4 example writes Fig. 4."""
 
 from pathlib import Path
 
