@@ -2,6 +2,8 @@
 
 from pathlib import Path
 
+import pytest
+
 from scripts import rover, study
 
 
@@ -11,6 +13,7 @@ def test_unknown_regime_exits_2(capsys) -> None:
     assert rover.main(["--regime", "rover_exp1", "--trials", "0"]) == 2
 
 
+@pytest.mark.slow
 def test_example_regime_writes_the_figure(tmp_path: Path) -> None:
     assert study.main(["--regime", "example", "--out", str(tmp_path)]) == 0
     png = tmp_path / "fig4_illustrative.png"

@@ -32,6 +32,7 @@ def test_observed_disturbance_is_zero_for_a_unicycle_move() -> None:
     assert learner.observed_disturbance(p0, p1, 0.5, 0.2, 0.1) == pytest.approx(np.zeros(3))
 
 
+@pytest.mark.slow
 def test_illustrative_example_ranks_feedback_mpc_lbnmpc() -> None:
     rms = {name: tracking_rms(run(name)) for name in ("feedback", "mpc", "lbnmpc")}
     assert rms["lbnmpc"] < 0.6 * rms["mpc"] < 0.6 * rms["feedback"]
