@@ -112,6 +112,7 @@ def write_figure(path: str, c: ExampleConfig = ExampleConfig()) -> dict[str, flo
     folder = os.path.dirname(os.path.abspath(path))
     fd, tmp = tempfile.mkstemp(suffix=".png", dir=folder)
     os.close(fd)
+    os.chmod(tmp, 0o644)
     fig.savefig(tmp, dpi=100)
     plt.close(fig)
     os.replace(tmp, path)
