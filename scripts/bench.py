@@ -28,6 +28,7 @@ PARTS: dict[str, str] = {
     "link": "experiments.bench.link",
     "loop": "experiments.bench.loop",
     "diagnose": "experiments.bench.diagnose",
+    "rover": "experiments.bench.rover",
 }
 
 

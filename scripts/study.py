@@ -96,6 +96,11 @@ def parse_args(argv: list[str] | None) -> StudyConfig:
 
 def main(argv: list[str] | None = None) -> int:
     """Run the study; returns the exit code."""
+    args_list = sys.argv[1:] if argv is None else list(argv)
+    if any(a == "--regime" or a.startswith("--regime=") for a in args_list):
+        from scripts import rover  # [Ostafew16] on its own robots: study --regime rover_exp1
+
+        return rover.main(args_list)
     try:
         config = parse_args(argv)
     except SystemExit as exc:

@@ -80,6 +80,10 @@ def run(progress: Callable[[str], None] = print, quick: bool = False) -> dict[st
     figures = {**result.headline, "loop_deadline_miss_fraction": miss}
     for regime, prefix in (("agile", "agile"), ("wind_field", "wind")):
         figures |= regime_figures(regime, prefix, progress, quick)
+    from experiments.bench import rover  # [Ostafew16] on its own robot (issue 16)
+
+    rover_figures = rover.run(progress, quick)
+    figures["rover_exp1_max_lateral_reduction"] = rover_figures["rover_exp1_max_lateral_reduction"]
     return figures
 
 

@@ -1,0 +1,86 @@
+"""Run a rover regime and write its figures and summary (atomically) into a folder.
+
+Figures: max and RMS e_L / e_H per trial, scheduled speeds along the path per trial, travel
+time per trial; ``summary.json`` holds the per-trial numbers and the reductions
+1 - (last trial / trial 1) of the max errors.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from dataclasses import replace
+
+import numpy as np
+
+from experiments.rover.scenarios import scenario
+from experiments.rover.trial import TrialRecord, run_trials
+
+
+def summarise(records: list[TrialRecord]) -> dict:
+    first, last = records[0], records[-1]
+    return {
+        "trials": len(records),
+        "max_e_lat_m": [r.max_e_lat_m for r in records],
+        "rms_e_lat_m": [r.rms_e_lat_m for r in records],
+        "max_e_head_rad": [r.max_e_head_rad for r in records],
+        "rms_e_head_rad": [r.rms_e_head_rad for r in records],
+        "travel_time_s": [r.travel_time_s for r in records],
+        "mean_scheduled_speed_mps": [float(np.mean(r.schedule_mps)) for r in records],
+        "completed": [r.completed for r in records],
+        "max_lateral_reduction": 1.0 - last.max_e_lat_m / first.max_e_lat_m,
+        "max_heading_reduction": 1.0 - last.max_e_head_rad / first.max_e_head_rad,
+        "max_local_experiences": int(max(int(r.n_local.max()) for r in records)),
+        "step_median_ms": float(np.median(np.concatenate([r.step_time_s for r in records]))) * 1e3,
+    }
+
+
+def _plots(records: list[TrialRecord], s_m: np.ndarray, folder: str, name: str) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    j = np.arange(1, len(records) + 1)
+    fig, axes = plt.subplots(3, 1, figsize=(8, 9))
+    ax = axes[0]
+    ax.plot(j, [r.max_e_lat_m for r in records], "o-", label="max |e_L| [m]")
+    ax.plot(j, [r.rms_e_lat_m for r in records], "s-", label="RMS e_L [m]")
+    ax.plot(j, [r.max_e_head_rad for r in records], "o--", label="max |e_H| [rad]")
+    ax.plot(j, [r.rms_e_head_rad for r in records], "s--", label="RMS e_H [rad]")
+    ax.set_xlabel("trial")
+    ax.legend()
+    ax = axes[1]
+    for k, r in enumerate(records):
+        ax.plot(s_m, r.schedule_mps, color=plt.cm.viridis(k / max(1, len(records) - 1)))
+    ax.set_xlabel("distance along path [m]")
+    ax.set_ylabel("scheduled speed [m/s]")
+    axes[2].plot(j, [r.travel_time_s for r in records], "o-")
+    axes[2].set_xlabel("trial")
+    axes[2].set_ylabel("travel time [s]")
+    fig.suptitle(f"{name}: [Ostafew16] path repeating with LB-NMPC")
+    fig.tight_layout()
+    fd, tmp = tempfile.mkstemp(suffix=".png", dir=folder)
+    os.close(fd)
+    os.chmod(tmp, 0o644)
+    fig.savefig(tmp, dpi=90)
+    plt.close(fig)
+    os.replace(tmp, os.path.join(folder, f"{name}.png"))
+
+
+def run_regime(name: str, out_dir: str, trials: int | None = None, seed: int = 0) -> dict:
+    """Run regime ``name`` (rover_exp1..3) and write ``<name>.png`` and ``<name>.json``."""
+    sc = scenario(name, seed)
+    if trials is not None:
+        sc = replace(sc, trials=trials)
+    records = run_trials(sc)
+    summary = summarise(records)
+    os.makedirs(out_dir, exist_ok=True)
+    _plots(records, sc.path.s_m, out_dir, name)
+    fd, tmp = tempfile.mkstemp(suffix=".json", dir=out_dir)
+    os.chmod(tmp, 0o644)
+    with os.fdopen(fd, "w") as f:
+        json.dump(summary, f, indent=1)
+    os.replace(tmp, os.path.join(out_dir, f"{name}.json"))
+    return summary

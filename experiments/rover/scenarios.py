@@ -1,0 +1,150 @@
+"""The three experiments of [Ostafew16] section 5 as simulated scenarios: path, robot, terrain,
+lighting, speed policy and number of trials. Terrain is placed on the path so each experiment
+meets what the paper names (slopes and side slopes up to 15 deg, gravel, loose dirt, curvature
+up to 1, 0.5 and ~0.25 1/m); the robot is not told about any of it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from planners.rover.path import TaughtPath
+from planners.rover.speed_scheduler import TABLE_I, SpeedSchedulerConfig
+from planners.rover.unicycle_nmpc import UnicycleNmpcConfig
+from vehicle_sim.rover.effects import Slope, SurfacePatch, WheelSlip, gravel_patch, mud_patch
+
+_TAN15 = math.tan(math.radians(15.0))
+
+
+@dataclass(frozen=True, eq=False)
+class RoverScenario:
+    """One experiment.
+
+    Attributes:
+        name: regime name (rover_exp1..3).
+        preset: vehicle_sim.rover preset name.
+        path: the taught path.
+        effects: terrain effects (hidden from the controller).
+        lighting: per-vertex lighting factor in [0, 1] (N,).
+        trials: number of repeats.
+        fixed_speed_mps: speed of every trial when ``scheduler`` is None [m/s].
+        scheduler: speed-scheduler gains, or None for a fixed speed.
+        nmpc: NMPC weights.
+        learning: False runs the plain NMPC (no GP) every trial.
+        loc_noise_m, loc_noise_rad: localisation noise std (VT&R stand-in).
+        dt_s: control period [s] ([Ostafew16] section 5.1: about 10 Hz).
+        seed: seed of everything random.
+    """
+
+    name: str
+    preset: str
+    path: TaughtPath
+    effects: tuple[object, ...]
+    lighting: np.ndarray
+    trials: int
+    fixed_speed_mps: float = 0.4
+    scheduler: SpeedSchedulerConfig | None = None
+    nmpc: UnicycleNmpcConfig = field(default_factory=UnicycleNmpcConfig)
+    learning: bool = True
+    loc_noise_m: float = 0.005
+    loc_noise_rad: float = 0.005
+    dt_s: float = 0.1
+    seed: int = 0
+
+    def with_trials(self, trials: int) -> RoverScenario:
+        return replace(self, trials=trials)
+
+
+def _along(path: TaughtPath, s_m: float) -> tuple[float, float]:
+    x, y, _ = path.ref_at(np.array([s_m]))[0]
+    return float(x), float(y)
+
+
+def experiment_1(seed: int = 0) -> RoverScenario:
+    """30 m path, Husky 50 kg, 0.4 m/s fixed, 20 trials, slopes/side slopes 15 deg, gravel."""
+    path = TaughtPath.from_segments(
+        [(3.0, 0.0), (2.0, 0.6), (3.0, 0.0), (math.pi / 2, 1.0), (4.0, 0.0), (2.5, -0.8),
+         (3.5, 0.0), (2.0, -1.0), (3.0, 0.0), (2.5, 0.5), (2.93, 0.0)]
+    )  # fmt: skip
+    effects = (
+        WheelSlip(yaw_loss_per_mps=0.2, yaw_loss_per_curv_m=0.25, lat_slip_s=0.25),
+        Slope(centre_m=_along(path, 15.0), radius_m=4.0, grade=(_TAN15 * 0.7, -_TAN15 * 0.7),
+              uphill_loss_per_grade=0.6, side_drift_mps_per_grade=0.35),
+        Slope(centre_m=_along(path, 23.0), radius_m=3.0, grade=(0.0, _TAN15),
+              uphill_loss_per_grade=0.6, side_drift_mps_per_grade=0.35),
+        gravel_patch(_along(path, 6.0), 2.0),
+        SurfacePatch(_along(path, 19.0), 2.0, traction=0.8, yaw_efficiency=0.6,
+                     lat_drift_mps=0.08),
+    )  # fmt: skip
+    return RoverScenario(
+        "rover_exp1", "husky_50kg", path, effects, np.ones(len(path)), trials=20,
+        fixed_speed_mps=0.4, nmpc=UnicycleNmpcConfig(q_lat=40.0, q_head=1.0, r_omega=1.0,
+                                                     r_delta=8.0, omega_max_radps=1.5),
+        seed=seed,
+    )  # fmt: skip
+
+
+def _rect_loop(a_m: float, b_m: float, curv_1pm: float) -> list[tuple[float, float]]:
+    arc = (math.pi / 2) / curv_1pm
+    return [(a_m, 0.0), (arc, curv_1pm), (b_m, 0.0), (arc, curv_1pm)] * 2
+
+
+def _lighting(path: TaughtPath, dark: list[tuple[float, float, float]]) -> np.ndarray:
+    light = np.ones(len(path))
+    for s0, s1, level in dark:
+        light[(path.s_m >= s0) & (path.s_m <= s1)] = level
+    return light
+
+
+def experiment_2(seed: int = 0) -> RoverScenario:
+    """60 m loop, ROC6 150 kg skid-steer, curvature <= 0.5 1/m, scheduler, 20 trials."""
+    path = TaughtPath.from_segments(_rect_loop(15.0, 8.72, 0.5))
+    effects = (
+        WheelSlip(yaw_loss_per_mps=0.2, yaw_loss_per_curv_m=0.3, lat_slip_s=0.2),
+        mud_patch(_along(path, 8.0), 2.5),
+        gravel_patch(_along(path, 19.0), 3.0),
+        Slope(centre_m=_along(path, 38.0), radius_m=5.0, grade=(0.0, 0.2),
+              uphill_loss_per_grade=0.5, side_drift_mps_per_grade=0.6),
+        gravel_patch(_along(path, 50.0), 3.0),
+    )  # fmt: skip
+    return RoverScenario(
+        "rover_exp2", "roc6_150kg", path, effects, _lighting(path, [(26.0, 32.0, 0.45)]),
+        trials=20, scheduler=TABLE_I["experiment_2"],
+        nmpc=UnicycleNmpcConfig(q_lat=20.0, q_head=10.0, r_omega=2.0, r_delta=4.0,
+                                omega_max_radps=1.2),
+        seed=seed,
+    )  # fmt: skip
+
+
+def experiment_3(seed: int = 0) -> RoverScenario:
+    """100 m loop, DMRV 600 kg Ackermann, scheduler (Table I experiment 3), 10 trials."""
+    path = TaughtPath.from_segments(_rect_loop(22.0, 15.43, 0.25))
+    effects = (
+        WheelSlip(yaw_loss_per_mps=0.1, yaw_loss_per_curv_m=0.3, lat_slip_s=0.3),
+        Slope(centre_m=_along(path, 12.0), radius_m=6.0, grade=(0.15, 0.15),
+              uphill_loss_per_grade=0.5, side_drift_mps_per_grade=0.6),
+        mud_patch(_along(path, 45.0), 4.0),
+        gravel_patch(_along(path, 70.0), 4.0),
+        Slope(centre_m=_along(path, 88.0), radius_m=5.0, grade=(-0.2, 0.0),
+              uphill_loss_per_grade=0.5, side_drift_mps_per_grade=0.6),
+    )  # fmt: skip
+    return RoverScenario(
+        "rover_exp3", "dmrv_600kg", path, effects, _lighting(path, [(55.0, 62.0, 0.45)]),
+        trials=10, scheduler=TABLE_I["experiment_3"],
+        nmpc=UnicycleNmpcConfig(q_lat=10.0, q_head=10.0, r_omega=10.0, r_delta=10.0,
+                                omega_max_radps=0.9),
+        seed=seed,
+    )  # fmt: skip
+
+
+SCENARIOS = {"rover_exp1": experiment_1, "rover_exp2": experiment_2, "rover_exp3": experiment_3}
+
+
+def scenario(name: str, seed: int = 0) -> RoverScenario:
+    """A scenario by regime name; an unknown name raises ValueError listing the choices."""
+    if name not in SCENARIOS:
+        raise ValueError(f"unknown rover regime {name!r}; choose one of {', '.join(SCENARIOS)}")
+    return SCENARIOS[name](seed)

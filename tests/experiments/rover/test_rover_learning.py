@@ -1,0 +1,46 @@
+"""The history GP's experience bins keep the local GP at constant size; section 3.4's example;
+a short experiment 1 learns (max lateral error lower on trial 4 than on trial 1)."""
+
+import numpy as np
+import pytest
+
+from experiments.rover import learner
+from experiments.rover.illustrative import run, tracking_rms
+from experiments.rover.scenarios import scenario
+from experiments.rover.trial import run_trials
+
+
+def test_local_gp_uses_a_bounded_number_of_experiences_however_many_trials() -> None:
+    rng = np.random.default_rng(3)
+    gp = learner.make_history_gp()
+    assert gp.config.max_local_points == 11 * 3 * 4
+    sizes = []
+    for _trial in range(12):
+        for vertex in range(60):
+            for _ in range(6):  # ~6 control steps per vertex at 0.4 m/s and 10 Hz
+                speed = rng.uniform(0.3, 0.6)
+                gp.add(vertex, speed, rng.normal(size=6), rng.normal(size=3))
+        sizes.append(gp.local_data(30, 0.45)[0].shape[0])
+    assert len(gp) == 60 * 2 * 4  # two speed bins (0.25-0.5, 0.5-0.75) of 4 per vertex
+    assert set(sizes[4:]) == {11 * 2 * 4}  # full bins: the local GP stops growing
+    assert max(sizes) <= gp.config.max_local_points
+
+
+def test_observed_disturbance_is_zero_for_a_unicycle_move() -> None:
+    p0 = np.array([1.0, 2.0, 0.3])
+    p1 = p0 + 0.1 * np.array([0.5 * np.cos(0.3), 0.5 * np.sin(0.3), 0.2])
+    assert learner.observed_disturbance(p0, p1, 0.5, 0.2, 0.1) == pytest.approx(np.zeros(3))
+
+
+@pytest.mark.slow
+def test_illustrative_example_ranks_feedback_mpc_lbnmpc() -> None:
+    rms = {name: tracking_rms(run(name)) for name in ("feedback", "mpc", "lbnmpc")}
+    assert rms["lbnmpc"] < 0.6 * rms["mpc"] < 0.6 * rms["feedback"]
+
+
+@pytest.mark.slow
+def test_short_experiment_1_learns() -> None:
+    records = run_trials(scenario("rover_exp1").with_trials(4))
+    assert all(r.completed for r in records)
+    assert records[3].max_e_lat_m < records[0].max_e_lat_m
+    assert records[3].n_local.max() <= 132

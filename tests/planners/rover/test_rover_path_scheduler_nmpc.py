@@ -1,0 +1,56 @@
+"""Taught path, [Ostafew16] errors, the speed scheduler (eq. 31) and the unicycle NMPC."""
+
+import math
+
+import numpy as np
+import pytest
+
+from planners.rover.path import TaughtPath
+from planners.rover.speed_scheduler import TABLE_I, next_schedule
+from planners.rover.unicycle_nmpc import UnicycleNmpc, unicycle_rollout
+
+
+def test_errors_against_the_nearest_vertex_follow_the_paper_sign_convention() -> None:
+    path = TaughtPath.from_segments([(10.0, 0.0)])
+    fix = path.localise(4.0, 0.3, 0.1)  # left of the path, nose turned left
+    assert fix.vertex == 16
+    assert fix.e_lat_m == pytest.approx(-0.3)  # x_d - x in the vertex frame
+    assert fix.e_head_rad == pytest.approx(-0.1)
+
+
+def test_path_from_csv_text_and_bad_rows() -> None:
+    path = TaughtPath.from_csv_text("x_m,y_m\n0,0\n1,0\n2,0\n", spacing_m=0.5)
+    assert len(path) == 5 and path.length_m == pytest.approx(2.0)
+    with pytest.raises(ValueError, match="line 2"):
+        TaughtPath.from_csv_text("0,0\n1,a\n2,0\n")
+
+
+def test_arc_curvature() -> None:
+    path = TaughtPath.from_segments([(2.0, 0.0), (math.pi, 0.5), (2.0, 0.0)])
+    assert np.max(np.abs(path.curvature_1pm())) == pytest.approx(0.5, abs=0.02)
+
+
+def test_scheduler_raises_lowers_and_keeps_by_eq_31() -> None:
+    c = TABLE_I["experiment_2"]
+    v = np.full(4, 0.5)
+    el = np.array([0.05, 0.2, 0.16, 0.05])  # ok, too big, in the deadband, ok
+    eh = np.zeros(4)
+    om = np.array([0.1, 0.1, 0.1, 0.1])
+    feats = np.array([100.0, 100.0, 100.0, 10.0])  # last: too few features
+    out = next_schedule(v, el, eh, om, feats, c)
+    assert out == pytest.approx([0.65, 0.4, 0.5, 0.4])
+
+
+def test_nmpc_turns_towards_a_path_on_its_left_and_learned_drift_changes_the_answer() -> None:
+    nmpc = UnicycleNmpc()
+    K = nmpc.config.horizon
+    v = np.full(K, 0.5)
+    ref = np.column_stack([0.05 * np.arange(1, K + 1), np.full(K, 0.3), np.zeros(K)])
+    w0 = nmpc.solve(np.zeros(3), v, np.zeros((K, 3)), ref, 0.0)
+    assert w0[0] > 0
+    drift = np.tile([0.0, 0.2, 0.0], (K, 1))  # a learned push to the left: turn less
+    nmpc.reset()
+    w1 = nmpc.solve(np.zeros(3), v, drift, ref, 0.0)
+    assert w1[0] < w0[0]
+    poses = unicycle_rollout(np.zeros(3), v, w1, drift, 0.1)
+    assert poses.shape == (K + 1, 3)

@@ -1,0 +1,21 @@
+"""study --regime / scripts.rover: bad input exits 2; the section 3.4 example writes Fig. 4."""
+
+from pathlib import Path
+
+import pytest
+
+from scripts import rover, study
+
+
+def test_unknown_regime_exits_2(capsys) -> None:
+    assert study.main(["--regime", "rover_exp9"]) == 2
+    assert "rover_exp9" in capsys.readouterr().err
+    assert rover.main(["--regime", "rover_exp1", "--trials", "0"]) == 2
+
+
+@pytest.mark.slow
+def test_example_regime_writes_the_figure(tmp_path: Path) -> None:
+    assert study.main(["--regime", "example", "--out", str(tmp_path)]) == 0
+    png = tmp_path / "fig4_illustrative.png"
+    assert png.stat().st_size > 10_000
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith("tmp")]

@@ -1,0 +1,139 @@
+"""A RoverSim behind one MAVLink UDP link, speaking as a PX4 rover does ([PX4-rover]).
+
+Small and separate from vehicle_sim.mavlink (the multirotor endpoint): HEARTBEAT with
+MAV_TYPE_GROUND_ROVER and the PX4 custom mode (main mode 6 = OFFBOARD), COMMAND_LONG
+MAV_CMD_COMPONENT_ARM_DISARM and MAV_CMD_DO_SET_MODE (acknowledged; MANUAL, AUTO = hold,
+OFFBOARD), SET_MODE, and offboard
+SET_POSITION_TARGET_LOCAL_NED with velocity + yaw rate: in MAV_FRAME_BODY_NED vx is the forward
+speed; in MAV_FRAME_LOCAL_NED the speed is (vx, vy) projected on the heading. Telemetry at
+``telemetry_hz``: HEARTBEAT, LOCAL_POSITION_NED, ATTITUDE. Offboard without a setpoint for
+``setpoint_timeout_s`` stops the rover (PX4's offboard loss failsafe, here: hold).
+
+World frame mapping: the rover's x is north, its y is west (heading counter-clockwise from x),
+so NED north = x_m, east = -y_m, yaw = -heading_rad.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+
+from pymavlink import mavutil
+
+from vehicle_sim.rover.simulator import RoverSim
+
+_PX4_MAIN_OFFBOARD = 6
+_PX4_MAIN_MANUAL = 1
+_PX4_MAIN_AUTO = 4
+_MAV = mavutil.mavlink
+
+
+class RoverMavlinkEndpoint:
+    """Runs ``sim`` in real time on a thread, listening on udpin ``host:port``."""
+
+    def __init__(
+        self,
+        sim: RoverSim,
+        port: int,
+        host: str = "127.0.0.1",
+        physics_period_s: float = 0.02,
+        telemetry_hz: float = 10.0,
+        setpoint_timeout_s: float = 1.0,
+    ) -> None:
+        self.sim = sim
+        self._conn = mavutil.mavlink_connection(
+            f"udpin:{host}:{port}", source_system=1, source_component=1
+        )
+        self._period = physics_period_s
+        self._telemetry_period = 1.0 / telemetry_hz
+        self._timeout = setpoint_timeout_s
+        self.offboard = False
+        self._last_sp = -math.inf
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+
+    def start(self) -> None:
+        self._thread.start()
+
+    def close(self) -> None:
+        self._stop.set()
+        self._thread.join(timeout=5.0)
+        self._conn.close()
+
+    def _run(self) -> None:
+        next_tel = 0.0
+        t_prev = time.monotonic()
+        while not self._stop.is_set():
+            while (msg := self._conn.recv_match(blocking=False)) is not None:
+                self._handle(msg)
+            now = time.monotonic()
+            if self.offboard and now - self._last_sp > self._timeout:
+                self.sim.set_setpoint(0.0, 0.0)
+            self.sim.step(min(now - t_prev, 0.1))
+            t_prev = now
+            if now >= next_tel and self._conn.mav is not None:
+                self._telemetry()
+                next_tel = now + self._telemetry_period
+            time.sleep(self._period)
+
+    def _ack(self, command: int, ok: bool) -> None:
+        result = _MAV.MAV_RESULT_ACCEPTED if ok else _MAV.MAV_RESULT_DENIED
+        self._conn.mav.command_ack_send(command, result)
+
+    def _set_mode(self, main_mode: int) -> bool:
+        if main_mode == _PX4_MAIN_OFFBOARD:
+            if time.monotonic() - self._last_sp > self._timeout:
+                return False  # PX4 refuses OFFBOARD without a setpoint stream
+            self.offboard = True
+            return True
+        if main_mode in (_PX4_MAIN_MANUAL, _PX4_MAIN_AUTO):  # manual, or AUTO (hold)
+            self.offboard = False
+            self.sim.set_setpoint(0.0, 0.0)
+            return True
+        return False
+
+    def _handle(self, msg: object) -> None:
+        kind = msg.get_type()
+        if kind == "COMMAND_LONG":
+            if msg.command == _MAV.MAV_CMD_COMPONENT_ARM_DISARM:
+                if msg.param1 > 0.5:
+                    self.sim.arm()
+                else:
+                    self.sim.disarm()
+                    self.offboard = False
+                self._ack(msg.command, True)
+            elif msg.command == _MAV.MAV_CMD_DO_SET_MODE:
+                self._ack(msg.command, self._set_mode(int(msg.param2)))
+            else:
+                self._ack(msg.command, False)
+        elif kind == "SET_MODE":
+            self._set_mode((msg.custom_mode >> 16) & 0xFF)
+        elif kind == "SET_POSITION_TARGET_LOCAL_NED":
+            self._last_sp = time.monotonic()
+            heading = self.sim.state.heading_rad
+            if msg.coordinate_frame == _MAV.MAV_FRAME_BODY_NED:
+                speed = msg.vx
+            else:  # LOCAL_NED: project the ground velocity on the heading (north, east)
+                speed = msg.vx * math.cos(-heading) + msg.vy * math.sin(-heading)
+            yaw_rate = 0.0 if math.isnan(msg.yaw_rate) else -msg.yaw_rate  # NED yaw is CW
+            if self.offboard and self.sim.armed:
+                self.sim.set_setpoint(float(speed), float(yaw_rate))
+
+    def _telemetry(self) -> None:
+        st = self.sim.state
+        base = _MAV.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
+        if self.sim.armed:
+            base |= _MAV.MAV_MODE_FLAG_SAFETY_ARMED
+        main = _PX4_MAIN_OFFBOARD if self.offboard else _PX4_MAIN_MANUAL
+        state = _MAV.MAV_STATE_ACTIVE if self.sim.armed else _MAV.MAV_STATE_STANDBY
+        mav = self._conn.mav
+        mav.heartbeat_send(
+            _MAV.MAV_TYPE_GROUND_ROVER, _MAV.MAV_AUTOPILOT_PX4, base, main << 16, state
+        )
+        t_ms = int(st.t_s * 1000)
+        c, s = math.cos(st.heading_rad), math.sin(st.heading_rad)
+        vx_w = st.speed_mps * c - st.lat_speed_mps * s
+        vy_w = st.speed_mps * s + st.lat_speed_mps * c
+        mav.local_position_ned_send(t_ms, st.x_m, -st.y_m, 0.0, vx_w, -vy_w, 0.0)
+        mav.attitude_send(t_ms, 0.0, 0.0, -st.heading_rad, 0.0, 0.0, -st.yaw_rate_radps)
