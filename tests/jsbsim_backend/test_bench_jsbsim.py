@@ -1,4 +1,6 @@
-"""The JSBSim benchmark part runs and reports its figure under the stable name."""
+"""The JSBSim benchmark part runs and reports its figures under the stable names."""
+
+import math
 
 import pytest
 
@@ -9,6 +11,8 @@ from experiments.bench import jsbsim as bench_jsbsim
 def test_quick_run_reports_a_realtime_factor():
     messages = []
     figures = bench_jsbsim.run(progress=messages.append, quick=True)
-    assert set(figures) == {"jsbsim_realtime_factor"}
-    assert figures["jsbsim_realtime_factor"] > 0.0
+    names = {"jsbsim_realtime_factor", "jsbsim_tracking_gain", "jsbsim_tracking_gain_min"}
+    assert set(figures) == names
+    assert all(math.isfinite(figures[n]) and figures[n] > 0.0 for n in names)
+    assert figures["jsbsim_tracking_gain_min"] <= figures["jsbsim_tracking_gain"]
     assert any("real time" in m for m in messages)
