@@ -51,6 +51,7 @@ class CandidateFit:
     effects: dict[str, dict[str, object]]
     train_sse_n2: float
     n_params: int
+    at_bound: bool = False
 
 
 def merge(base: EffectParams, extra: EffectParams) -> dict[str, dict[str, object]]:
@@ -148,7 +149,20 @@ def fit_jointly(
     upper = np.concatenate([c.upper for c in candidates])
     x0 = np.clip(np.concatenate([c.x0 for c in candidates]), lower, upper)
     sol = least_squares(cost, x0, bounds=(lower, upper), x_scale="jac")
-    return CandidateFit(candidates[-1].name, effects_of(sol.x), float(2.0 * sol.cost), len(x0))
+    own = slice(sizes[-2], sizes[-1])
+    at_bound = on_bound(sol.x[own], lower[own], upper[own])
+    return CandidateFit(
+        candidates[-1].name, effects_of(sol.x), float(2.0 * sol.cost), len(x0), at_bound
+    )
+
+
+def on_bound(theta: np.ndarray, lower: np.ndarray, upper: np.ndarray, rel: float = 1e-3) -> bool:
+    """True if a parameter sits on its search bound: the upper one, or a lower one that is not
+    the effect's natural zero (a drag of 0 is "no drag", a payload ratio of 0.5 is a limit)."""
+    span = (upper - lower) * rel
+    high = theta >= upper - span
+    low = (theta <= lower + span) & (lower != 0.0)
+    return bool(np.any(high | low))
 
 
 def residual_sse(effects: EffectParams, data: ForceData, battery: BatteryModel) -> float:

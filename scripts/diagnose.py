@@ -3,7 +3,7 @@
     diagnose LOGS... --sim-config FILE|PRESET --out DIR
 
 LOGS are schema-v1 CSV flight logs (with their .json sidecars) or PX4 ULog files (.ulg).
-Writes DIR/report.json (schema diagnosis/1), DIR/report.md with PNG plots, and
+Writes DIR/report.json (schema diagnosis/2), DIR/report.md with PNG plots, and
 DIR/extended_config.toml (the config plus the accepted effects with fitted parameters).
 Progress goes to stderr. Exit codes: 0 done, 2 bad input (one line saying why).
 """
