@@ -217,8 +217,9 @@ def diagnose(
     left_rmse = extended.rmse_mps()
     limit = max(config.unexplained_replay_ratio * floor_rmse, 0.05)
     if np.isfinite(left_rmse) and left_rmse > limit and "unexplained" not in verdict:
+        ratio = left_rmse / max(floor_rmse, 1e-9)
         evidence = (
-            f"held-out replay velocity RMSE {left_rmse:.3f} m/s stays {left_rmse / max(floor_rmse, 1e-9):.1f}x "
+            f"held-out replay velocity RMSE {left_rmse:.3f} m/s stays {ratio:.1f}x "
             f"the log's noise floor ({floor_rmse:.3f} m/s) after every candidate: the "
             "simulation does not reproduce this flight (another controller, an effect outside "
             "the vocabulary, or disturbances)"

@@ -99,7 +99,7 @@ def _markdown(
         f"- **Verdict: {verdict}**",
         f"- Held-out replay velocity RMSE: baseline {d.baseline.rmse_mps():.4f} m/s, "
         f"extended {d.extended.rmse_mps():.4f} m/s (gain {d.gain:.1f}x)",
-        f"- Noise floor of the logs (replay RMSE white velocity noise alone leaves): "
+        "- Noise floor of the logs (replay RMSE white velocity noise alone leaves): "
         + (f"{floor:.4f} m/s" if isinstance(floor, float) else "n/a"),
         f"- Extended config: `{extended.name}`",
         *(f"- **Warning:** {w}" for w in d.warnings),
