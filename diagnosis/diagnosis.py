@@ -16,7 +16,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.ndimage import uniform_filter1d
@@ -48,6 +48,10 @@ from vehicle_sim.effects.base import effect_as_mapping
 
 Progress = Callable[[str], None]
 AT_BOUND_WARN_FRACTION = 0.25  # a fit on its bound that explains this much is worth a headline
+# A force cause is kept if the held-out replay with it is at most this much worse than without:
+# slow thrust effects (battery sag) barely move a noisy replay, whose controller compensates them;
+# a wrong cause (a thrust telemetry error fitted as payload) makes it 30 % worse.
+REPLAY_WORSE_TOLERANCE = 0.05
 
 
 @dataclass(frozen=True)
@@ -186,6 +190,13 @@ def diagnose(
     baseline = replay(sim_config, logs, test)
     current = replay(force_config, logs, test) if added else baseline
     progress(f"baseline held-out replay RMSE {baseline.rmse_mps():.4f} m/s")
+    if added:
+        causes, moved, effects, current = _physics_check(
+            sim_config, logs, test, causes, effects, base, current, progress
+        )
+        rejected += moved
+        added = _added(base, effects)
+        force_config = sim_config.with_effects(added) if added else sim_config
     current, accepted, tried = select_command_causes(
         force_config,
         logs,
@@ -277,6 +288,54 @@ def _velocity_noise(logs: Sequence[FlightLog]) -> np.ndarray:
     vel = np.vstack([log.stack("vel_n_mps", "vel_e_mps", "vel_d_mps") for log in logs])
     seg = np.concatenate([np.full(log.n_rows, i) for i, log in enumerate(logs)])
     return white_noise_std(vel, seg)
+
+
+def _physics_check(sim_config, logs, test, causes, effects, base, current, progress):
+    """Keep a force cause only if the held-out replay is not worse with it (within
+    ``REPLAY_WORSE_TOLERANCE``; issue 18: a fit of the force residual that makes the vehicle fly
+    worse is not the vehicle's dynamics).
+
+    A payload that fails this is a thrust telemetry error: with the logged thrust c times the
+    true one, m (a - g) = F_T / c + D, which the payload fit reads as mass_ratio = c; it changes
+    the force residual but not how the vehicle flies. It is named ``thrust_scale`` with
+    ``logged_over_true`` = c.
+    Returns (kept causes, moved-out causes, effects, held-out replay of the kept effects).
+    """
+    kept, moved = [], []
+    effects = {k: dict(v) for k, v in effects.items()}
+    for cause in causes:
+        without = {k: dict(v) for k, v in effects.items() if k != cause.name}
+        if cause.name in base:
+            without[cause.name] = dict(base[cause.name])
+        added_without = _added(base, without)
+        cfg = sim_config.with_effects(added_without) if added_without else sim_config
+        other = replay(cfg, logs, test)
+        if current.rmse_mps() <= (1.0 + REPLAY_WORSE_TOLERANCE) * other.rmse_mps():
+            kept.append(cause)
+            continue
+        progress(f"physics check: {cause.name} does not improve the replay; not named")
+        note = (
+            f"; fits the force residual but the replay is not better with it "
+            f"({other.rmse_mps():.4f} -> {current.rmse_mps():.4f} m/s): not named"
+        )
+        moved.append(replace(cause, evidence=cause.evidence + note, confidence=0.0))
+        if cause.name == "payload":
+            rho = float(cause.params.get("mass_ratio", 1.0))
+            kept.append(
+                Cause(
+                    "thrust_scale",
+                    {"logged_over_true": rho},
+                    cause.explained_fraction,
+                    cause.confidence,
+                    "the logged thrust is off by this factor: the force residual looks like a "
+                    f"payload (mass ratio {rho:.3f}) but the replay does not get better with it "
+                    f"({other.rmse_mps():.4f} vs {current.rmse_mps():.4f} m/s); "
+                    "recalibrate the thrust telemetry",
+                    cause.statistic,
+                )
+            )
+        effects, current = without, other
+    return kept, moved, effects, current
 
 
 def _force_causes(
