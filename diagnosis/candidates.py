@@ -22,7 +22,8 @@ from diagnosis.force_model import BatteryModel, EffectParams, predicted_residual
 from diagnosis.forces import ForceData
 
 FORCE_CAUSES: tuple[str, ...] = (
-    "rotor_drag", "body_drag", "wind", "payload", "battery_sag", "ground_effect",
+    "rotor_drag", "body_drag", "isotropic_drag", "wind", "payload", "battery_sag",
+    "ground_effect",
 )  # fmt: skip
 
 
@@ -81,8 +82,17 @@ def make_candidate(name: str, base: EffectParams) -> Candidate:
             np.full(3, 5.0),
             lambda th: {"body_drag": {"c_n_per_mps2": _tup(th)}},
         )
+    if name == "isotropic_drag":
+        k0 = base.get("isotropic_drag", {}).get("k_n_per_mps2", 0.03)
+        return Candidate(
+            name,
+            np.array([k0], float),
+            np.zeros(1),
+            np.full(1, 10.0),
+            lambda th: {"isotropic_drag": {"k_n_per_mps2": float(th[0])}},
+        )
     if name == "wind":
-        if "rotor_drag" in base or "body_drag" in base:
+        if {"rotor_drag", "body_drag", "isotropic_drag"} & set(base):
             return Candidate(
                 name,
                 np.zeros(2),

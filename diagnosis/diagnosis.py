@@ -147,8 +147,8 @@ def diagnose(
     logs = [with_thrust_n(log, max_thrust_n) for log in logs]
     not_ident = check_identifiability(logs)
     base_names = {e.name for e in sim_config.effects}
-    drag_known = bool({"rotor_drag", "body_drag"} & base_names)
-    no_drag = {"rotor_drag", "body_drag"} <= {n.name for n in not_ident}
+    drag_known = bool({"rotor_drag", "body_drag", "isotropic_drag"} & base_names)
+    no_drag = {"rotor_drag", "body_drag", "isotropic_drag"} <= {n.name for n in not_ident}
     if not drag_known and no_drag and "wind" not in {n.name for n in not_ident}:
         # wind acts only through drag; without identifiable drag a "wind" would carry the drag
         # fit under another name (issue 18)

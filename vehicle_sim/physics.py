@@ -51,7 +51,8 @@ GROUND_RADIUS = 15  # m, rotor radius
 GROUND_HEIGHT = 16  # m, rotor plane height above the ground when landed
 MOTOR_TAU = 17  # s; 0 = the preset's motor time constant
 COMMAND_DELAY = 18  # s (applied by the simulator, not the physics)
-N_EFFECT = 19
+ISO_DRAG_K = 19  # N/(m/s)^2, drag along the airspeed: F = -k |v_air| v_air
+N_EFFECT = 20
 
 GUST_MIN_SPEED_MPS = 1.0
 MOTOR_STOPPED = 1e-9  # normalised rotor speed below which a rotor counts as stopped
@@ -88,9 +89,10 @@ def derivatives(x, n_cmd, pp, rp, spin, ep, gust, thrust_factor, dx):
     vbx = r00 * vax + r10 * vay + r20 * vaz
     vby = r01 * vax + r11 * vay + r21 * vaz
     vbz = r02 * vax + r12 * vay + r22 * vaz
-    fbx = -ep[ROTOR_DRAG_K] * vbx - ep[BODY_DRAG_C] * vbx * abs(vbx)
-    fby = -ep[ROTOR_DRAG_K + 1] * vby - ep[BODY_DRAG_C + 1] * vby * abs(vby)
-    fbz = -thrust - ep[ROTOR_DRAG_K + 2] * vbz - ep[BODY_DRAG_C + 2] * vbz * abs(vbz)
+    kiso = ep[ISO_DRAG_K] * math.sqrt(vbx * vbx + vby * vby + vbz * vbz)
+    fbx = -ep[ROTOR_DRAG_K] * vbx - ep[BODY_DRAG_C] * vbx * abs(vbx) - kiso * vbx
+    fby = -ep[ROTOR_DRAG_K + 1] * vby - ep[BODY_DRAG_C + 1] * vby * abs(vby) - kiso * vby
+    fbz = -thrust - ep[ROTOR_DRAG_K + 2] * vbz - ep[BODY_DRAG_C + 2] * vbz * abs(vbz) - kiso * vbz
     m = pp[P_MASS] * ep[PAYLOAD_RATIO]
     dx[0] = x[3]
     dx[1] = x[4]
