@@ -92,7 +92,7 @@ def fit_command_cause(
             best_value, best_score = float(sol.x), float(sol.fun)
     held_out = replay(with_cause(config, name, best_value), logs, test)
     test_rmse = held_out.rmse_mps()
-    at_bound = best_value >= grid[-1] * (1.0 - 1e-3)
+    at_bound = bool(best_value >= grid[-1] * (1.0 - 1e-3))
     progress(f"  {name}: {param} = {best_value:.4g}, held-out replay RMSE {test_rmse:.4f} m/s")
     return CommandFit(name, param, best_value, best_score, test_rmse, held_out, at_bound)
 
