@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 from diagnosis.diagnosis import diagnose
-from flightlog.schema import FlightLog
-from tests.diagnosis.hidden_effects import draw, fly_hidden
+from diagnosis.fly_schedule import fly_schedule
+from flightlog.schema import FlightLog, read_flight_log, write_flight_log
+from tests.diagnosis.hidden_effects import draw, fly_hidden, schedule
 from vehicle_sim import load_sim_config
 from vehicle_sim.sensor_noise import add_sensor_noise, draw_sensor_noise
 
@@ -137,3 +138,17 @@ def test_gusts_are_reported_as_unexplained_disturbance(tmp_path):
     assert unexplained.name == "unexplained"
     ratio = unexplained.params["gust_intensity_mps"] / truth["gusts"]["intensity_mps"]
     assert 0.5 < ratio < 2.0
+
+
+@pytest.mark.slow
+def test_another_controller_is_never_reported_as_none(tmp_path):
+    """The truth flies other velocity gains than the config: no "none" beside the replay error
+    (fitting the gains, the `flight_control` cause, is not done yet)."""
+    rng = np.random.default_rng(51)
+    gains = {"MPC_XY_VEL_P_ACC": rng.uniform(0.5, 0.8), "MPC_XY_VEL_I_ACC": rng.uniform(1.0, 2.0)}
+    log = fly_schedule(load_sim_config("iris"), schedule(), seed=51, params=gains)
+    path = write_flight_log(tmp_path / "flight_0.csv", log)
+    result = diagnose([read_flight_log(path)], load_sim_config("iris"))
+    assert result.verdict, result.causes[:3]
+    assert result.causes[0].name != "none"
+    assert "unexplained" in result.verdict or result.gain > 1.5, result.verdict
