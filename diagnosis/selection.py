@@ -17,7 +17,7 @@ Otherwise selection stops: what does not generalise is not named.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -180,6 +180,27 @@ def select_causes(
         remaining_sse = best_sse
         left.remove(best.name)
         progress(f"accepted {best.name}")
+    # Backward pass: a cause accepted early (the simplest of near-equals) may be made redundant
+    # by a later one (isotropic_drag taken first for a body drag that body_drag then fits in
+    # full). Drop an accepted cause whose removal, the others refitted, costs less than the
+    # floor and is not significant.
+    for score in list(accepted):
+        if len(chosen) < 2:
+            break
+        others = [c for c in chosen if c.name != score.name]
+        fit = fit_jointly(others, base, train, battery)
+        without_sq = _row_sq(fit.effects, test, battery)
+        cost = float(without_sq.sum()) - remaining_sse
+        sig = block_bootstrap(without_sq, current_sq, test_block)
+        if cost < floor_sse or sig.p_value > config.max_p_value:
+            progress(f"dropped {score.name}: redundant given the others")
+            accepted.remove(score)
+            chosen = others
+            current = fit.effects
+            current_sq = without_sq
+            remaining_sse = float(without_sq.sum())
+            last_try[score.name] = replace(score, accepted=False)
+            left.append(score.name)
     rejected = sorted(
         (s for n, s in last_try.items() if n in left), key=lambda s: -s.explained_fraction
     )
