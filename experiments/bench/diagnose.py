@@ -24,7 +24,7 @@ from experiments.bench import diagnose_detection
 from flightlog.schema import read_flight_log, write_flight_log
 from vehicle_sim import load_sim_config
 
-MISSION = Path(__file__).resolve().parents[1] / "missions" / "excite_full.toml"
+MISSION = Path(__file__).resolve().parents[2] / "missions" / "excite_full.toml"
 PRESET = "iris"
 HIDDEN_EFFECTS = {
     "rotor_drag": {"k_n_per_mps": [0.4, 0.35, 0.1]},
