@@ -22,7 +22,8 @@ from diagnosis.force_model import BatteryModel, EffectParams, predicted_residual
 from diagnosis.forces import ForceData
 
 FORCE_CAUSES: tuple[str, ...] = (
-    "rotor_drag", "body_drag", "wind", "payload", "battery_sag", "ground_effect",
+    "rotor_drag", "body_drag", "isotropic_drag", "wind", "payload", "battery_sag",
+    "ground_effect",
 )  # fmt: skip
 
 
@@ -51,6 +52,7 @@ class CandidateFit:
     effects: dict[str, dict[str, object]]
     train_sse_n2: float
     n_params: int
+    at_bound: bool = False
 
 
 def merge(base: EffectParams, extra: EffectParams) -> dict[str, dict[str, object]]:
@@ -80,8 +82,17 @@ def make_candidate(name: str, base: EffectParams) -> Candidate:
             np.full(3, 5.0),
             lambda th: {"body_drag": {"c_n_per_mps2": _tup(th)}},
         )
+    if name == "isotropic_drag":
+        k0 = base.get("isotropic_drag", {}).get("k_n_per_mps2", 0.03)
+        return Candidate(
+            name,
+            np.array([k0], float),
+            np.zeros(1),
+            np.full(1, 10.0),
+            lambda th: {"isotropic_drag": {"k_n_per_mps2": float(th[0])}},
+        )
     if name == "wind":
-        if "rotor_drag" in base or "body_drag" in base:
+        if {"rotor_drag", "body_drag", "isotropic_drag"} & set(base):
             return Candidate(
                 name,
                 np.zeros(2),
@@ -148,7 +159,20 @@ def fit_jointly(
     upper = np.concatenate([c.upper for c in candidates])
     x0 = np.clip(np.concatenate([c.x0 for c in candidates]), lower, upper)
     sol = least_squares(cost, x0, bounds=(lower, upper), x_scale="jac")
-    return CandidateFit(candidates[-1].name, effects_of(sol.x), float(2.0 * sol.cost), len(x0))
+    own = slice(sizes[-2], sizes[-1])
+    at_bound = on_bound(sol.x[own], lower[own], upper[own])
+    return CandidateFit(
+        candidates[-1].name, effects_of(sol.x), float(2.0 * sol.cost), len(x0), at_bound
+    )
+
+
+def on_bound(theta: np.ndarray, lower: np.ndarray, upper: np.ndarray, rel: float = 1e-3) -> bool:
+    """True if a parameter sits on its search bound: the upper one, or a lower one that is not
+    the effect's natural zero (a drag of 0 is "no drag", a payload ratio of 0.5 is a limit)."""
+    span = (upper - lower) * rel
+    high = theta >= upper - span
+    low = (theta <= lower + span) & (lower != 0.0)
+    return bool(np.any(high | low))
 
 
 def residual_sse(effects: EffectParams, data: ForceData, battery: BatteryModel) -> float:

@@ -9,13 +9,19 @@ import numpy as np
 
 @dataclass(frozen=True)
 class Cause:
-    """One ranked cause, as in report.json (params flattened to floats)."""
+    """One ranked cause, as in report.json (params flattened to floats).
+
+    ``statistic`` is the significance test of its held-out improvement (diagnosis/2);
+    ``at_bound`` marks a fit on its search bound, which is never named.
+    """
 
     name: str
     params: dict[str, float]
     explained_fraction: float
     confidence: float
     evidence: str
+    statistic: dict[str, object] | None = None
+    at_bound: bool = False
 
 
 def flatten_params(name: str, params: dict[str, object]) -> dict[str, float]:

@@ -3,7 +3,10 @@
 Each cause has one parameter; its value is chosen on the training windows by a coarse grid
 followed by a bounded scalar refinement around the best grid point, then judged on the held-out
 windows like the force causes: it is named only if it removes at least ``min_gain_fraction`` of
-the held-out replay mean squared velocity error that is left.
+the held-out replay mean squared velocity error that is left above the noise floor (the white
+velocity noise of the log, which no replay can follow), if that removal is significant by a block
+bootstrap over the held-out windows (:mod:`.noise_floor`), and if its value is not on the edge of
+the search grid (then it is reported "at the bound" and not named).
 """
 
 from __future__ import annotations
@@ -15,6 +18,7 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from diagnosis.cause import Cause
+from diagnosis.noise_floor import block_bootstrap
 from diagnosis.replay import ReplayResult, Window, replay
 from flightlog.schema import FlightLog
 from vehicle_sim import SimConfig
@@ -23,8 +27,8 @@ COMMAND_CAUSES: tuple[str, ...] = ("command_delay", "motor_lag")
 
 # name -> (parameter, grid of values)
 SEARCH_GRIDS: dict[str, tuple[str, np.ndarray]] = {
-    "command_delay": ("delay_s", np.linspace(0.0, 0.4, 9)),
-    "motor_lag": ("tau_s", np.geomspace(0.008, 0.25, 9)),
+    "command_delay": ("delay_s", np.linspace(0.0, 1.2, 13)),
+    "motor_lag": ("tau_s", np.geomspace(0.008, 0.5, 10)),
 }
 
 
@@ -36,6 +40,7 @@ class ReplayThresholds:
 
     min_gain_fraction: float = 0.5
     min_gain_mps: float = 0.003
+    max_p_value: float = 0.01
 
 
 @dataclass(frozen=True)
@@ -52,6 +57,8 @@ class CommandFit:
     value: float
     train_rmse_mps: float
     test_rmse_mps: float
+    test: ReplayResult | None = None
+    at_bound: bool = False
 
 
 def with_cause(config: SimConfig, name: str, value: float) -> SimConfig:
@@ -83,9 +90,16 @@ def fit_command_cause(
         sol = minimize_scalar(train_rmse, bounds=(lo, hi), method="bounded", options=options)
         if sol.fun < best_score:
             best_value, best_score = float(sol.x), float(sol.fun)
-    test_rmse = replay(with_cause(config, name, best_value), logs, test).rmse_mps()
+    held_out = replay(with_cause(config, name, best_value), logs, test)
+    test_rmse = held_out.rmse_mps()
+    at_bound = bool(best_value >= grid[-1] * (1.0 - 1e-3))
     progress(f"  {name}: {param} = {best_value:.4g}, held-out replay RMSE {test_rmse:.4f} m/s")
-    return CommandFit(name, param, best_value, best_score, test_rmse)
+    return CommandFit(name, param, best_value, best_score, test_rmse, held_out, at_bound)
+
+
+def _row_sq(result: ReplayResult) -> np.ndarray:
+    err = result.sim_vel_ned_mps - result.meas_vel_ned_mps
+    return np.sum(err * err, axis=1)
 
 
 def select_command_causes(
@@ -99,29 +113,42 @@ def select_command_causes(
     names: list[str],
     thresholds: ReplayThresholds,
     progress: Callable[[str], None],
+    noise_mse_mps2: float = 0.0,
 ) -> tuple[ReplayResult, list[Cause], list[Cause]]:
     """Forward selection of command-path causes by held-out replay error; adds the accepted
-    ones to ``effects``. Returns the final held-out replay, accepted and rejected causes."""
+    ones to ``effects``. ``noise_mse_mps2`` is the replay's noise floor (mean squared 3-D
+    velocity noise of the log [m^2/s^2]). Returns the final held-out replay, accepted and
+    rejected causes."""
     accepted: list[Cause] = []
     rejected: dict[str, Cause] = {}
     left = list(names)
-    scale = max(baseline.rmse_mps() ** 2, 1e-12)
+    scale = max(baseline.rmse_mps() ** 2 - noise_mse_mps2, 1e-12)
     while left and search and current.rmse_mps() >= thresholds.min_gain_mps:
         fits = [fit_command_cause(n, config_now, logs, search, test, progress) for n in left]
         best = min(fits, key=lambda f: f.test_rmse_mps)
         before = current.rmse_mps()
+        sigs = {}
         for f in fits:
+            sig = block_bootstrap(_row_sq(current), _row_sq(f.test), current.window)
+            sigs[f.name] = sig
+            bound = " at the bound (search wider / the cause may be another)" if f.at_bound else ""
             rejected[f.name] = Cause(
                 f.name,
                 {f.param: f.value},
                 float((before**2 - f.test_rmse_mps**2) / scale),
                 float(max(0.0, 1.0 - (f.test_rmse_mps / before) ** 2)),
-                f"held-out replay velocity RMSE {before:.4f} -> {f.test_rmse_mps:.4f} m/s",
+                f"held-out replay velocity RMSE {before:.4f} -> {f.test_rmse_mps:.4f} m/s"
+                f" (p {sig.p_value:.3g}){bound}",
+                sig.as_dict(),
+                f.at_bound,
             )
         removed = before**2 - best.test_rmse_mps**2
+        explainable = max(before**2 - noise_mse_mps2, 0.0)
         if (
-            removed < thresholds.min_gain_fraction * before**2
+            removed < thresholds.min_gain_fraction * explainable
             or before - best.test_rmse_mps < thresholds.min_gain_mps
+            or sigs[best.name].p_value > thresholds.max_p_value
+            or best.at_bound
         ):
             break
         accepted.append(rejected.pop(best.name))

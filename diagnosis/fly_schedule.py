@@ -7,6 +7,8 @@ at the tick and the command sent at that tick.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 from diagnosis.excitation import ExcitationSchedule
 from flightlog.schema import FlightLog, FlightLogRecorder
 from vehicle_sim import FlightMode, SimConfig, Simulator, VelocitySetpoint
@@ -20,10 +22,17 @@ class FlightAborted(RuntimeError):
 
 
 def fly_schedule(
-    config: SimConfig, schedule: ExcitationSchedule, seed: int = 0, rate_hz: float = 20.0
+    config: SimConfig,
+    schedule: ExcitationSchedule,
+    seed: int = 0,
+    rate_hz: float = 20.0,
+    params: Mapping[str, float] | None = None,
 ) -> FlightLog:
-    """Take off, fly ``schedule`` in OFFBOARD at ``rate_hz`` [Hz]; the OFFBOARD part as a log."""
+    """Take off, fly ``schedule`` in OFFBOARD at ``rate_hz`` [Hz]; the OFFBOARD part as a log.
+    ``params``: PX4 parameters set before take-off (e.g. other velocity gains)."""
     sim = Simulator(config, seed=seed)
+    for name, value in (params or {}).items():
+        sim.set_param(name, value)
     _check(sim.arm(), "arm")
     _check(sim.takeoff(schedule.takeoff_alt_m), "takeoff")
     waited_s = 0.0

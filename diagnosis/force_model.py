@@ -38,13 +38,16 @@ class BatteryModel:
 
 
 def drag_force_ned(effects: EffectParams, data: ForceData) -> np.ndarray:
-    """(n, 3) rotor plus body drag in NED [N] on the air-relative velocity."""
+    """(n, 3) rotor, body and isotropic drag in NED [N] on the air-relative velocity."""
     wind = np.asarray(effects.get("wind", {}).get("vel_ned_mps", (0.0, 0.0, 0.0)), float)
     k = np.asarray(effects.get("rotor_drag", {}).get("k_n_per_mps", (0.0, 0.0, 0.0)), float)
     c = np.asarray(effects.get("body_drag", {}).get("c_n_per_mps2", (0.0, 0.0, 0.0)), float)
-    vb = np.einsum("nji,nj->ni", data.rot, data.vel_ned_mps - wind)
+    k_iso = float(effects.get("isotropic_drag", {}).get("k_n_per_mps2", 0.0))
+    air = data.vel_ned_mps - wind
+    vb = np.einsum("nji,nj->ni", data.rot, air)
     fb = -k * vb - c * vb * np.abs(vb)
-    return np.einsum("nij,nj->ni", data.rot, fb)
+    iso = -k_iso * np.linalg.norm(air, axis=1, keepdims=True) * air
+    return np.einsum("nij,nj->ni", data.rot, fb) + iso
 
 
 def thrust_factor(effects: EffectParams, data: ForceData, battery: BatteryModel) -> np.ndarray:

@@ -66,7 +66,7 @@ def _force_checks(logs: Sequence[FlightLog]) -> list[NotIdentifiable]:
     speed = np.hypot(vel[:, 0], vel[:, 1])
     span = float(np.ptp(speed))
     if span < MIN_SPEED_SPAN_MPS:
-        for name in ("rotor_drag", "body_drag"):
+        for name in ("rotor_drag", "body_drag", "isotropic_drag"):
             out.append(
                 NotIdentifiable(
                     name,

@@ -1,7 +1,9 @@
-"""Write the diagnosis out: report.json (schema diagnosis/1), report.md with plots, extended config.
+"""Write the diagnosis out: report.json (schema diagnosis/2), report.md with plots, extended config.
 
-The JSON follows docs/design.md section 8 exactly, plus one additional key ``closed_loop``: held-out
-closed-loop tracking velocity RMSE of the config and of the extended config, and their ratio.
+The JSON keeps every key of diagnosis/1 (docs/design.md section 8) and adds: ``closed_loop``
+(held-out closed-loop tracking velocity RMSE of the config and of the extended config, and their
+ratio), ``noise_floor`` (the log's own noise), ``explained_of_explainable``, ``not_examined``,
+``at_bound``, ``warnings`` and per cause ``statistic`` (its significance test) and ``at_bound``.
 Causes that the data cannot identify appear in the ranking with confidence 0 and say in their
 evidence what flight would make them so.
 """
@@ -17,11 +19,11 @@ from typing import Any
 from diagnosis.diagnosis import Diagnosis
 from diagnosis.report_plots import plot_closed_loop, plot_replay, plot_residuals
 
-SCHEMA = "diagnosis/1"
+SCHEMA = "diagnosis/2"
 
 
 def report_document(diagnosis: Diagnosis) -> dict[str, Any]:
-    """The report.json content (schema diagnosis/1 and ``closed_loop``)."""
+    """The report.json content (schema diagnosis/2)."""
     cl = diagnosis.closed_loop
     return {
         "schema": SCHEMA,
@@ -33,9 +35,20 @@ def report_document(diagnosis: Diagnosis) -> dict[str, Any]:
                 "explained_fraction": _num(c.explained_fraction),
                 "confidence": _num(c.confidence),
                 "evidence": c.evidence,
+                "statistic": c.statistic,
+                "at_bound": c.at_bound,
             }
             for c in diagnosis.causes
         ],
+        "noise_floor": diagnosis.noise_floor,
+        "explained_of_explainable": (
+            None
+            if diagnosis.explained_of_explainable is None
+            else _num(diagnosis.explained_of_explainable)
+        ),
+        "not_examined": list(diagnosis.not_examined),
+        "at_bound": list(diagnosis.at_bound),
+        "warnings": list(diagnosis.warnings),
         "verdict": list(diagnosis.verdict),
         "extended": {
             "replay_vel_rmse_mps": _num(diagnosis.extended.rmse_mps()),
@@ -72,7 +85,12 @@ def write_report(
 def _markdown(
     d: Diagnosis, log_names: Sequence[str], config_name: str, extended: Path, plots: list[Path]
 ) -> str:
-    verdict = ", ".join(f"`{v}`" for v in d.verdict) or "none: the config explains the logs"
+    verdict = ", ".join(f"`{v}`" for v in d.verdict) or (
+        "none: no cause stands out of the log's noise floor"
+    )
+    if d.not_examined and not d.verdict:
+        verdict += f" (not examined: {', '.join(d.not_examined)})"
+    floor = d.noise_floor.get("replay_rmse_mps")
     lines = [
         "# Diagnosis: what the simulation gets wrong",
         "",
@@ -81,7 +99,10 @@ def _markdown(
         f"- **Verdict: {verdict}**",
         f"- Held-out replay velocity RMSE: baseline {d.baseline.rmse_mps():.4f} m/s, "
         f"extended {d.extended.rmse_mps():.4f} m/s (gain {d.gain:.1f}x)",
+        "- Noise floor of the logs (replay RMSE white velocity noise alone leaves): "
+        + (f"{floor:.4f} m/s" if isinstance(floor, float) else "n/a"),
         f"- Extended config: `{extended.name}`",
+        *(f"- **Warning:** {w}" for w in d.warnings),
         "",
         "## Causes, strongest first",
         "",

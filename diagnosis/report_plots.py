@@ -40,6 +40,10 @@ RESIDUAL_AXES: dict[str, tuple[str, Axis, str, Component]] = {
         "body x velocity [m/s]", lambda d: _body(d, d.vel_ned_mps)[:, 0],
         "body x force residual [N]", lambda d, r: _body(d, r)[:, 0],
     ),
+    "isotropic_drag": (
+        "body x velocity [m/s]", lambda d: _body(d, d.vel_ned_mps)[:, 0],
+        "body x force residual [N]", lambda d, r: _body(d, r)[:, 0],
+    ),
     "wind": (
         "north velocity [m/s]", lambda d: d.vel_ned_mps[:, 0],
         "north force residual [N]", lambda d, r: r[:, 0],

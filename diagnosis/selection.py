@@ -2,21 +2,29 @@
 
 Rows are cut into blocks of ``block_s`` seconds; even blocks train, odd blocks test. Starting
 from the config's own effects, each round fits every remaining candidate on the training rows
-and keeps the one that lowers the held-out squared residual most, if it removes at least
-``min_gain_fraction`` of what is left and at least ``min_force_fraction`` of the weight in RMS
-force. Otherwise selection stops: what does not generalise is not named.
+and keeps the one that lowers the held-out squared residual most, if
+
+- it removes at least ``min_gain_fraction`` of what is left *above the noise floor* (the white
+  part of the residual, estimated from the data by :func:`.noise_floor.white_noise_std`: no
+  model removes sensor noise, so it must not count in the denominator),
+- the removal is significant: block-bootstrap p-value below ``max_p_value``
+  (:func:`.noise_floor.block_bootstrap`; why a bootstrap over blocks is explained there),
+- and it explains at least ``min_force_fraction`` of the weight in RMS force.
+
+Otherwise selection stops: what does not generalise is not named.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from diagnosis.candidates import Candidate, fit_jointly, make_candidate, residual_sse
-from diagnosis.force_model import BatteryModel, EffectParams
+from diagnosis.force_model import BatteryModel, EffectParams, predicted_residual
 from diagnosis.forces import GRAVITY_MPS2, ForceData
+from diagnosis.noise_floor import Significance, block_bootstrap, white_noise_std
 
 
 @dataclass(frozen=True)
@@ -29,12 +37,14 @@ class SelectionConfig:
             must remove to be named.
         min_force_fraction: least RMS force [fraction of the nominal weight] a cause must explain.
         max_fit_rows: training rows used by the fits at most (evenly spaced), to bound the time.
+        max_p_value: largest block-bootstrap p-value of the held-out reduction to name a cause.
     """
 
     block_s: float = 4.0
     min_gain_fraction: float = 0.5
-    min_force_fraction: float = 0.0005
+    min_force_fraction: float = 0.003
     max_fit_rows: int = 2000
+    max_p_value: float = 0.01
 
 
 @dataclass(frozen=True)
@@ -50,6 +60,8 @@ class CauseScore:
         before_rms_n, after_rms_n: held-out force residual RMS per component without and with
             it (on top of the causes accepted before it) [N].
         accepted: whether it was named.
+        significance: block bootstrap of its held-out reduction (None if not computed).
+        at_bound: a parameter of it sits on its search bound (then it is not named).
     """
 
     name: str
@@ -59,6 +71,8 @@ class CauseScore:
     before_rms_n: float
     after_rms_n: float
     accepted: bool
+    significance: Significance | None = None
+    at_bound: bool = False
 
 
 @dataclass(frozen=True)
@@ -70,6 +84,7 @@ class ForceSelection:
         effects: the config's effects plus the accepted causes.
         baseline_sse_n2, final_sse_n2: held-out squared residual before and after.
         n_test: held-out rows.
+        noise_std_n: (3,) std of the white part of the force residual per NED axis [N].
     """
 
     scores: tuple[CauseScore, ...]
@@ -77,6 +92,20 @@ class ForceSelection:
     baseline_sse_n2: float
     final_sse_n2: float
     n_test: int
+    noise_std_n: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+    @property
+    def noise_sse_n2(self) -> float:
+        """Held-out squared residual the noise floor accounts for [N^2]."""
+        return float(self.n_test * sum(s * s for s in self.noise_std_n))
+
+    def explained_of_explainable(self) -> float:
+        """Fraction of the explainable held-out squared residual (above the noise floor) that
+        the accepted causes remove, in [0, 1]; 1 when nothing stood above the floor."""
+        explainable = self.baseline_sse_n2 - self.noise_sse_n2
+        if explainable <= 0.0:
+            return 1.0
+        return float(np.clip((self.baseline_sse_n2 - self.final_sse_n2) / explainable, 0.0, 1.0))
 
     @property
     def accepted(self) -> tuple[str, ...]:
@@ -107,12 +136,16 @@ def select_causes(
     train_rows = np.flatnonzero(train_mask)
     stride = max(1, -(-len(train_rows) // config.max_fit_rows))
     train, test = data.take(train_rows[::stride]), data.take(test_mask)
+    noise = white_noise_std(data.resid_ned_n, data.segment)
+    noise_sse = test.n_rows * float(np.sum(noise * noise))
+    test_block = np.floor(test.t_s / config.block_s).astype(int) + 100_000 * test.segment
     base = {k: dict(v) for k, v in base.items()}
     current = base
-    baseline = residual_sse(current, test, battery)
+    current_sq = _row_sq(current, test, battery)
+    baseline = float(current_sq.sum())
     remaining_sse = baseline
     floor_sse = test.n_rows * 3 * (config.min_force_fraction * data.mass_kg * GRAVITY_MPS2) ** 2
-    scale = max(baseline, floor_sse)
+    scale = max(baseline - noise_sse, floor_sse)  # explained fractions: of the explainable part
     chosen: list[Candidate] = []
     accepted: list[CauseScore] = []
     last_try: dict[str, CauseScore] = {}
@@ -123,24 +156,68 @@ def select_causes(
             fit = fit_jointly([*chosen, make_candidate(name, base)], base, train, battery)
             sse = residual_sse(fit.effects, test, battery)
             tried.append((sse, fit))
-            last_try[name] = _score(name, fit.effects, scale, remaining_sse, sse, test, False)
-            progress(f"  {name}: held-out force residual {_rms(sse, test):.3f} N")
+            sig = block_bootstrap(current_sq, _row_sq(fit.effects, test, battery), test_block)
+            last_try[name] = _score(name, fit, scale, remaining_sse, sse, test, False, sig)
+            progress(
+                f"  {name}: held-out force residual {_rms(sse, test):.3f} N (p {sig.p_value:.3g})"
+            )
         best_sse, best = _simplest_of_best(tried, remaining_sse)
         removed = remaining_sse - best_sse
-        if removed < config.min_gain_fraction * remaining_sse or removed < floor_sse:
+        explainable = max(remaining_sse - noise_sse, 0.0)
+        sig = last_try[best.name].significance
+        if (
+            removed < config.min_gain_fraction * explainable
+            or removed < floor_sse
+            or sig is None
+            or sig.p_value > config.max_p_value
+            or best.at_bound
+        ):
             break
-        accepted.append(_score(best.name, best.effects, scale, remaining_sse, best_sse, test, True))
+        accepted.append(_score(best.name, best, scale, remaining_sse, best_sse, test, True, sig))
         chosen.append(make_candidate(best.name, base))
         current = best.effects
+        current_sq = _row_sq(current, test, battery)
         remaining_sse = best_sse
         left.remove(best.name)
         progress(f"accepted {best.name}")
+    # Backward pass: a cause accepted early (the simplest of near-equals) may be made redundant
+    # by a later one (isotropic_drag taken first for a body drag that body_drag then fits in
+    # full). Drop an accepted cause whose removal, the others refitted, costs less than the
+    # floor and is not significant.
+    for score in list(accepted):
+        if len(chosen) < 2:
+            break
+        others = [c for c in chosen if c.name != score.name]
+        fit = fit_jointly(others, base, train, battery)
+        without_sq = _row_sq(fit.effects, test, battery)
+        cost = float(without_sq.sum()) - remaining_sse
+        sig = block_bootstrap(without_sq, current_sq, test_block)
+        if cost < floor_sse or sig.p_value > config.max_p_value:
+            progress(f"dropped {score.name}: redundant given the others")
+            accepted.remove(score)
+            chosen = others
+            current = fit.effects
+            current_sq = without_sq
+            remaining_sse = float(without_sq.sum())
+            last_try[score.name] = replace(score, accepted=False)
+            left.append(score.name)
     rejected = sorted(
         (s for n, s in last_try.items() if n in left), key=lambda s: -s.explained_fraction
     )
     return ForceSelection(
-        tuple(accepted) + tuple(rejected), current, baseline, remaining_sse, test.n_rows
+        tuple(accepted) + tuple(rejected),
+        current,
+        baseline,
+        remaining_sse,
+        test.n_rows,
+        (float(noise[0]), float(noise[1]), float(noise[2])),
     )
+
+
+def _row_sq(effects: EffectParams, data: ForceData, battery: BatteryModel) -> np.ndarray:
+    """(n,) squared force residual per row [N^2] left over by ``effects``."""
+    err = predicted_residual(effects, data, battery) - data.resid_ned_n
+    return np.sum(err * err, axis=1)
 
 
 def _simplest_of_best(tried: list, before: float, tolerance: float = 0.05):
@@ -153,17 +230,19 @@ def _simplest_of_best(tried: list, before: float, tolerance: float = 0.05):
     return min(near, key=lambda t: (t[1].n_params, t[0]))
 
 
-def _score(name, effects, scale, before, after, test, accepted) -> CauseScore:
+def _score(name, fit, scale, before, after, test, accepted, sig=None) -> CauseScore:
     explained = (before - after) / scale if scale > 0 else 0.0
     step = (before - after) / before if before > 0 else 0.0
     return CauseScore(
         name,
-        effects,
+        fit.effects,
         float(explained),
         float(step),
         _rms(before, test),
         _rms(after, test),
         accepted,
+        sig,
+        fit.at_bound,
     )
 
 

@@ -3,7 +3,9 @@
 Starts `vehicle-sim` (the study vehicle, vehicle_sim/presets/iris_study.toml) as a MAVLink
 endpoint on loopback, flies missions/demo_bspline.toml with the nominal NMPC over MAVSDK, fits
 the residual GP from that flight's log, flies the mission again with the augmented NMPC, prints
-the comparison and writes out/demo/report.md with plots. Every process it starts is
+the comparison and writes out/demo/report.md with plots. Then the diagnosis: the excitation
+mission flown on the same vehicle with realistic sensor noise, diagnosed against the plain iris
+preset (experiments/diagnosis_demo.py; report in out/demo/diagnosis). Every process it starts is
 stopped, also on errors and Ctrl-C. Exit code 0 on success, 1 if a flight failed, 130 on Ctrl-C.
 """
 
@@ -16,6 +18,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from companion.app import CompanionInputError
+from experiments.diagnosis_demo import run_diagnosis_demo
 from experiments.sim_endpoint import EndpointError
 from experiments.study.mavlink_demo import DemoConfig, DemoError, comparison_table, run_demo
 
@@ -54,6 +57,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         f"augmented; {time.monotonic() - start:.0f} s in all"
     )
     print(f"report: {config.out_dir / 'report.md'}")
+    print(run_diagnosis_demo(config.out_dir / "diagnosis", config.seed, progress).summary())
     return 0
 
 

@@ -4,7 +4,7 @@
     diagnose LOGS... --sim-config FILE|PRESET --out DIR --batch [--workers 2 | --scheduler ADDR]
 
 LOGS are schema-v1 CSV flight logs (with their .json sidecars) or PX4 ULog files (.ulg).
-Writes DIR/report.json (schema diagnosis/1), DIR/report.md with PNG plots, and
+Writes DIR/report.json (schema diagnosis/2), DIR/report.md with PNG plots, and
 DIR/extended_config.toml (the config plus the accepted effects with fitted parameters).
 With ``--batch`` every log is diagnosed on its own (one job each, on ``--workers`` local
 processes or on the workers of the Dask cluster at ``--scheduler tcp://HOST:8786``) and DIR

@@ -119,11 +119,12 @@ class SimConfig:
         if dup:
             raise SimConfigError(f"effects.{dup[0]}: given twice; keep one {dup[0]} entry")
         if ("wind" in names or "gusts" in names) and not (
-            "rotor_drag" in names or "body_drag" in names
+            {"rotor_drag", "body_drag", "isotropic_drag"} & set(names)
         ):
             which = "wind" if "wind" in names else "gusts"
             raise SimConfigError(
-                f"effects.{which}: acts only through drag; also enable rotor_drag or body_drag"
+                f"effects.{which}: acts only through drag; also enable rotor_drag, body_drag "
+                "or isotropic_drag"
             )
         v = self.vehicle
         if v.hover_thrust_norm > 0.8:

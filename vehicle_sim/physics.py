@@ -55,7 +55,8 @@ FIELD_VEL_NED = 19  # (3,) m/s, peak air velocity of the wind field
 FIELD_CENTER_NE = 22  # (2,) m, a point on the field's centre line (north, east)
 FIELD_HEADING = 24  # rad, direction of the centre line (0 = north)
 FIELD_HALF_WIDTH = 25  # m, 1/e half-width of the field; 0 = effect off
-N_EFFECT = 26
+ISO_DRAG_K = 26  # N/(m/s)^2, drag along the airspeed: F = -k |v_air| v_air
+N_EFFECT = 27
 
 GUST_MIN_SPEED_MPS = 1.0
 MOTOR_STOPPED = 1e-9  # normalised rotor speed below which a rotor counts as stopped
@@ -105,9 +106,10 @@ def derivatives(x, n_cmd, pp, rp, spin, ep, gust, thrust_factor, dx):
     vbx = r00 * vax + r10 * vay + r20 * vaz
     vby = r01 * vax + r11 * vay + r21 * vaz
     vbz = r02 * vax + r12 * vay + r22 * vaz
-    fbx = -ep[ROTOR_DRAG_K] * vbx - ep[BODY_DRAG_C] * vbx * abs(vbx)
-    fby = -ep[ROTOR_DRAG_K + 1] * vby - ep[BODY_DRAG_C + 1] * vby * abs(vby)
-    fbz = -thrust - ep[ROTOR_DRAG_K + 2] * vbz - ep[BODY_DRAG_C + 2] * vbz * abs(vbz)
+    kiso = ep[ISO_DRAG_K] * math.sqrt(vbx * vbx + vby * vby + vbz * vbz)
+    fbx = -ep[ROTOR_DRAG_K] * vbx - ep[BODY_DRAG_C] * vbx * abs(vbx) - kiso * vbx
+    fby = -ep[ROTOR_DRAG_K + 1] * vby - ep[BODY_DRAG_C + 1] * vby * abs(vby) - kiso * vby
+    fbz = -thrust - ep[ROTOR_DRAG_K + 2] * vbz - ep[BODY_DRAG_C + 2] * vbz * abs(vbz) - kiso * vbz
     m = pp[P_MASS] * ep[PAYLOAD_RATIO]
     dx[0] = x[3]
     dx[1] = x[4]

@@ -20,6 +20,7 @@ from diagnosis.excitation import ExcitationSchedule, load_schedule
 from diagnosis.extend_config import write_extended_config
 from diagnosis.fly_schedule import fly_schedule
 from diagnosis.report import write_report
+from experiments.bench import diagnose_detection
 from flightlog.schema import read_flight_log, write_flight_log
 from vehicle_sim import load_sim_config
 
@@ -79,4 +80,14 @@ def run(progress: Callable[[str], None] = print, quick: bool = False) -> dict[st
         "diagnose_speedup_vs_realtime": log_s / wall_s,
         "diagnose_log_sim_s": sim_s,
         "diagnose_vs_log_sim_ratio": wall_s / sim_s,
+        **_detection(progress, quick),
     }
+
+
+def _detection(progress: Callable[[str], None], quick: bool) -> dict[str, float]:
+    """Detection / false-positive figures by noise level (quick: none, they need many flights)."""
+    if quick:
+        return {}
+    figures = diagnose_detection.run(progress)
+    progress("diagnose: detection by noise level\n" + diagnose_detection.markdown_table(figures))
+    return figures

@@ -28,6 +28,8 @@ def draw(name: str, rng: np.random.Generator) -> tuple[dict, dict]:
         return {name: {"k_n_per_mps": [u(0.2, 0.6), u(0.2, 0.6), u(0.05, 0.2)]}}, {}
     if name == "body_drag":
         return {name: {"c_n_per_mps2": [u(0.02, 0.08), u(0.02, 0.08), u(0.03, 0.1)]}}, {}
+    if name == "isotropic_drag":
+        return {name: {"k_n_per_mps2": u(0.02, 0.08)}}, {}
     if name == "wind":
         speed, heading = u(2.0, 6.0), u(0.0, 2.0 * np.pi)
         wind = [speed * np.cos(heading), speed * np.sin(heading), 0.0]

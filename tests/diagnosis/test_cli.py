@@ -13,6 +13,11 @@ from vehicle_sim import load_sim_config
 
 SCHEMA_KEYS = {"schema", "baseline", "causes", "verdict", "extended"}
 CAUSE_KEYS = {"name", "params", "explained_fraction", "confidence", "evidence"}
+V2_KEYS = {
+    "closed_loop", "noise_floor", "explained_of_explainable", "not_examined", "at_bound",
+    "warnings",
+}  # fmt: skip
+V2_CAUSE_KEYS = {"statistic", "at_bound"}
 CLOSED_LOOP_KEYS = {"baseline_vel_rmse_mps", "extended_vel_rmse_mps", "gain"}
 
 
@@ -25,10 +30,11 @@ def test_cli_writes_schema_report_plots_and_a_loadable_extended_config(tmp_path,
     assert main([str(log_path), "--sim-config", "iris", "--out", str(out)]) == 0
     assert "verdict: payload" in capsys.readouterr().err
     doc = json.loads((out / "report.json").read_text())
-    assert set(doc) == SCHEMA_KEYS | {"closed_loop"} and doc["schema"] == "diagnosis/1"
+    assert set(doc) == SCHEMA_KEYS | V2_KEYS and doc["schema"] == "diagnosis/2"
     assert set(doc["baseline"]) == {"replay_vel_rmse_mps"}
     assert set(doc["extended"]) == {"replay_vel_rmse_mps", "gain"}
-    assert all(set(c) == CAUSE_KEYS for c in doc["causes"])
+    assert all(set(c) == CAUSE_KEYS | V2_CAUSE_KEYS for c in doc["causes"])
+    assert doc["causes"][0]["statistic"]["p_value"] < 0.01
     assert doc["verdict"] == ["payload"] and doc["causes"][0]["name"] == "payload"
     assert doc["extended"]["gain"] >= 3.0
     assert set(doc["closed_loop"]) == CLOSED_LOOP_KEYS

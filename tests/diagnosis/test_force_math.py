@@ -72,11 +72,21 @@ def test_rotor_drag_residual_is_linear_in_body_air_velocity():
         np.testing.assert_allclose(r[i], data.rot[i] @ (-k * v_body), atol=1e-12)
 
 
+def test_isotropic_drag_points_against_the_airspeed():
+    data = synthetic()
+    wind = np.array([1.0, 2.0, 0.0])
+    effects = {"isotropic_drag": {"k_n_per_mps2": 0.05}, "wind": {"vel_ned_mps": wind}}
+    r = predicted_residual(effects, data, BATTERY)
+    air = data.vel_ned_mps - wind
+    np.testing.assert_allclose(r, -0.05 * np.linalg.norm(air, axis=1)[:, None] * air, atol=1e-12)
+
+
 @pytest.mark.parametrize(
     ("name", "effects", "base"),
     [
         ("rotor_drag", {"rotor_drag": {"k_n_per_mps": (0.45, 0.3, 0.12)}}, {}),
         ("body_drag", {"body_drag": {"c_n_per_mps2": (0.05, 0.03, 0.07)}}, {}),
+        ("isotropic_drag", {"isotropic_drag": {"k_n_per_mps2": 0.045}}, {}),
         ("payload", {"payload": {"mass_ratio": 1.3}}, {}),
         ("battery_sag", {"battery_sag": {"max_thrust_loss": 0.3}}, {}),
         (

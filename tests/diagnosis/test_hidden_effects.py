@@ -1,6 +1,7 @@
 """End to end: an effect hidden from the config is named first, fitted within 15 % and the
 extended config replays held-out data, and tracks the logged setpoints in closed loop, at least
-3x better."""
+3x better. The same flight with realistic sensor noise (levels drawn at random) still names the
+effect first with its main parameter within 15 %; clean flights with noise name nothing."""
 
 from __future__ import annotations
 
@@ -8,18 +9,27 @@ import numpy as np
 import pytest
 
 from diagnosis.diagnosis import diagnose
-from tests.diagnosis.hidden_effects import draw, fly_hidden
+from diagnosis.fly_schedule import fly_schedule
+from flightlog.schema import FlightLog, read_flight_log, write_flight_log
+from tests.diagnosis.hidden_effects import draw, fly_hidden, schedule
 from vehicle_sim import load_sim_config
+from vehicle_sim.sensor_noise import add_sensor_noise, draw_sensor_noise
 
 SINGLE = (
     "rotor_drag", "body_drag", "wind", "payload", "battery_sag", "ground_effect", "motor_lag",
-    "command_delay",
+    "command_delay", "isotropic_drag",
 )  # fmt: skip
+# Known gaps (issue 18), on noisy logs only: the excitation mission's few seconds of ground holds,
+# logged at 25-50 Hz, do not make ground effect significant against IMU noise (bootstrap p about
+# 0.1); a short motor lag (a few 10 ms) hides under 0.08 m/s velocity noise at 25 Hz.
+NOT_YET_ON_NOISY_LOGS = ("ground_effect", "motor_lag")
 
 
 def main_parameter_errors(name: str, truth: dict, params: dict) -> dict[str, float]:
     """Relative error of the main parameter(s) of ``name``: estimate vs truth."""
     p = truth[name]
+    if name == "isotropic_drag":
+        return {"k": abs(params["k_n_per_mps2"] / p["k_n_per_mps2"] - 1.0)}
     if name in ("rotor_drag", "body_drag"):
         key = "k_n_per_mps" if name == "rotor_drag" else "c_n_per_mps2"
         return {
@@ -54,6 +64,16 @@ def test_hidden_effect_is_named_fitted_and_gains(name, tmp_path):
     assert result.gain >= 3.0, (result.baseline.rmse_mps(), result.extended.rmse_mps())
     cl = result.closed_loop
     assert cl.gain() >= 3.0, (cl.baseline_rmse_mps(), cl.extended_rmse_mps())
+    if name in NOT_YET_ON_NOISY_LOGS:
+        return
+    noise = draw_sensor_noise(np.random.default_rng(200 + seed))
+    noisy = diagnose(
+        [add_sensor_noise(log, noise, seed) for log in logs], load_sim_config("iris", base)
+    )
+    assert noisy.verdict and noisy.verdict[0] == name, (noise, noisy.verdict)
+    errors = main_parameter_errors(name, truth, noisy.causes[0].params)
+    assert max(errors.values()) < 0.15, (noise, errors)
+    assert noisy.gain > 0.95  # slow thrust effects barely move a noisy replay
 
 
 @pytest.mark.slow
@@ -82,6 +102,33 @@ def test_clean_log_gives_empty_verdict(tmp_path):
 
 
 @pytest.mark.slow
+def test_a_thrust_telemetry_scale_is_not_a_payload(tmp_path):
+    rng = np.random.default_rng(41)
+    factor = float(rng.choice([rng.uniform(0.75, 0.9), rng.uniform(1.1, 1.3)]))
+    (log,) = fly_hidden({}, tmp_path, 41)
+    cols = dict(log.columns)
+    cols["thrust_n"] = cols["thrust_n"] * factor
+    scaled = FlightLog(cols, log.metadata)
+    result = diagnose([scaled], load_sim_config("iris"))
+    assert result.verdict and result.verdict[0] == "thrust_scale", result.verdict
+    assert "payload" not in result.verdict and "payload" not in result.added_effects
+    assert abs(result.causes[0].params["logged_over_true"] / factor - 1.0) < 0.15
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_clean_noisy_logs_name_nothing(seed, tmp_path):
+    """Three noise draws here (each about 20 s); the 20-seed rate is `bench --only diagnose`."""
+    logs = fly_hidden({}, tmp_path, 11)
+    noise = draw_sensor_noise(np.random.default_rng(300 + seed))
+    result = diagnose([add_sensor_noise(log, noise, seed) for log in logs], load_sim_config("iris"))
+    assert result.verdict == (), (noise, result.verdict, result.warnings)
+    assert result.causes[0].name == "none"
+    floor = result.noise_floor["vel_mps"]
+    assert all(0.5 * noise.vel_mps < v < 1.5 * noise.vel_mps for v in floor), (noise, floor)
+
+
+@pytest.mark.slow
 def test_gusts_are_reported_as_unexplained_disturbance(tmp_path):
     truth, base = draw("gusts", np.random.default_rng(12))
     result = diagnose(fly_hidden(truth, tmp_path, 12), load_sim_config("iris", base))
@@ -91,3 +138,17 @@ def test_gusts_are_reported_as_unexplained_disturbance(tmp_path):
     assert unexplained.name == "unexplained"
     ratio = unexplained.params["gust_intensity_mps"] / truth["gusts"]["intensity_mps"]
     assert 0.5 < ratio < 2.0
+
+
+@pytest.mark.slow
+def test_another_controller_is_never_reported_as_none(tmp_path):
+    """The truth flies other velocity gains than the config: no "none" beside the replay error
+    (fitting the gains, the `flight_control` cause, is not done yet)."""
+    rng = np.random.default_rng(51)
+    gains = {"MPC_XY_VEL_P_ACC": rng.uniform(0.5, 0.8), "MPC_XY_VEL_I_ACC": rng.uniform(1.0, 2.0)}
+    log = fly_schedule(load_sim_config("iris"), schedule(), seed=51, params=gains)
+    path = write_flight_log(tmp_path / "flight_0.csv", log)
+    result = diagnose([read_flight_log(path)], load_sim_config("iris"))
+    assert result.verdict, result.causes[:3]
+    assert result.causes[0].name != "none"
+    assert "unexplained" in result.verdict or result.gain > 1.5, result.verdict

@@ -20,11 +20,11 @@ def test_a_short_excitation_on_jsbsim_is_diagnosed_with_a_gain(tmp_path, capsys)
     assert 20.0 < log["t_s"][-1] <= 30.0
     report = json.loads((tmp_path / "diagnosis" / "report.json").read_text())
     assert (tmp_path / "diagnosis" / "report.md").is_file()
-    assert report["schema"] == "diagnosis/1" and "body_drag" in report["verdict"]
+    assert report["schema"] == "diagnosis/2" and "isotropic_drag" in report["verdict"]
     baseline_mps = report["baseline"]["replay_vel_rmse_mps"]
     assert baseline_mps > report["extended"]["replay_vel_rmse_mps"]
     out = capsys.readouterr().out
-    assert "| body_drag | yes |" in out and "| replay | " in out
+    assert "| isotropic_drag | yes |" in out and "| replay | " in out
 
 
 def test_a_missing_mission_is_one_line_and_exit_2(tmp_path, capsys):

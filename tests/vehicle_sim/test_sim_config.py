@@ -53,6 +53,7 @@ def test_effects_from_toml_from_mappings_and_from_objects(tmp_path):
     assert set(EFFECT_NAMES) == {
         "rotor_drag",
         "body_drag",
+        "isotropic_drag",
         "wind",
         "gusts",
         "payload",

@@ -7,6 +7,7 @@ vector the physics reads. Parameters, units and defaults:
     effect         parameter            unit         default           range
     rotor_drag     k_n_per_mps          N/(m/s)      (0.35, 0.35, 0.1) 0..50 per FRD axis
     body_drag      c_n_per_mps2         N/(m/s)^2    (0.02, 0.02, 0.04) 0..10 per FRD axis
+    isotropic_drag k_n_per_mps2         N/(m/s)^2    0.03              0..10 (along the airspeed)
     wind           vel_ned_mps          m/s          (3, 0, 0)         -40..40 (needs a drag)
     gusts          intensity_mps        m/s          1.0               0..20 (needs a drag)
                    length_scale_m       m            20.0              0.5..2000
@@ -33,6 +34,7 @@ from vehicle_sim.effects.body_drag import BodyDrag
 from vehicle_sim.effects.command_delay import CommandDelay
 from vehicle_sim.effects.ground_effect import GroundEffect
 from vehicle_sim.effects.gusts import Gusts
+from vehicle_sim.effects.isotropic_drag import IsotropicDrag
 from vehicle_sim.effects.layout import neutral_effect_vector
 from vehicle_sim.effects.motor_lag import MotorLag
 from vehicle_sim.effects.payload import Payload
@@ -43,16 +45,16 @@ from vehicle_sim.effects.wind_field import WindField
 EFFECT_CLASSES: dict[str, type] = {
     cls.name: cls
     for cls in (
-        RotorDrag, BodyDrag, Wind, Gusts, Payload, BatterySag, GroundEffect, MotorLag, CommandDelay,
-        WindField,
+        RotorDrag, BodyDrag, IsotropicDrag, Wind, Gusts, Payload, BatterySag, GroundEffect,
+        MotorLag, CommandDelay, WindField,
     )
 }  # fmt: skip
 EFFECT_NAMES: tuple[str, ...] = tuple(EFFECT_CLASSES)
 
 __all__ = [
     "EFFECT_CLASSES", "EFFECT_NAMES", "BatterySag", "BodyDrag", "CommandDelay", "Effect",
-    "GroundEffect", "Gusts", "MotorLag", "ParamSpec", "Payload", "RotorDrag", "SimConfigError",
-    "Wind", "make_effect", "pack_effects",
+    "GroundEffect", "Gusts", "IsotropicDrag", "MotorLag", "ParamSpec", "Payload", "RotorDrag",
+    "SimConfigError", "Wind", "make_effect", "pack_effects",
 ]  # fmt: skip
 
 

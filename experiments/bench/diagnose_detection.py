@@ -1,0 +1,92 @@
+"""Detection rate, parameter error and false positives of the diagnosis by IMU noise level.
+
+For each hidden effect of the vocabulary and each trial, a simulated Iris flies the excitation
+mission (missions/excite_full.toml) with the effect on (parameters drawn at random, seeded);
+the log gets realistic sensor noise (:func:`vehicle_sim.sensor_noise.draw_sensor_noise`, the
+IMU level fixed per column: 0, 0.1, 0.3, 0.5 m/s^2; at 0 no noise at all) and is diagnosed
+against the plain preset. "Named" means the effect is the first cause of the verdict; the
+parameter error is the largest relative error of its main parameter(s). False positives: clean
+flights (no effect) with noise drawn per seed; any named cause counts.
+"""
+
+from __future__ import annotations
+
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+from diagnosis.diagnosis import diagnose
+from tests.diagnosis.hidden_effects import draw, fly_hidden
+from tests.diagnosis.test_hidden_effects import SINGLE, main_parameter_errors
+from vehicle_sim import load_sim_config
+from vehicle_sim.sensor_noise import add_sensor_noise, draw_sensor_noise
+
+NOISE_LEVELS_MPS2 = (0.0, 0.1, 0.3, 0.5)
+
+
+def _noisy(logs, level: float, seed: int):
+    if level <= 0.0:
+        return logs
+    noise = draw_sensor_noise(np.random.default_rng(seed), acc_mps2=level)
+    return [add_sensor_noise(log, noise, seed) for log in logs]
+
+
+def run(
+    progress: Callable[[str], None] = print,
+    trials: int = 2,
+    clean_seeds: int = 20,
+    levels: tuple[float, ...] = NOISE_LEVELS_MPS2,
+) -> dict[str, float]:
+    """Figures ``diagnose_named_rate_acc<level>``, ``diagnose_max_param_err_acc<level>``,
+    ``diagnose_median_param_err_acc<level>`` and ``diagnose_false_positive_rate_acc<level>``."""
+    named = {lv: [] for lv in levels}
+    errors = {lv: [] for lv in levels}
+    false_pos = {lv: [] for lv in levels}
+    with tempfile.TemporaryDirectory() as tmp:
+        for name in SINGLE:
+            for trial in range(trials):
+                seed = 1000 + 17 * SINGLE.index(name) + trial
+                truth, base = draw(name, np.random.default_rng(seed))
+                logs = fly_hidden(truth, Path(tmp), seed)
+                for lv in levels:
+                    d = diagnose(_noisy(logs, lv, seed), load_sim_config("iris", base))
+                    ok = bool(d.verdict) and d.verdict[0] == name
+                    named[lv].append(ok)
+                    if ok:
+                        errs = main_parameter_errors(name, truth, d.causes[0].params)
+                        errors[lv].append(max(errs.values()))
+                    progress(f"detection: {name} trial {trial} acc {lv}: {d.verdict}")
+        clean = fly_hidden({}, Path(tmp), 77)
+        for lv in levels:
+            for s in range(clean_seeds if lv > 0.0 else 1):
+                d = diagnose(_noisy(clean, lv, 5000 + s), load_sim_config("iris"))
+                false_pos[lv].append(bool(d.verdict))
+                progress(f"detection: clean seed {s} acc {lv}: {d.verdict}")
+    out: dict[str, float] = {}
+    for lv in levels:
+        out[f"diagnose_named_rate_acc{lv}"] = float(np.mean(named[lv]))
+        errs = errors[lv] or [float("nan")]
+        out[f"diagnose_max_param_err_acc{lv}"] = float(np.max(errs))
+        out[f"diagnose_median_param_err_acc{lv}"] = float(np.median(errs))
+        out[f"diagnose_false_positive_rate_acc{lv}"] = float(np.mean(false_pos[lv]))
+    return out
+
+
+def markdown_table(figures: dict[str, float], levels=NOISE_LEVELS_MPS2) -> str:
+    """The BENCHMARKS.md table of :func:`run`'s figures."""
+    rows = [
+        "| IMU noise [m/s^2] | named | median param err | max param err | false positives |",
+        "|---|---|---|---|---|",
+    ]
+    for lv in levels:
+        f = {
+            k: figures.get(f"diagnose_{k}_acc{lv}", float("nan"))
+            for k in ("named_rate", "median_param_err", "max_param_err", "false_positive_rate")
+        }
+        rows.append(
+            f"| {lv} | {100 * f['named_rate']:.0f} % | {100 * f['median_param_err']:.1f} % | "
+            f"{100 * f['max_param_err']:.1f} % | {100 * f['false_positive_rate']:.0f} % |"
+        )
+    return "\n".join(rows)
