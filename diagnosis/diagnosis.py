@@ -100,6 +100,7 @@ class Diagnosis:
         explained_of_explainable: fraction of the force residual above the noise floor that the
             named causes remove (None without a force residual).
         warnings: sentences the report must show in its headline.
+        thrust_sources: per log, where its thrust came from (see ``forces.with_thrust_n``).
     """
 
     causes: tuple[Cause, ...]
@@ -116,6 +117,7 @@ class Diagnosis:
     noise_floor: dict[str, object] = field(default_factory=dict)
     explained_of_explainable: float | None = None
     warnings: tuple[str, ...] = ()
+    thrust_sources: tuple[str, ...] = ()
 
     @property
     def not_examined(self) -> tuple[str, ...]:
@@ -144,7 +146,20 @@ def diagnose(
     """Diagnose what ``sim_config`` gets wrong about the vehicle that flew ``logs``."""
     vehicle = sim_config.vehicle
     max_thrust_n = len(vehicle.rotor_spin) * vehicle.max_rotor_thrust_n
-    logs = [with_thrust_n(log, max_thrust_n) for log in logs]
+    thrust = [
+        with_thrust_n(
+            log,
+            max_thrust_n,
+            vehicle.thrust_coeff_n_per_radps2,
+            len(vehicle.rotor_spin),
+            sim_config.mass_kg,
+        )
+        for log in logs
+    ]
+    logs = [log for log, _ in thrust]
+    thrust_sources = tuple(source for _, source in thrust)
+    for i, source in enumerate(thrust_sources):
+        progress(f"log {i + 1} thrust: {source}")
     not_ident = check_identifiability(logs)
     base_names = {e.name for e in sim_config.effects}
     drag_known = bool({"rotor_drag", "body_drag", "isotropic_drag"} & base_names)
@@ -280,6 +295,7 @@ def diagnose(
             selection.explained_of_explainable() if selection is not None else None
         ),
         warnings=tuple(warnings),
+        thrust_sources=thrust_sources,
     )
 
 

@@ -104,14 +104,61 @@ def acceleration(log: FlightLog) -> np.ndarray:
     return savgol_filter(vel, window, 2, deriv=1, delta=dt, axis=0)
 
 
-def with_thrust_n(log: FlightLog, max_total_thrust_n: float) -> FlightLog:
-    """``log`` with ``thrust_n`` = ``thrust_norm`` * ``max_total_thrust_n`` [N] when it logs only
-    the normalised thrust (PX4's thrust setpoint; assumes thrust linear in the command, as the
-    simulator's mixer does); unchanged otherwise."""
-    if log.has("thrust_n") or not log.has("thrust_norm"):
-        return log
-    cols = {**log.columns, "thrust_n": log["thrust_norm"] * max_total_thrust_n}
-    return FlightLog(cols, log.metadata, log.path)
+HOVER_THRUST_TOLERANCE = (0.75, 1.33)  # accepted thrust / weight in steady hover
+
+
+def with_thrust_n(
+    log: FlightLog,
+    max_total_thrust_n: float,
+    thrust_coeff_n_per_radps2: float,
+    n_rotors: int,
+    mass_kg: float,
+) -> tuple[FlightLog, str]:
+    """``log`` with a ``thrust_n`` column [N] from the best source it holds, and which one.
+
+    1. ``thrust_n`` as logged.
+    2. ``rotor_speed_rms_radps`` (ESC telemetry): n_rotors * k_T * rms^2, used only if its
+       steady-hover median lies within :data:`HOVER_THRUST_TOLERANCE` of the weight (a wrong
+       thrust coefficient or ESC pole count would otherwise pass for a payload).
+    3. ``thrust_norm`` * ``max_total_thrust_n`` (PX4's thrust setpoint or motor outputs;
+       assumes thrust linear in the command, as the simulator's mixer does).
+    Without any of them the log is returned unchanged with source ``"none"``.
+    """
+    if log.has("thrust_n"):
+        return log, "thrust_n as logged"
+    note = ""
+    if log.has("rotor_speed_rms_radps"):
+        thrust = n_rotors * thrust_coeff_n_per_radps2 * log["rotor_speed_rms_radps"] ** 2
+        ratio = _hover_thrust_ratio(log, thrust, mass_kg)
+        lo, hi = HOVER_THRUST_TOLERANCE
+        if ratio is not None and lo <= ratio <= hi:
+            cols = {**log.columns, "thrust_n": thrust}
+            source = (
+                f"ESC rotor speed x the config's thrust coefficient (hover {ratio:.2f} x weight)"
+            )
+            return FlightLog(cols, log.metadata, log.path), source
+        why = "no steady hover to check it" if ratio is None else f"{ratio:.2f} x the weight"
+        note = f"; ESC rotor speed not used: its hover thrust is {why}"
+    if log.has("thrust_norm"):
+        cols = {**log.columns, "thrust_n": log["thrust_norm"] * max_total_thrust_n}
+        return FlightLog(cols, log.metadata, log.path), "normalised thrust x max thrust" + note
+    return log, "none" + note
+
+
+def _hover_thrust_ratio(log: FlightLog, thrust_n: np.ndarray, mass_kg: float) -> float | None:
+    """Median thrust / weight over steady airborne rows (speed and acceleration < 0.3), or None
+    when fewer than 20 such rows exist."""
+    vel = log.stack("vel_n_mps", "vel_e_mps", "vel_d_mps")
+    acc = acceleration(log)
+    steady = (np.linalg.norm(vel, axis=1) < 0.3) & (np.linalg.norm(acc, axis=1) < 0.3)
+    steady &= -log["pos_d_m"] > MIN_AIRBORNE_ALT_M
+    if log.has("landed"):
+        steady &= log["landed"] < 0.5
+    if log.has("armed"):
+        steady &= log["armed"] > 0.5
+    if np.sum(steady) < 20:
+        return None
+    return float(np.median(thrust_n[steady]) / (mass_kg * GRAVITY_MPS2))
 
 
 def force_data(logs: list[FlightLog], mass_kg: float) -> ForceData:

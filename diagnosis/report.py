@@ -49,6 +49,7 @@ def report_document(diagnosis: Diagnosis) -> dict[str, Any]:
         "not_examined": list(diagnosis.not_examined),
         "at_bound": list(diagnosis.at_bound),
         "warnings": list(diagnosis.warnings),
+        "thrust_sources": list(diagnosis.thrust_sources),
         "verdict": list(diagnosis.verdict),
         "extended": {
             "replay_vel_rmse_mps": _num(diagnosis.extended.rmse_mps()),
@@ -102,6 +103,7 @@ def _markdown(
         "- Noise floor of the logs (replay RMSE white velocity noise alone leaves): "
         + (f"{floor:.4f} m/s" if isinstance(floor, float) else "n/a"),
         f"- Extended config: `{extended.name}`",
+        *(f"- Thrust of log {i + 1}: {s}" for i, s in enumerate(d.thrust_sources)),
         *(f"- **Warning:** {w}" for w in d.warnings),
         "",
         "## Causes, strongest first",

@@ -58,11 +58,17 @@ def describe_log(log: FlightLog) -> list[str]:
         lines.append("thrust: " + ("thrust_n" if log.has("thrust_n") else "thrust_norm"))
     else:
         lines.append("thrust: none")
+    rotor = meta.get("rotor_speed_source")
+    if isinstance(rotor, dict):
+        lines.append(
+            f"rotor speed: produced, from {rotor.get('topic')} ({rotor.get('detail')}); diagnose "
+            "prefers it when the config's thrust coefficient matches the hover"
+        )
     for command in NEEDS_HZ:
         short = rate_shortfalls(log, command)
         verdict = "too slow: " + "; ".join(short) if short else "rates sufficient"
         lines.append(f"{command}: {verdict}")
-    has_thrust = log.has("thrust_n") or log.has("thrust_norm")
+    has_thrust = log.has("thrust_n") or log.has("thrust_norm") or log.has("rotor_speed_rms_radps")
     if not has_thrust:
         lines.append("diagnose: thrust-related causes (mass, payload, thrust) cannot be examined")
     return lines

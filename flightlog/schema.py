@@ -36,7 +36,7 @@ REQUIRED_COLUMNS: tuple[str, ...] = (
 OPTIONAL_NUMERIC_COLUMNS: tuple[str, ...] = (
     "acc_n_mps2", "acc_e_mps2", "acc_d_mps2",
     "rate_x_radps", "rate_y_radps", "rate_z_radps",
-    "thrust_n", "thrust_norm", "battery_v", "armed", "landed",
+    "thrust_n", "thrust_norm", "rotor_speed_rms_radps", "battery_v", "armed", "landed",
     "pred_vel_n_mps", "pred_vel_e_mps", "pred_vel_d_mps",
     "pred_pos_n_m", "pred_pos_e_m", "pred_pos_d_m",
     "ref_pos_n_m", "ref_pos_e_m", "ref_pos_d_m",

@@ -181,6 +181,9 @@ def flight_log_from_topics(
     thrust, thrust_source = _thrust(topics, params, t_all)
     if thrust is not None:
         cols["thrust_norm"] = thrust
+    rotor_speed, rotor_source = _rotor_speed_rms(topics, params, t_all)
+    if rotor_speed is not None:
+        cols["rotor_speed_rms_radps"] = rotor_speed
     keep, dropped, segments = _keep_rows(topics, pos, rows, cols, t_all, vehicle)
     if keep.sum() < 2:
         counts = ", ".join(f"{n} {why}" for why, n in dropped.items() if n) or "none usable"
@@ -210,8 +213,9 @@ def flight_log_from_topics(
         "thrust_source": thrust_source or {"topic": None, "kind": "none"},
         "px4_params": params,
     }
-    if "esc_status" in topics:
-        meta["esc_rpm_available"] = True
+    if rotor_source:
+        meta["rotor_speed_source"] = rotor_source
+        rates_hz["rotor_speed"] = _rate(topics["esc_status"], t_all)
     if segments:
         meta["vtol_multicopter_segments_s"] = [
             [round((a - t0) * 1e-6, 3), round((b - t0) * 1e-6, 3)] for a, b in segments
@@ -298,8 +302,8 @@ def _thrust(topics: Topics, params: Mapping[str, float], t_us: np.ndarray):
        MAV_TYPE.
     3. ``vehicle_thrust_setpoint`` -xyz[2] (v1.13+) or ``actuator_controls_0`` control[3]
        (v1.9-v1.13): commanded, not produced, thrust (kind ``commanded``).
-    ``esc_status`` RPM (all versions) needs the vehicle's thrust coefficient, which a log does
-    not hold: it is flagged (``esc_rpm_available``) for a consumer that has a config.
+    ``esc_status`` RPM is kept apart (:func:`_rotor_speed_rms`): turning it into thrust needs
+    the vehicle's thrust coefficient, which a log does not hold.
     """
     fac = float(params.get("THR_MDL_FAC", 0.0))
     motors = topics.get("actuator_motors")
@@ -327,6 +331,32 @@ def _thrust(topics: Topics, params: Mapping[str, float], t_us: np.ndarray):
         thrust = _hold(topics["actuator_controls_0"], "control[3]", t_us)
         return thrust, {"topic": "actuator_controls_0", "kind": "commanded"}
     return None, None
+
+
+def _rotor_speed_rms(topics: Topics, params: Mapping[str, float], t_us: np.ndarray):
+    """Root mean square of the rotor speeds [rad/s] from ESC telemetry, and its description.
+
+    ``esc_status`` carries ``esc_count`` and ``esc[i].esc_rpm`` (int32 revolutions per minute,
+    every version v1.9 to v1.16; [PX4-msgs] esc_status.msg, esc_report.msg). The rotors are the
+    first CA_ROTOR_COUNT (v1.13+) or MAV_TYPE's motor count of the ESCs; an ESC count below
+    that, or RPM that never leaves zero (ESCs without telemetry), gives None. The total thrust
+    is then n * k_T * rms^2 with the configuration's thrust coefficient k_T [N/(rad/s)^2].
+    """
+    esc = topics.get("esc_status")
+    n_rotors = int(params.get("CA_ROTOR_COUNT", 0)) or MOTOR_COUNT.get(
+        int(params.get("MAV_TYPE", -1)), 0
+    )
+    if esc is None or n_rotors == 0 or not all(f"esc[{i}].esc_rpm" in esc for i in range(n_rotors)):
+        return None, None
+    if int(np.max(np.asarray(esc.get("esc_count", [n_rotors])))) < n_rotors:
+        return None, None
+    rpm = np.column_stack([_interp(esc, f"esc[{i}].esc_rpm", t_us) for i in range(n_rotors)])
+    if not np.any(np.abs(rpm) > 0):
+        return None, None
+    radps = np.abs(rpm) * (2.0 * np.pi / 60.0)
+    rms = np.sqrt(np.mean(radps**2, axis=1))
+    detail = f"{n_rotors} ESC RPM; thrust = {n_rotors} x thrust coefficient x rms^2"
+    return rms, {"topic": "esc_status", "kind": "produced", "rotors": n_rotors, "detail": detail}
 
 
 def _modes_flown(topics: Topics) -> str:

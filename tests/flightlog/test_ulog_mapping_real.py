@@ -67,3 +67,18 @@ def test_modes_armed_landed_validity_thrust_and_rates():
     assert meta["vehicle"] == {"mav_type": 2, "type": "quadrotor", "is_vtol": False}
     assert meta["firmware"] == "v1.15.0"
     assert meta["px4_params"]["MPC_THR_HOVER"] == 0.5
+
+
+def test_rotor_speed_from_esc_rpm_of_the_rotors_only():
+    log, raw = read_log(AUTO), raw_topics()
+    esc = raw["esc_status"]
+    assert int(esc["esc_count"][0]) == 6  # SITL reports 6 ESCs for a 4-rotor airframe
+    source = log.metadata["rotor_speed_source"]
+    assert source["topic"] == "esc_status" and source["rotors"] == 4
+    abs_us = np.round(log["t_s"] * 1e6) + _first_kept_us(log, raw)
+    rpm = np.column_stack(
+        [np.interp(abs_us, esc["timestamp"], esc[f"esc[{i}].esc_rpm"]) for i in range(4)]
+    )
+    expected = np.sqrt(np.mean((rpm * 2 * np.pi / 60) ** 2, axis=1))
+    np.testing.assert_allclose(log["rotor_speed_rms_radps"], expected, rtol=1e-6, atol=1e-6)
+    assert float(np.max(log["rotor_speed_rms_radps"])) > 200.0  # airborne rotors spin

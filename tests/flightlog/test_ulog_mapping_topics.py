@@ -125,3 +125,24 @@ def test_two_hz_setpoints_refused_with_the_rate_needed(flight):
     assert log.metadata["rates_hz"]["velocity_command"] == pytest.approx(2.0, rel=0.05)
     with pytest.raises(FlightLogError, match=r"velocity_command at 2 Hz \(needs >= 5 Hz\)"):
         require_rates(log, "fit-gp")
+
+
+def test_esc_rpm_kept_as_rotor_speed_only_when_every_rotor_reports(flight):
+    topics = topics_of(flight)
+    t = topics["vehicle_local_position"]["timestamp"]
+    rpm = 6000.0 + 0 * t
+    topics["esc_status"] = {
+        "timestamp": t, "esc_count": 4 + 0 * t, **{f"esc[{i}].esc_rpm": rpm for i in range(4)}
+    }  # fmt: skip
+    log = flight_log_from_topics(topics, params={"MAV_TYPE": 2})
+    np.testing.assert_allclose(log["rotor_speed_rms_radps"], 6000.0 * 2 * np.pi / 60)
+    assert log.metadata["rotor_speed_source"]["rotors"] == 4
+    assert log.metadata["thrust_source"]["topic"] == "vehicle_thrust_setpoint"  # kept apart
+    topics["esc_status"]["esc_count"] = 3 + 0 * t  # a hexarotor's count would be 6: too few
+    assert not flight_log_from_topics(topics, params={"MAV_TYPE": 2}).has("rotor_speed_rms_radps")
+    topics["esc_status"] = {
+        "timestamp": t,
+        "esc_count": 4 + 0 * t,
+        **{f"esc[{i}].esc_rpm": 0 * t for i in range(4)},
+    }  # ESCs without telemetry report zeros
+    assert not flight_log_from_topics(topics, params={"MAV_TYPE": 2}).has("rotor_speed_rms_radps")
