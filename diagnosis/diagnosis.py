@@ -35,7 +35,7 @@ from diagnosis.force_model import (
 from diagnosis.forces import GRAVITY_MPS2, ForceData, force_data, with_thrust_n
 from diagnosis.identifiability import NotIdentifiable, check_identifiability
 from diagnosis.noise_floor import white_noise_std
-from diagnosis.replay import ReplayResult, replay, windows
+from diagnosis.replay import LEAD_IN_S, ReplayResult, replay, windows
 from diagnosis.selection import (
     ForceSelection,
     SelectionConfig,
@@ -253,6 +253,12 @@ def diagnose(
         causes.append(Cause("unexplained", {"replay_rmse_mps": left_rmse}, 0.0, 1.0, evidence))
         verdict.append("unexplained")
         warnings.append(evidence)
+    if not test:
+        warnings.append(
+            f"replay not examined: no airborne run of more than {config.window_s + LEAD_IN_S:g} s "
+            "in which the logged command drives the vehicle (OFFBOARD, or a position-controlled "
+            "PX4 mode); fly longer position-controlled segments"
+        )
     if not_ident:
         warnings.append(
             "not examined (the logs cannot identify them): " + ", ".join(n.name for n in not_ident)
@@ -442,5 +448,6 @@ def _unexplained(
         float(min(share, 1.0)),
         f"held-out force residual RMS {rms:.3f} N ({100 * rms / weight:.1f} % of the weight, "
         f"averaged over {config.persistence_s} s) stays after every deterministic candidate: "
-        "a stochastic disturbance such as gusts",
+        "a disturbance such as gusts, or a vehicle the config does not describe (another "
+        "airframe or controller, an effect outside the vocabulary)",
     )

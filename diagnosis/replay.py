@@ -30,6 +30,7 @@ CMD_COLUMNS = ("cmd_vel_n_mps", "cmd_vel_e_mps", "cmd_vel_d_mps")
 ACC_COLUMNS = ("acc_n_mps2", "acc_e_mps2", "acc_d_mps2")
 MIN_REPLAY_ALT_M = 0.02
 LEAD_IN_S = 1.0
+MAX_ROW_GAP_S = 0.5  # rows further apart than this (dropped rows between) end a replay run
 
 
 @dataclass(frozen=True)
@@ -66,14 +67,25 @@ class ReplayResult:
 
 
 def airborne_runs(log: FlightLog) -> list[tuple[int, int]]:
-    """[start, stop) row ranges in which the vehicle is airborne (and in OFFBOARD, if the log
-    has a ``mode`` column: only then do the logged setpoints drive it) throughout."""
+    """[start, stop) row ranges in which the vehicle is airborne throughout, the logged command
+    drives it, and no two rows are more than ``MAX_ROW_GAP_S`` apart.
+
+    The command drives the vehicle in OFFBOARD for the project's own logs (a ``mode`` column
+    other than OFFBOARD means the autopilot flew itself). A PX4 ULog's mapping keeps only rows
+    in position-controlled modes, where the command is the setpoint PX4's velocity controller
+    was given (POSCTL, AUTO.*, OFFBOARD), so every kept row counts; rows it dropped (estimator
+    invalid, other modes) leave gaps, which end a run.
+    """
     air = -log["pos_d_m"] > MIN_REPLAY_ALT_M
-    if log.has("mode"):
+    if log.has("mode") and log.metadata.get("source") != "px4_ulog":
         air &= np.char.upper(log["mode"].astype(str)) == "OFFBOARD"
-    air = np.concatenate([[False], air, [False]])
-    edges = np.flatnonzero(np.diff(air.astype(int)))
-    return [(int(a), int(b)) for a, b in zip(edges[::2], edges[1::2], strict=True)]
+    gap_before = np.r_[False, np.diff(log["t_s"]) > MAX_ROW_GAP_S]
+    runs = []
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], air.astype(int), [0]])))
+    for a, b in zip(edges[::2], edges[1::2], strict=True):
+        cuts = [a, *(a + 1 + np.flatnonzero(gap_before[a + 1 : b])).tolist(), b]
+        runs += [(int(c), int(d)) for c, d in zip(cuts[:-1], cuts[1:], strict=True) if d > c]
+    return runs
 
 
 def windows(logs: Sequence[FlightLog], window_s: float = 2.0) -> list[Window]:

@@ -98,8 +98,12 @@ def _markdown(
         f"- Logs: {', '.join(f'`{n}`' for n in log_names)}",
         f"- Simulation config: `{config_name}`",
         f"- **Verdict: {verdict}**",
-        f"- Held-out replay velocity RMSE: baseline {d.baseline.rmse_mps():.4f} m/s, "
-        f"extended {d.extended.rmse_mps():.4f} m/s (gain {d.gain:.1f}x)",
+        (
+            f"- Held-out replay velocity RMSE: baseline {d.baseline.rmse_mps():.4f} m/s, "
+            f"extended {d.extended.rmse_mps():.4f} m/s (gain {d.gain:.1f}x)"
+            if math.isfinite(d.baseline.rmse_mps())
+            else "- Held-out replay: not examined (see the warning below)"
+        ),
         "- Noise floor of the logs (replay RMSE white velocity noise alone leaves): "
         + (f"{floor:.4f} m/s" if isinstance(floor, float) else "n/a"),
         f"- Extended config: `{extended.name}`",

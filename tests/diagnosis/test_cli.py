@@ -15,7 +15,7 @@ SCHEMA_KEYS = {"schema", "baseline", "causes", "verdict", "extended"}
 CAUSE_KEYS = {"name", "params", "explained_fraction", "confidence", "evidence"}
 V2_KEYS = {
     "closed_loop", "noise_floor", "explained_of_explainable", "not_examined", "at_bound",
-    "warnings",
+    "warnings", "thrust_sources",
 }  # fmt: skip
 V2_CAUSE_KEYS = {"statistic", "at_bound"}
 CLOSED_LOOP_KEYS = {"baseline_vel_rmse_mps", "extended_vel_rmse_mps", "gain"}
