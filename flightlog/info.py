@@ -72,3 +72,22 @@ def describe_log(log: FlightLog) -> list[str]:
     if not has_thrust:
         lines.append("diagnose: thrust-related causes (mass, payload, thrust) cannot be examined")
     return lines
+
+
+def describe_unusable_ulog(summary: dict, reason: str) -> list[str]:
+    """Lines for a ULog the mapping refuses: what it holds (``ulog.summarise_ulog``) and why no
+    command can use it."""
+    lines = ["source: px4_ulog"]
+    if summary.get("vehicle"):
+        lines.append(f"vehicle: {summary['vehicle']}")
+    if summary.get("firmware"):
+        lines.append(f"firmware: PX4 {summary['firmware']} on {summary.get('hardware')}")
+    lines.append(f"log duration: {summary['duration_s']:.1f} s")
+    for name, hz in summary["rates_hz"].items():
+        lines.append(f"topic {name}: {hz:g} Hz")
+    for mode, a, b in summary["modes"]:
+        lines.append(f"mode {mode}: {a:.1f} s to {b:.1f} s")
+    if not summary["modes"]:
+        lines.append("modes: not recorded")
+    lines.append(f"fit-gp, diagnose, convert: cannot use this log: {reason}")
+    return lines

@@ -128,6 +128,48 @@ def read_ulog(path: str | Path) -> FlightLog:
     return FlightLog(log.columns, {**log.metadata, **meta}, path)
 
 
+def summarise_ulog(path: str | Path) -> dict[str, object]:
+    """What a ULog holds, read without mapping it (for ``flightlog info`` on a log the mapping
+    refuses): firmware, hardware, vehicle type, duration [s], the mapped topics present with
+    their rates [Hz], and the modes flown as (name, start_s, end_s) from the log's start.
+
+    Raises:
+        FlightLogError: not a ULog, or pyulog cannot read even its header.
+    """
+    from pyulog import ULog
+
+    path = Path(path)
+    if not is_ulog(path):
+        raise FlightLogError(f"{path}: not a ULog file (no ULog magic bytes)")
+    try:
+        ulog = ULog(str(path), message_name_filter_list=list(TOPICS))
+    except Exception as exc:  # pyulog raises several types for corrupt files
+        raise FlightLogError(f"{path}: not a readable ULog file ({type(exc).__name__})") from None
+    t0, t1 = ulog.start_timestamp, ulog.last_timestamp
+    topics = {d.name: d.data for d in ulog.data_list if d.multi_id == 0}
+    params = ulog.initial_parameters
+    mav_type = int(params["MAV_TYPE"]) if "MAV_TYPE" in params else None
+    span = np.array([t0, t1], dtype=float)
+    modes: list[tuple[str, float, float]] = []
+    status = topics.get("vehicle_status")
+    if status is not None:
+        t = np.asarray(status["timestamp"], float)
+        nav = np.asarray(status["nav_state"], int)
+        cuts = [0, *(np.flatnonzero(nav[1:] != nav[:-1]) + 1).tolist(), len(nav)]
+        for a, b in zip(cuts[:-1], cuts[1:], strict=True):
+            end = t[b] if b < len(t) else t1
+            modes.append((px4.NAV_STATE_NAMES.get(int(nav[a]), f"NAV_STATE_{nav[a]}"),
+                          max(t[a] - t0, 0.0) * 1e-6, (end - t0) * 1e-6))  # fmt: skip
+    return {
+        "firmware": px4.firmware_version(ulog.msg_info_dict.get("ver_sw_release")),
+        "hardware": ulog.msg_info_dict.get("ver_hw"),
+        "vehicle": px4.MAV_TYPE_NAMES.get(mav_type, f"MAV_TYPE {mav_type}") if mav_type else None,
+        "duration_s": (t1 - t0) * 1e-6,
+        "rates_hz": {name: _rate(topic, span) for name, topic in sorted(topics.items())},
+        "modes": modes,
+    }
+
+
 def flight_log_from_topics(
     topics: Topics, where: str = "ulog", params: Mapping[str, float] | None = None
 ) -> FlightLog:

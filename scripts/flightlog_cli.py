@@ -3,7 +3,8 @@
     flightlog info LOG          vehicle, firmware, rates, modes, validity, what commands can do
     flightlog convert LOG.ulg --out FLIGHT.csv   (writes FLIGHT.csv and FLIGHT.csv.json)
 
-LOG is a schema-v1 CSV or a PX4 ULog (chosen by content). Exit codes: 0 done, 2 bad input.
+LOG is a schema-v1 CSV or a PX4 ULog (chosen by content). ``info`` also describes a readable
+ULog that no command can use, and says why. Exit codes: 0 done, 2 bad input.
 """
 
 from __future__ import annotations
@@ -15,9 +16,10 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from flightlog.info import describe_log
+from flightlog.info import describe_log, describe_unusable_ulog
 from flightlog.reader import read_log
 from flightlog.schema import FlightLogError, sidecar_path, write_flight_log
+from flightlog.ulog import is_ulog, summarise_ulog, truncated_at
 
 EXIT_BAD_INPUT = 2
 
@@ -65,6 +67,18 @@ def convert(log_path: Path, out: Path) -> Path:
     return out
 
 
+def _info_lines(path: Path) -> list[str]:
+    """describe_log of the mapped log; for a ULog the mapping refuses (no velocity command,
+    not a multirotor, no valid motion), what the raw ULog holds and the one-line reason."""
+    try:
+        return describe_log(read_log(path))
+    except FlightLogError as exc:
+        if not is_ulog(path) or truncated_at(path) is not None:
+            raise
+        reason = str(exc).removeprefix(f"{path}: ")
+        return [f"file: {path}", *describe_unusable_ulog(summarise_ulog(path), reason)]
+
+
 def main(argv: list[str] | None = None) -> int:
     try:
         args = parse_args(argv)
@@ -72,7 +86,7 @@ def main(argv: list[str] | None = None) -> int:
         return int(exc.code or 0)
     try:
         if args.command == "info":
-            print("\n".join(describe_log(read_log(args.log))))
+            print("\n".join(_info_lines(args.log)))
         else:
             assert args.out is not None
             out = convert(args.log, args.out)

@@ -42,6 +42,22 @@ def test_info_names_vehicle_firmware_rates_modes_validity_and_uses(capsys):
         assert line in out
 
 
+@pytest.mark.parametrize(
+    "name, lines",
+    [
+        ("vtol_manual_v1_11.ulg",
+         ["vehicle: VTOL standard", "firmware: PX4 v1.11.2", "mode MANUAL: 0.0 s to 6.5 s"]),
+        ("quad_manual_v1_6.ulg", ["firmware: PX4 v1.6.0", "mode MANUAL: 0.0 s"]),
+    ],
+)  # fmt: skip
+def test_info_describes_a_ulog_no_command_can_use_and_says_why(name, lines, capsys):
+    assert flightlog_cli.main(["info", str(FIXTURES / name)]) == 0
+    out = capsys.readouterr().out
+    for line in lines:
+        assert line in out
+    assert re.search(r"fit-gp, diagnose, convert: cannot use this log: .*no velocity command", out)
+
+
 def test_convert_writes_csv_and_sidecar_that_read_back_the_same(tmp_path):
     out = tmp_path / "flight.csv"
     assert flightlog_cli.main(["convert", str(AUTO), "--out", str(out)]) == 0
