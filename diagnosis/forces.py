@@ -137,8 +137,12 @@ def with_thrust_n(
                 f"ESC rotor speed x the config's thrust coefficient (hover {ratio:.2f} x weight)"
             )
             return FlightLog(cols, log.metadata, log.path), source
-        why = "no steady hover to check it" if ratio is None else f"{ratio:.2f} x the weight"
-        note = f"; ESC rotor speed not used: its hover thrust is {why}"
+        why = (
+            "cannot be checked against the weight (no steady hover)"
+            if ratio is None
+            else f"is {ratio:.2f} x the weight (thrust coefficient or ESC pole count wrong?)"
+        )
+        note = f"; ESC rotor speed not used: its hover thrust {why}"
     if log.has("thrust_norm"):
         cols = {**log.columns, "thrust_n": log["thrust_norm"] * max_total_thrust_n}
         return FlightLog(cols, log.metadata, log.path), "normalised thrust x max thrust" + note

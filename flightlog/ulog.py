@@ -13,7 +13,8 @@ Topics and fields per firmware version ([PX4-msgs] msg/*.msg, v1.9 to v1.16):
   when the former is absent (then it is what reached the controller, e.g. OFFBOARD logs).
   Rows outside position-controlled modes, or whose command is NaN (position-only), are dropped.
 - ``vehicle_status`` (all): nav_state -> ``mode``, arming_state -> ``armed``; is_vtol and
-  vehicle_type (v1.13+) or is_rotary_wing (v1.9-v1.12) for the VTOL phase.
+  vehicle_type (v1.13+) or is_rotary_wing (v1.9-v1.12) for the VTOL phase. Rows before its
+  first sample (a log started in the air) have no known mode and are dropped and counted.
 - ``vehicle_land_detected`` (all): landed -> ``landed``.
 - Thrust, best source first (see :func:`_thrust`), recorded in ``metadata['thrust_source']``.
 - ``vehicle_angular_velocity`` xyz[0..2] (v1.10+), ``battery_status`` voltage_v (all).
@@ -305,8 +306,10 @@ def _keep_rows(topics, pos, rows, cols, t_all, vehicle):
     has_cmd = np.all(np.isfinite(cmd), axis=1)
     pos_ctrl = np.ones(n, dtype=bool)
     rotary = np.ones(n, dtype=bool)
+    known = np.ones(n, dtype=bool)
     status = topics.get("vehicle_status")
     if status is not None:
+        known = t_all >= float(np.asarray(status["timestamp"])[0])  # mode unknown before
         nav = _hold(status, "nav_state", t_all).astype(int)
         cols["mode"] = px4.mode_names(nav)
         cols["armed"] = (_hold(status, "arming_state", t_all) == px4.ARMING_STATE_ARMED) * 1.0
@@ -320,13 +323,15 @@ def _keep_rows(topics, pos, rows, cols, t_all, vehicle):
                 rotary &= _hold(status, "in_transition_mode", t_all) == 0
     if "vehicle_land_detected" in topics:
         cols["landed"] = (_hold(topics["vehicle_land_detected"], "landed", t_all) > 0) * 1.0
+    valid_known = valid & known
     dropped = {
         "estimator_invalid": int(np.sum(~valid)),
-        "not_multicopter_phase": int(np.sum(valid & ~rotary)),
-        "not_position_controlled": int(np.sum(valid & rotary & ~pos_ctrl)),
-        "no_velocity_command": int(np.sum(valid & rotary & pos_ctrl & ~has_cmd)),
+        "mode_unknown": int(np.sum(valid & ~known)),
+        "not_multicopter_phase": int(np.sum(valid_known & ~rotary)),
+        "not_position_controlled": int(np.sum(valid_known & rotary & ~pos_ctrl)),
+        "no_velocity_command": int(np.sum(valid_known & rotary & pos_ctrl & ~has_cmd)),
     }
-    keep = valid & rotary & pos_ctrl & has_cmd
+    keep = valid_known & rotary & pos_ctrl & has_cmd
     segments = []
     if vehicle["is_vtol"]:
         edges = np.flatnonzero(np.diff(np.r_[0, rotary.astype(int), 0]))

@@ -236,7 +236,8 @@ def config_from_mapping(doc: Mapping[str, Any], preset_name: str) -> SimConfig:
 
 
 def _px4_params(table: Any) -> tuple[tuple[str, float], ...]:
-    """Validate ``[px4_params]``: known PX4 names, finite numbers; MPC_THR_HOVER refused."""
+    """Validate ``[px4_params]``: known PX4 names, finite numbers of the parameter's type within
+    PX4's bounds; MPC_THR_HOVER refused."""
     from vehicle_sim.params import PX4_PARAMS
 
     if not isinstance(table, Mapping):
@@ -258,6 +259,10 @@ def _px4_params(table: Any) -> tuple[tuple[str, float], ...]:
             or not math.isfinite(value)
         ):
             raise SimConfigError(f"px4_params.{name}: {value!r} is not a finite number")
+        try:
+            PX4_PARAMS[name].check(name, float(value))
+        except ValueError as exc:
+            raise SimConfigError(f"px4_params.{name}: {exc}; set a value PX4 accepts") from None
         out.append((name, float(value)))
     return tuple(sorted(out))
 

@@ -51,11 +51,13 @@ def config_from_log(log: FlightLog, preset: str = "iris") -> ConfigFromLog:
     mass_kg = hover * 4 * v.max_rotor_thrust_n / GRAVITY_MPS2
     tuned = {n: float(f"{float(params[n]):.7g}") for n in sorted(PX4_PARAMS) if n in params}
     tuned.pop("MPC_THR_HOVER", None)
+    clamped = _clamp_to_px4_ranges(tuned)
     defaults = [n for n in sorted(PX4_PARAMS) if n not in params and n != "MPC_THR_HOVER"]
     from_log = [
         f"mass_kg = {mass_kg:.4f}: hover thrust {hover:.3f} ({hover_how}) x the preset's "
         f"maximum thrust {4 * v.max_rotor_thrust_n:.2f} N / g",
         f"{len(tuned)} PX4 parameters: {', '.join(tuned) or 'none'}",
+        *clamped,
     ]
     assumed = [
         f"inertia_kgm2, rotor geometry, rotor speed, thrust and torque coefficients, motor "
@@ -92,6 +94,25 @@ def config_from_log(log: FlightLog, preset: str = "iris") -> ConfigFromLog:
 
     config_from_mapping(tomllib.loads(text), preset_name="from_log")  # valid before written
     return ConfigFromLog(text, tuple(from_log), tuple(assumed))
+
+
+def _clamp_to_px4_ranges(tuned: dict[str, float]) -> list[str]:
+    """Clamp, in place, values outside PX4's documented bounds (PX4 stores what it is sent, so
+    real logs hold such values; the simulator refuses them); one note per clamped value."""
+    notes = []
+    for name, value in tuned.items():
+        spec = PX4_PARAMS[name]
+        try:
+            spec.check(name, value)
+        except ValueError:
+            fixed = min(max(value, spec.lo), spec.hi)
+            fixed = float(round(fixed)) if spec.type == "INT32" else fixed
+            tuned[name] = fixed
+            notes.append(
+                f"{name} = {value:g} is outside PX4's documented range [{spec.lo:g}, "
+                f"{spec.hi:g}]: clamped to {fixed:g}"
+            )
+    return notes
 
 
 def _hover_thrust(log: FlightLog, params: Mapping[str, float]) -> tuple[float | None, str]:

@@ -62,6 +62,20 @@ def test_px4_params_section_is_validated():
         config_from_mapping({**base, "px4_params": {"MPC_XY_VEL_P_AC": 2.0}}, "t")
     with pytest.raises(SimConfigError, match="MPC_THR_HOVER: follows from vehicle.mass_kg"):
         config_from_mapping({**base, "px4_params": {"MPC_THR_HOVER": 0.4}}, "t")
+    with pytest.raises(SimConfigError, match=r"MPC_XY_CRUISE: .*outside PX4's range \[3, 20\]"):
+        config_from_mapping({**base, "px4_params": {"MPC_XY_CRUISE": 1.0}}, "t")
+
+
+def test_real_vehicles_out_of_range_value_is_clamped_and_said(tmp_path, capsys):
+    """PX4 stores what it is sent: this real v1.16 vehicle flew with MPC_XY_CRUISE = 1, below
+    PX4's documented minimum of 3, which the simulator refuses."""
+    log = FIXTURES / "quad_offboard_v1_16.ulg"
+    assert read_log(log).metadata["px4_params"]["MPC_XY_CRUISE"] == 1.0
+    out = tmp_path / "v.toml"
+    assert vehicle_sim_cli.main(["config-from-log", str(log), "--out", str(out)]) == 0
+    note = "MPC_XY_CRUISE = 1 is outside PX4's documented range [3, 20]: clamped to 3"
+    assert note in capsys.readouterr().err and note in out.read_text()
+    assert Simulator(load_sim_config(out)).get_param("MPC_XY_CRUISE") == 3.0
 
 
 def test_log_without_thrust_or_parameters_refused(tmp_path, capsys):
