@@ -59,9 +59,15 @@ def config_from_log(log: FlightLog, preset: str = "iris") -> ConfigFromLog:
         f"{len(tuned)} PX4 parameters: {', '.join(tuned) or 'none'}",
         *clamped,
     ]
+    battery = _battery_from_params(params)
+    if battery is not None:
+        full_v, empty_v, how = battery
+        from_log.append(f"battery full_v = {full_v:g}, empty_v = {empty_v:g}: {how}")
+    else:
+        full_v, empty_v = v.battery_full_v, v.battery_empty_v
     assumed = [
         f"inertia_kgm2, rotor geometry, rotor speed, thrust and torque coefficients, motor "
-        f"time constant, battery voltages: from preset {preset!r}",
+        f"time constant{'' if battery else ', battery voltages'}: from preset {preset!r}",
     ]
     if defaults:
         assumed.append(f"PX4 defaults for {', '.join(defaults)} (not in the log)")
@@ -82,9 +88,9 @@ def config_from_log(log: FlightLog, preset: str = "iris") -> ConfigFromLog:
         f"positions_frd_m = {[list(p) for p in v.rotor_positions_frd_m]}",
         f"spin = {list(v.rotor_spin)}",
         "",
-        "[battery]  # assumed (" + preset + ")",
-        f"full_v = {v.battery_full_v!r}",
-        f"empty_v = {v.battery_empty_v!r}",
+        "[battery]  # " + ("from the log" if battery else f"assumed ({preset})"),
+        f"full_v = {full_v!r}",
+        f"empty_v = {empty_v!r}",
         "",
         "[px4_params]  # from the log",
         *(f"{n} = {x!r}" for n, x in tuned.items()),
@@ -94,6 +100,23 @@ def config_from_log(log: FlightLog, preset: str = "iris") -> ConfigFromLog:
 
     config_from_mapping(tomllib.loads(text), preset_name="from_log")  # valid before written
     return ConfigFromLog(text, tuple(from_log), tuple(assumed))
+
+
+def _battery_from_params(params: Mapping[str, float]) -> tuple[float, float, str] | None:
+    """(full_v, empty_v, how) of the pack from PX4's battery parameters, or None.
+
+    [PX4-params] BAT1_N_CELLS, BAT1_V_CHARGED, BAT1_V_EMPTY (v1.12+; BAT_N_CELLS,
+    BAT_V_CHARGED, BAT_V_EMPTY before): cells in series and the per-cell voltage PX4 treats as
+    full and as empty.
+    """
+    for prefix in ("BAT1_", "BAT_"):
+        names = [f"{prefix}{n}" for n in ("N_CELLS", "V_CHARGED", "V_EMPTY")]
+        if all(n in params for n in names):
+            cells, charged, empty = (float(params[n]) for n in names)
+            if cells >= 1 and charged > empty > 0:
+                how = f"{cells:g} cells x {names[1]} {charged:g} V / {names[2]} {empty:g} V"
+                return round(cells * charged, 4), round(cells * empty, 4), how
+    return None
 
 
 def _clamp_to_px4_ranges(tuned: dict[str, float]) -> list[str]:

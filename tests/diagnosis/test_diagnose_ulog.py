@@ -23,6 +23,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "flightlog"))
 from px4_topics import topics_of  # noqa: E402
 
 AUTO = Path(__file__).resolve().parents[1] / "fixtures" / "ulog" / "quad_sitl_v1_15_auto.ulg"
+POSCTL = AUTO.parent / "quad_posctl_v1_15.ulg"  # a real vehicle
 HOVER = schedule_from_mapping(
     {
         "segment": [
@@ -35,10 +36,11 @@ HOVER = schedule_from_mapping(
 
 
 @pytest.mark.slow
-def test_ulog_and_converted_csv_give_the_same_report(tmp_path):
+@pytest.mark.parametrize("ulog", [AUTO, POSCTL], ids=["sitl_auto", "real_posctl"])
+def test_ulog_and_converted_csv_give_the_same_report(ulog, tmp_path):
     csv = tmp_path / "flight.csv"
-    assert flightlog_cli.main(["convert", str(AUTO), "--out", str(csv)]) == 0
-    for name, log in (("a", AUTO), ("b", csv)):
+    assert flightlog_cli.main(["convert", str(ulog), "--out", str(csv)]) == 0
+    for name, log in (("a", ulog), ("b", csv)):
         assert (
             diagnose_cli.main([str(log), "--sim-config", "iris", "--out", str(tmp_path / name)])
             == 0

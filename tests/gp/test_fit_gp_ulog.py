@@ -5,21 +5,26 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
+
 from flightlog.reader import read_log
 from flightlog.schema import FlightLog, write_flight_log
 from gp.model_io import read_model_header
 from scripts import fit_gp as fit_gp_cli
 from scripts import flightlog_cli
 
-AUTO = Path(__file__).resolve().parents[1] / "fixtures" / "ulog" / "quad_sitl_v1_15_auto.ulg"
+FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "ulog"
+AUTO = FIXTURES / "quad_sitl_v1_15_auto.ulg"
+POSCTL = FIXTURES / "quad_posctl_v1_15.ulg"  # a real vehicle
 FAST = ["--no-plots", "--m", "10", "--restarts", "1", "--force"]
 
 
-def test_ulog_and_its_converted_csv_give_the_same_model(tmp_path, capsys):
+@pytest.mark.parametrize("ulog", [AUTO, POSCTL], ids=["sitl_auto", "real_posctl"])
+def test_ulog_and_its_converted_csv_give_the_same_model(ulog, tmp_path, capsys):
     csv = tmp_path / "flight.csv"
-    assert flightlog_cli.main(["convert", str(AUTO), "--out", str(csv)]) == 0
+    assert flightlog_cli.main(["convert", str(ulog), "--out", str(csv)]) == 0
     capsys.readouterr()
-    assert fit_gp_cli.main([str(AUTO), "--out", str(tmp_path / "a"), *FAST]) == 0
+    assert fit_gp_cli.main([str(ulog), "--out", str(tmp_path / "a"), *FAST]) == 0
     from_ulog = capsys.readouterr().out
     assert fit_gp_cli.main([str(csv), "--out", str(tmp_path / "b"), *FAST]) == 0
     assert capsys.readouterr().out == from_ulog

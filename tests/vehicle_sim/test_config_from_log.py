@@ -34,6 +34,10 @@ def test_config_uses_the_logs_tuning_and_hovers_at_its_hover_thrust(tmp_path, ca
     measured = float(np.median(log["thrust_norm"][(speed < 0.3) & (log["landed"] == 0)]))
     assert config.vehicle.hover_thrust_norm == pytest.approx(measured, rel=0.02)
     assert sim.get_param("MPC_THR_HOVER") == pytest.approx(measured, rel=0.02)
+    cells, full, empty = (params[n] for n in ("BAT1_N_CELLS", "BAT1_V_CHARGED", "BAT1_V_EMPTY"))
+    assert config.vehicle.battery_full_v == pytest.approx(cells * full)
+    assert config.vehicle.battery_empty_v == pytest.approx(cells * empty)
+    assert "battery voltages" not in err
 
 
 def test_bad_log_one_line_exit_2_nothing_written(tmp_path, capsys):
