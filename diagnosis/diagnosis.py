@@ -24,7 +24,12 @@ from scipy.ndimage import uniform_filter1d
 from diagnosis.candidates import FORCE_CAUSES
 from diagnosis.cause import Cause, flatten_params
 from diagnosis.closed_loop import ClosedLoopResult, closed_loop
-from diagnosis.command_path import COMMAND_CAUSES, ReplayThresholds, select_command_causes
+from diagnosis.command_path import (
+    COMMAND_CAUSES,
+    ReplayThresholds,
+    configured,
+    select_command_causes,
+)
 from diagnosis.force_model import (
     ASSUMED_ROTOR_HEIGHT_M,
     BatteryModel,
@@ -193,7 +198,7 @@ def diagnose(
         effects = _complete(selection.effects, data, battery)
         causes, rejected = _force_causes(selection, effects)
     added = _added(base, effects)
-    force_config = sim_config.with_effects(added) if added else sim_config
+    force_config = configured(sim_config, added)
     wins = windows(logs, config.window_s)
     block = config.selection.block_s
     test = [w for w in wins if (int(w.t_anchor_s // block) + w.log_index) % 2 == 1]
@@ -210,8 +215,7 @@ def diagnose(
             sim_config, logs, test, causes, effects, base, current, progress
         )
         rejected += moved
-        added = _added(base, effects)
-        force_config = sim_config.with_effects(added) if added else sim_config
+        force_config = configured(sim_config, _added(base, effects))
     current, accepted, tried = select_command_causes(
         force_config,
         logs,
@@ -230,7 +234,7 @@ def diagnose(
     added = _added(base, effects)
     extended = current
     progress("closed-loop tracking of the logged setpoints")
-    extended_config = sim_config.with_effects(added) if added else sim_config
+    extended_config = configured(sim_config, added)
     tracking = closed_loop(sim_config, extended_config, logs, test)
     verdict = [c.name for c in causes]
     if selection is not None and data is not None:
@@ -330,7 +334,7 @@ def _physics_check(sim_config, logs, test, causes, effects, base, current, progr
         if cause.name in base:
             without[cause.name] = dict(base[cause.name])
         added_without = _added(base, without)
-        cfg = sim_config.with_effects(added_without) if added_without else sim_config
+        cfg = configured(sim_config, added_without)
         other = replay(cfg, logs, test)
         if current.rmse_mps() <= (1.0 + REPLAY_WORSE_TOLERANCE) * other.rmse_mps():
             kept.append(cause)

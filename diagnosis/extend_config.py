@@ -22,10 +22,16 @@ def extended_document(
     doc: Mapping[str, Any], added: Mapping[str, Mapping[str, Any]]
 ) -> dict[str, Any]:
     """``doc`` (a parsed config) with the effects ``added`` written into its [effects] tables,
-    replacing any of the same name; vectors become lists."""
+    replacing any of the same name, and fitted ``flight_control`` gains into [px4_params];
+    vectors become lists."""
     out = {k: v for k, v in doc.items() if k != "effects"}
     effects = {k: dict(v) for k, v in doc.get("effects", {}).items()}
+    if "flight_control" in added:
+        gains = {k: float(v) for k, v in added["flight_control"].items()}
+        out["px4_params"] = {**dict(doc.get("px4_params", {})), **gains}
     for name, params in added.items():
+        if name == "flight_control":
+            continue
         effects[name] = {
             key: [float(v) for v in value] if isinstance(value, (list, tuple)) else float(value)
             for key, value in params.items()

@@ -48,7 +48,7 @@ def check_identifiability(logs: Sequence[FlightLog]) -> tuple[NotIdentifiable, .
         out.extend(_force_checks(logs))
     steps = sum(_setpoint_steps(log) for log in logs)
     if steps < MIN_SETPOINT_STEPS:
-        for name in ("command_delay", "motor_lag"):
+        for name in ("command_delay", "motor_lag", "flight_control"):
             out.append(
                 NotIdentifiable(
                     name,

@@ -141,15 +141,22 @@ def test_gusts_are_reported_as_unexplained_disturbance(tmp_path):
 
 
 @pytest.mark.slow
-def test_another_controller_is_never_reported_as_none(tmp_path):
-    """The truth flies other velocity gains than the config: no "none" beside the replay error
-    (fitting the gains, the `flight_control` cause, is not done yet)."""
-    rng = np.random.default_rng(51)
-    # Within PX4's bounds (the simulator refuses others), far from the defaults 1.8 and 0.4.
-    gains = {"MPC_XY_VEL_P_ACC": rng.uniform(1.2, 1.3), "MPC_XY_VEL_I_ACC": rng.uniform(2.0, 3.0)}
-    log = fly_schedule(load_sim_config("iris"), schedule(), seed=51, params=gains)
+@pytest.mark.parametrize("seed", [51, 52])
+def test_another_controller_is_named_flight_control_with_its_gains(seed, tmp_path):
+    """The truth flies other horizontal velocity gains than the config (and body drag): the
+    diagnosis names ``flight_control`` with the gains within 20 % and still finds the drag."""
+    rng = np.random.default_rng(seed)
+    # Within PX4's bounds (the simulator refuses others), slower or faster than the defaults.
+    factor = rng.uniform(0.72, 0.8) if rng.uniform() < 0.5 else rng.uniform(1.4, 1.9)
+    gains = {"MPC_XY_VEL_P_ACC": 1.8 * factor, "MPC_XY_VEL_I_ACC": rng.uniform(1.2, 2.8)}
+    truth, _ = draw("body_drag", rng)
+    log = fly_schedule(load_sim_config("iris", truth), schedule(), seed=seed, params=gains)
     path = write_flight_log(tmp_path / "flight_0.csv", log)
     result = diagnose([read_flight_log(path)], load_sim_config("iris"))
-    assert result.verdict, result.causes[:3]
-    assert result.causes[0].name != "none"
-    assert "unexplained" in result.verdict or result.gain > 1.5, result.verdict
+    assert "flight_control" in result.verdict and "body_drag" in result.verdict, result.causes[:3]
+    (named,) = [c for c in result.causes if c.name == "flight_control"]
+    for name, value in gains.items():
+        assert named.params[name] == pytest.approx(value, rel=0.2), (name, named.params)
+    (drag,) = [c for c in result.causes if c.name == "body_drag"]
+    fitted = [drag.params[f"c_n_per_mps2_{a}"] for a in "xy"]
+    assert fitted == pytest.approx(truth["body_drag"]["c_n_per_mps2"][:2], rel=0.15)
