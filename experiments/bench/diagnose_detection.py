@@ -18,8 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from diagnosis.diagnosis import diagnose
-from tests.diagnosis.hidden_effects import draw, fly_hidden
-from tests.diagnosis.test_hidden_effects import SINGLE, main_parameter_errors
+from experiments.hidden_effects import HIDDEN_EFFECTS, draw, fly_hidden, main_parameter_errors
 from vehicle_sim import load_sim_config
 from vehicle_sim.sensor_noise import add_sensor_noise, draw_sensor_noise
 
@@ -45,9 +44,9 @@ def run(
     errors = {lv: [] for lv in levels}
     false_pos = {lv: [] for lv in levels}
     with tempfile.TemporaryDirectory() as tmp:
-        for name in SINGLE:
+        for name in HIDDEN_EFFECTS:
             for trial in range(trials):
-                seed = 1000 + 17 * SINGLE.index(name) + trial
+                seed = 1000 + 17 * HIDDEN_EFFECTS.index(name) + trial
                 truth, base = draw(name, np.random.default_rng(seed))
                 logs = fly_hidden(truth, Path(tmp), seed)
                 for lv in levels:

@@ -7,8 +7,8 @@ import json
 import numpy as np
 import pytest
 
+from experiments.hidden_effects import draw, fly_hidden
 from scripts.diagnose import main
-from tests.diagnosis.hidden_effects import draw, fly_hidden
 from vehicle_sim import load_sim_config
 
 SCHEMA_KEYS = {"schema", "baseline", "causes", "verdict", "extended"}

@@ -10,49 +10,23 @@ import pytest
 
 from diagnosis.diagnosis import diagnose
 from diagnosis.fly_schedule import fly_schedule
+from experiments.hidden_effects import (
+    HIDDEN_EFFECTS,
+    NOT_YET_ON_NOISY_LOGS,
+    draw,
+    fly_hidden,
+    main_parameter_errors,
+    schedule,
+)
 from flightlog.schema import FlightLog, read_flight_log, write_flight_log
-from tests.diagnosis.hidden_effects import draw, fly_hidden, schedule
 from vehicle_sim import load_sim_config
 from vehicle_sim.sensor_noise import add_sensor_noise, draw_sensor_noise
 
-SINGLE = (
-    "rotor_drag", "body_drag", "wind", "payload", "battery_sag", "ground_effect", "motor_lag",
-    "command_delay", "isotropic_drag",
-)  # fmt: skip
-# Known gaps (issue 18), on noisy logs only: the excitation mission's few seconds of ground holds,
-# logged at 25-50 Hz, do not make ground effect significant against IMU noise (bootstrap p about
-# 0.1); a short motor lag (a few 10 ms) hides under 0.08 m/s velocity noise at 25 Hz.
-NOT_YET_ON_NOISY_LOGS = ("ground_effect", "motor_lag")
-
-
-def main_parameter_errors(name: str, truth: dict, params: dict) -> dict[str, float]:
-    """Relative error of the main parameter(s) of ``name``: estimate vs truth."""
-    p = truth[name]
-    if name == "isotropic_drag":
-        return {"k": abs(params["k_n_per_mps2"] / p["k_n_per_mps2"] - 1.0)}
-    if name in ("rotor_drag", "body_drag"):
-        key = "k_n_per_mps" if name == "rotor_drag" else "c_n_per_mps2"
-        return {
-            f"{key}_{a}": abs(params[f"{key}_{a}"] / p[key][i] - 1.0) for i, a in enumerate("xy")
-        }
-    if name == "wind":
-        est = np.array([params["vel_ned_mps_n"], params["vel_ned_mps_e"]])
-        true = np.array(p["vel_ned_mps"][:2])
-        return {"vel_ned_mps": float(np.linalg.norm(est - true) / np.linalg.norm(true))}
-    if name == "payload":
-        return {"mass_ratio - 1": abs((params["mass_ratio"] - 1.0) / (p["mass_ratio"] - 1.0) - 1.0)}
-    if name == "battery_sag":
-        return {k: abs(params[k] / p[k] - 1.0) for k in ("max_thrust_loss", "full_flight_time_s")}
-    if name == "ground_effect":
-        return {"max_gain": abs(params["max_gain"] / p["max_gain"] - 1.0)}
-    key = "tau_s" if name == "motor_lag" else "delay_s"
-    return {key: abs(params[key] / p[key] - 1.0)}
-
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", SINGLE)
+@pytest.mark.parametrize("name", HIDDEN_EFFECTS)
 def test_hidden_effect_is_named_fitted_and_gains(name, tmp_path):
-    seed = SINGLE.index(name)
+    seed = HIDDEN_EFFECTS.index(name)
     truth, base = draw(name, np.random.default_rng(100 + seed))
     logs = fly_hidden(truth, tmp_path, seed)
     result = diagnose(logs, load_sim_config("iris", base))

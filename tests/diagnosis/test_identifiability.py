@@ -10,8 +10,8 @@ from diagnosis.excitation import schedule_from_mapping
 from diagnosis.fly_schedule import fly_schedule
 from diagnosis.identifiability import check_identifiability
 from diagnosis.replay import windows
+from experiments.hidden_effects import fly_hidden
 from flightlog.schema import FlightLog
-from tests.diagnosis.hidden_effects import fly_hidden
 from vehicle_sim import load_sim_config
 
 HOVER = schedule_from_mapping({"segment": [{"kind": "hover", "duration_s": 30.0}]})

@@ -1,5 +1,6 @@
-"""Hidden-effect flights for the diagnosis tests: draw an effect's parameters, fly the excitation
-mission with it on, write the log under a neutral name. The truth stays in the test."""
+"""Hidden-effect flights for the diagnosis' tests and its detection bench: draw an effect's
+parameters, fly the excitation mission with it on, write the log under a neutral name, and score
+a fitted parameter against the truth. The truth stays with the caller, never in the log."""
 
 from __future__ import annotations
 
@@ -12,7 +13,7 @@ from diagnosis.fly_schedule import fly_schedule
 from flightlog.schema import FlightLog, read_flight_log, write_flight_log
 from vehicle_sim import load_sim_config
 
-MISSION = Path(__file__).resolve().parents[2] / "missions" / "excite_full.toml"
+MISSION = Path(__file__).resolve().parents[1] / "missions" / "excite_full.toml"
 DEFAULT_ROTOR_DRAG = {"k_n_per_mps": [0.35, 0.35, 0.1]}
 
 
@@ -56,3 +57,37 @@ def fly_hidden(truth: dict, tmp_path: Path, seed: int) -> list[FlightLog]:
     log = fly_schedule(load_sim_config("iris", truth), schedule(), seed=seed)
     path = write_flight_log(tmp_path / "flight_0.csv", log)
     return [read_flight_log(path)]
+
+
+HIDDEN_EFFECTS = (
+    "rotor_drag", "body_drag", "wind", "payload", "battery_sag", "ground_effect", "motor_lag",
+    "command_delay", "isotropic_drag",
+)  # fmt: skip
+# Known gaps (issue 18), on noisy logs only: the excitation mission's few seconds of ground holds,
+# logged at 25-50 Hz, do not make ground effect significant against IMU noise (bootstrap p about
+# 0.1); a short motor lag (a few 10 ms) hides under 0.08 m/s velocity noise at 25 Hz.
+NOT_YET_ON_NOISY_LOGS = ("ground_effect", "motor_lag")
+
+
+def main_parameter_errors(name: str, truth: dict, params: dict) -> dict[str, float]:
+    """Relative error of the main parameter(s) of ``name``: estimate vs truth."""
+    p = truth[name]
+    if name == "isotropic_drag":
+        return {"k": abs(params["k_n_per_mps2"] / p["k_n_per_mps2"] - 1.0)}
+    if name in ("rotor_drag", "body_drag"):
+        key = "k_n_per_mps" if name == "rotor_drag" else "c_n_per_mps2"
+        return {
+            f"{key}_{a}": abs(params[f"{key}_{a}"] / p[key][i] - 1.0) for i, a in enumerate("xy")
+        }
+    if name == "wind":
+        est = np.array([params["vel_ned_mps_n"], params["vel_ned_mps_e"]])
+        true = np.array(p["vel_ned_mps"][:2])
+        return {"vel_ned_mps": float(np.linalg.norm(est - true) / np.linalg.norm(true))}
+    if name == "payload":
+        return {"mass_ratio - 1": abs((params["mass_ratio"] - 1.0) / (p["mass_ratio"] - 1.0) - 1.0)}
+    if name == "battery_sag":
+        return {k: abs(params[k] / p[k] - 1.0) for k in ("max_thrust_loss", "full_flight_time_s")}
+    if name == "ground_effect":
+        return {"max_gain": abs(params["max_gain"] / p["max_gain"] - 1.0)}
+    key = "tau_s" if name == "motor_lag" else "delay_s"
+    return {key: abs(params[key] / p[key] - 1.0)}
