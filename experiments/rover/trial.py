@@ -20,7 +20,7 @@ from experiments.rover.scenarios import RoverScenario
 from gp.local_gp import LocalGP
 from planners.rover.path import LocalisationQuality, project_arc_length
 from planners.rover.speed_scheduler import initial_schedule, next_schedule
-from planners.rover.unicycle_nmpc import UnicycleNmpc, unicycle_rollout
+from planners.rover.unicycle_nmpc import UnicycleNmpc
 from vehicle_sim.rover import RoverSim, rover_preset
 
 
@@ -72,6 +72,10 @@ class TrialRecord:
         return float(np.sqrt(np.mean(self.e_head_rad**2)))
 
 
+EXPERIENCE_MODE = "all"
+USE_JAC = True
+
+
 def run_trial(
     sc: RoverScenario,
     gp: LocalGP,
@@ -95,6 +99,7 @@ def run_trial(
         "w": np.full(N, np.nan), "f": np.full(N, np.nan),
     }  # fmt: skip
     hint, w_prev, pose_prev, pending = 0, 0.0, None, None
+    experiences: list = []
     t_limit = 4.0 * path.length_m / max(float(np.min(schedule_mps)), 0.1) + 20.0
     completed = False
     while sim.state.t_s < t_limit:
@@ -109,7 +114,7 @@ def run_trial(
         if pending is not None and sc.learning:  # experience of the previous step
             vtx, v_c, a_prev, pose_k, w_c = pending
             g_obs = learner.observed_disturbance(pose_k, est, v_c, w_c, dt)
-            gp.add(vtx, v_c, a_prev, g_obs)
+            experiences.append((vtx, v_c, a_prev, g_obs, abs(a_prev[0] - path.s_m[vtx])))
         if fix.vertex >= N - 2:
             completed = True
             break
@@ -117,24 +122,17 @@ def run_trial(
         v_now = float(schedule_mps[fix.vertex])
         s_ahead = fix.s_m + v_now * dt * np.arange(K)
         v_h = np.interp(s_ahead, path.s_m, schedule_mps)
-        post = gp.posterior(fix.vertex, v_now) if sc.learning else None
-        n_local = gp.local_data(fix.vertex, v_now)[0].shape[0] if sc.learning else 0
-        w = nmpc.warm_start()
-        g = np.zeros((K, 3))
-        for _ in range(2):
-            poses = unicycle_rollout(est, v_h, w, g, dt)
-            if post is not None:
-                q = learner.horizon_queries(fix.s_m, poses, pose_prev, v_h, w, w_prev, dt)
-                g = learner.predict(post, q)
-                poses = unicycle_rollout(est, v_h, w, g, dt)
-            s_pred = project_arc_length(path, poses[1:, :2], fix.vertex)
-            ref = path.ref_at(s_pred)
-            w = nmpc.solve(est, v_h, g, ref, w_prev, omega_init=w)
+        model = (
+            learner.LocalDisturbance(gp, fix.vertex, v_now, USE_JAC) if sc.learning else None
+        )
+        w = nmpc.solve(
+            est, v_h, lambda poses, v=fix.vertex: path.ref_at(project_arc_length(path, poses[:, :2], v)),
+            w_prev, pose_prev=pose_prev, s0_m=fix.s_m, model=model,
+        )  # fmt: skip
         step_time = time.perf_counter() - t0
+        n_local = model.n_experiences if model is not None else 0
         w_cmd = float(w[0])
-        a_k = learner.horizon_queries(
-            fix.s_m, np.vstack([est, est]), pose_prev, v_h[:1], w[:1], w_prev, dt
-        )[0]
+        a_k = learner.experience_query(fix.s_m, pose_prev, est, v_now, w_cmd, w_prev, dt)
         pending = (fix.vertex, v_now, a_k, est.copy(), w_cmd)
         feats = quality.count(sc.lighting[fix.vertex], true_fix.e_lat_m, true_fix.e_head_rad,
                               st.speed_mps)  # fmt: skip
@@ -150,6 +148,7 @@ def run_trial(
         sim.set_setpoint(v_now, w_cmd)
         sim.step(dt)
         pose_prev, w_prev = est, w_cmd
+    learner.store_pass(gp, experiences, EXPERIENCE_MODE)
     arr = {k: np.asarray(v, dtype=float) for k, v in rec.items()}
     return TrialRecord(
         arr["s"], arr["el"], arr["eh"], arr["w"], arr["v"], arr["f"], arr["n"].astype(int),
