@@ -51,9 +51,7 @@ class LocalDisturbance:
         vertex: the current path vertex; speed_mps: the scheduled speed there.
     """
 
-    def __init__(
-        self, gp: LocalGP, vertex: int, speed_mps: float, jacobian: bool = True
-    ) -> None:
+    def __init__(self, gp: LocalGP, vertex: int, speed_mps: float, jacobian: bool = True) -> None:
         self._jacobian = jacobian
         X, Y = gp.local_data(vertex, speed_mps)
         self.n_experiences = int(X.shape[0])
@@ -112,14 +110,21 @@ def experience_query(
     return np.array([s_m, v_act, dth / dt_s, v_cmd_mps, w_cmd_radps, w_cmd_prev_radps])
 
 
-def store_pass(gp: LocalGP, experiences: list, mode: str = "all") -> None:
-    """Add one pass's experiences (vertex, v_cmd, a, g, distance to vertex) to the bins."""
-    if mode == "per_vertex":
-        best: dict = {}
-        for e in experiences:
-            key = (e[0], gp.config.speed_bin(e[1]))
-            if key not in best or e[4] < best[key][4]:
-                best[key] = e
-        experiences = sorted(best.values(), key=lambda e: e[0])
-    for vtx, v_c, a, g, _ in experiences:
+def store_pass(gp: LocalGP, experiences: list) -> None:
+    """Add one pass's experiences to the bins, after the pass.
+
+    ``experiences`` holds (vertex, v_cmd [m/s], a (6,), g (3,), distance to the vertex [m]).
+    Trial j drives on the experience of trials < j only ([Ostafew16] section 3.2's
+    D^(1..j-1); the first trial has none). Per (vertex, speed bin) only the pass's experience
+    nearest the vertex is kept, so a bin of c_bin holds the last c_bin PASSES: at 10 Hz and
+    0.25 m vertices one pass makes ~6 experiences per vertex, which would otherwise fill every
+    bin from the last pass alone, and the local GP would model only the previous trial's
+    transients (measured: experiment 1's max lateral error then drifts back up from trial 5).
+    """
+    best: dict[tuple[int, int], tuple] = {}
+    for e in experiences:
+        key = (int(e[0]), gp.config.speed_bin(e[1]))
+        if key not in best or e[4] < best[key][4]:
+            best[key] = e
+    for vtx, v_c, a, g, _ in sorted(best.values(), key=lambda e: e[0]):
         gp.add(vtx, v_c, a, g)

@@ -1,11 +1,13 @@
 """Repeat a taught path trial after trial with the LB-NMPC ([Ostafew16] sections 3-4).
 
-Each control step (``dt_s``): localise against the nearest vertex (noisy pose, VT&R stand-in),
-take the scheduled speed there, build ONE local GP from the experience bins at (vertex, speed
-bin), predict the disturbance along the horizon, solve the unicycle NMPC for the turn rates
-(re-predicting the disturbance along the new trajectory once), send (speed, turn rate) to the
-rover and, one step later, store the observed disturbance as a new experience. After a trial the
-speed scheduler (if any) sets the next trial's speeds from the per-vertex records.
+Each control step (``dt_s``): localise against the nearest vertex (VT&R stand-in:
+experiments.rover.localisation), take the scheduled speed there, build ONE local GP from the
+experience bins at (vertex, speed bin), solve the unicycle NMPC for the turn rates (the
+disturbance is predicted along each Gauss-Newton iterate; with ``gp_jacobian`` its derivatives
+enter the step too), send (speed, turn rate) to the rover and, one step later, record the
+observed disturbance. After the pass the experiences go into the bins (the next trials learn
+from them) and the speed scheduler (if any) sets the next trial's speeds from the per-vertex
+records.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from experiments.rover import learner
+from experiments.rover.localisation import LocalisationError
 from experiments.rover.scenarios import RoverScenario
 from gp.local_gp import LocalGP
 from planners.rover.path import LocalisationQuality, project_arc_length
@@ -72,10 +75,6 @@ class TrialRecord:
         return float(np.sqrt(np.mean(self.e_head_rad**2)))
 
 
-EXPERIENCE_MODE = "all"
-USE_JAC = True
-
-
 def run_trial(
     sc: RoverScenario,
     gp: LocalGP,
@@ -91,6 +90,7 @@ def run_trial(
     sim = RoverSim(rover_preset(sc.preset), sc.effects, seed=sc.seed * 1000 + trial_index,
                    pose=start)  # fmt: skip
     sim.arm()
+    loc_error = LocalisationError(sc.localisation, sc.dt_s, rng)
     nmpc = UnicycleNmpc(cfg)
     K, dt, N = cfg.horizon, sc.dt_s, len(path)
     rec = {k: [] for k in ("s", "el", "eh", "w", "v", "f", "n", "t")}
@@ -105,7 +105,7 @@ def run_trial(
     while sim.state.t_s < t_limit:
         st = sim.state
         truth = np.array([st.x_m, st.y_m, st.heading_rad])
-        est = truth + rng.normal(0, [sc.loc_noise_m, sc.loc_noise_m, sc.loc_noise_rad])
+        est = truth + loc_error.draw()
         if pose_prev is None:
             pose_prev = est.copy()
         fix = path.localise(*est, hint=hint)
@@ -123,12 +123,13 @@ def run_trial(
         s_ahead = fix.s_m + v_now * dt * np.arange(K)
         v_h = np.interp(s_ahead, path.s_m, schedule_mps)
         model = (
-            learner.LocalDisturbance(gp, fix.vertex, v_now, USE_JAC) if sc.learning else None
+            learner.LocalDisturbance(gp, fix.vertex, v_now, sc.gp_jacobian) if sc.learning else None
         )
-        w = nmpc.solve(
-            est, v_h, lambda poses, v=fix.vertex: path.ref_at(project_arc_length(path, poses[:, :2], v)),
-            w_prev, pose_prev=pose_prev, s0_m=fix.s_m, model=model,
-        )  # fmt: skip
+
+        def reference(poses: np.ndarray, vertex: int = fix.vertex) -> np.ndarray:
+            return path.ref_at(project_arc_length(path, poses[:, :2], vertex))
+
+        w = nmpc.solve(est, v_h, reference, w_prev, pose_prev=pose_prev, s0_m=fix.s_m, model=model)
         step_time = time.perf_counter() - t0
         n_local = model.n_experiences if model is not None else 0
         w_cmd = float(w[0])
@@ -148,7 +149,8 @@ def run_trial(
         sim.set_setpoint(v_now, w_cmd)
         sim.step(dt)
         pose_prev, w_prev = est, w_cmd
-    learner.store_pass(gp, experiences, EXPERIENCE_MODE)
+    if sc.learning:  # this pass's experiences serve the next trials ([Ostafew16] D^(j))
+        learner.store_pass(gp, experiences)
     arr = {k: np.asarray(v, dtype=float) for k, v in rec.items()}
     return TrialRecord(
         arr["s"], arr["el"], arr["eh"], arr["w"], arr["v"], arr["f"], arr["n"].astype(int),

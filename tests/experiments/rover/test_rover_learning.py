@@ -38,9 +38,43 @@ def test_illustrative_example_ranks_feedback_mpc_lbnmpc() -> None:
     assert rms["lbnmpc"] < 0.6 * rms["mpc"] < 0.6 * rms["feedback"]
 
 
+def test_local_gp_mean_and_jacobian_match_the_gp_and_finite_differences() -> None:
+    rng = np.random.default_rng(5)
+    gp = learner.make_history_gp()
+    for i in range(40):
+        gp.add(i // 4, 0.4, rng.normal(0, 0.5, 6), rng.normal(0, 0.2, 3))
+    model = learner.LocalDisturbance(gp, 5, 0.4)
+    assert model.n_experiences == gp.local_data(5, 0.4)[0].shape[0] == 40
+    q = rng.normal(0, 0.3, 6)
+    mean, jac = model.mean_and_jacobian(q)
+    assert mean == pytest.approx(gp.predict(5, 0.4, q[None, :])[0][0], abs=1e-9)
+    eye = 1e-6 * np.eye(6)
+    num = np.array(
+        [
+            (model.mean_and_jacobian(q + e)[0] - model.mean_and_jacobian(q - e)[0]) / 2e-6
+            for e in eye
+        ]
+    ).T
+    assert jac == pytest.approx(num, abs=1e-7)
+
+
+def test_a_pass_fills_each_bin_with_one_experience_the_nearest_to_its_vertex() -> None:
+    gp = learner.make_history_gp()
+    a, g = np.zeros(6), np.zeros(3)
+    for trial in range(6):
+        experiences = [(7, 0.4, a + trial, g + d, d) for d in (0.1, 0.02, 0.05)]
+        learner.store_pass(gp, experiences)
+    X, Y = gp.local_data(7, 0.4)
+    assert len(gp) == 4  # c_bin passes, newest kept
+    assert sorted(X[:, 0]) == [2, 3, 4, 5]
+    assert Y[:, 0] == pytest.approx(np.full(4, 0.02))
+
+
 @pytest.mark.slow
-def test_short_experiment_1_learns() -> None:
+def test_short_experiment_1_learns_from_past_trials_with_a_bounded_local_gp() -> None:
     records = run_trials(scenario("rover_exp1").with_trials(4))
     assert all(r.completed for r in records)
+    assert records[0].n_local.max() == 0  # the first trial has no experience
     assert records[3].max_e_lat_m < records[0].max_e_lat_m
-    assert records[3].n_local.max() <= 132
+    sizes = [int(r.n_local.max()) for r in records[1:]]
+    assert 0 < max(sizes) <= 132
