@@ -6,8 +6,8 @@ MAV_CMD_COMPONENT_ARM_DISARM and MAV_CMD_DO_SET_MODE (acknowledged; MANUAL, AUTO
 OFFBOARD), SET_MODE, and offboard
 SET_POSITION_TARGET_LOCAL_NED with velocity + yaw rate: in MAV_FRAME_BODY_NED vx is the forward
 speed; in MAV_FRAME_LOCAL_NED the speed is (vx, vy) projected on the heading. Telemetry at
-``telemetry_hz``: HEARTBEAT, LOCAL_POSITION_NED, ATTITUDE. Offboard without a setpoint for
-``setpoint_timeout_s`` stops the rover (PX4's offboard loss failsafe, here: hold).
+``telemetry_hz``: HEARTBEAT, LOCAL_POSITION_NED, ATTITUDE, ATTITUDE_QUATERNION. Offboard without
+a setpoint for ``setpoint_timeout_s`` stops the rover (PX4's offboard loss failsafe, here: hold).
 
 World frame mapping: the rover's x is north, its y is west (heading counter-clockwise from x),
 so NED north = x_m, east = -y_m, yaw = -heading_rad.
@@ -30,7 +30,11 @@ _MAV = mavutil.mavlink
 
 
 class RoverMavlinkEndpoint:
-    """Runs ``sim`` in real time on a thread, listening on udpin ``host:port``."""
+    """Runs ``sim`` in real time on a thread, on UDP ``host:port``.
+
+    ``mode`` "udpin" listens there (a ground station sends first); "udpout" sends there, as
+    PX4 SITL sends to a companion listening on udpin (companion.pymavlink_link, MAVSDK).
+    """
 
     def __init__(
         self,
@@ -40,10 +44,13 @@ class RoverMavlinkEndpoint:
         physics_period_s: float = 0.02,
         telemetry_hz: float = 10.0,
         setpoint_timeout_s: float = 1.0,
+        mode: str = "udpin",
     ) -> None:
+        if mode not in ("udpin", "udpout"):
+            raise ValueError(f"mode must be 'udpin' or 'udpout', got {mode!r}")
         self.sim = sim
         self._conn = mavutil.mavlink_connection(
-            f"udpin:{host}:{port}", source_system=1, source_component=1
+            f"{mode}:{host}:{port}", source_system=1, source_component=1
         )
         self._period = physics_period_s
         self._telemetry_period = 1.0 / telemetry_hz
@@ -137,3 +144,7 @@ class RoverMavlinkEndpoint:
         vy_w = st.speed_mps * s + st.lat_speed_mps * c
         mav.local_position_ned_send(t_ms, st.x_m, -st.y_m, 0.0, vx_w, -vy_w, 0.0)
         mav.attitude_send(t_ms, 0.0, 0.0, -st.heading_rad, 0.0, 0.0, -st.yaw_rate_radps)
+        half = -st.heading_rad / 2
+        mav.attitude_quaternion_send(
+            t_ms, math.cos(half), 0.0, 0.0, math.sin(half), 0.0, 0.0, -st.yaw_rate_radps
+        )
