@@ -1,10 +1,10 @@
 """The history GP of [Ostafew16] over experience bins: what the LB-NMPC learns trial to trial.
 
-Query a_k = (s_k, v_act_{k-1}, omega_act_{k-1}, v_cmd_k, omega_cmd_k, omega_cmd_{k-1})
-(planners.rover.unicycle_nmpc.QUERY_NAMES): the path position (arc length, standing in for x_k,
-which the vertex bins already localise), the velocity state one step ago from consecutive
-localised poses ([Ostafew16] section 4.1), and the command now and one step ago. Output: the
-body-frame disturbance rates (along [m/s], lateral [m/s], yaw [rad/s]) observed as
+Query a_k = (s_k, e_L,k, e_H,k, v_act_{k-1}, omega_act_{k-1}, v_cmd_k, omega_cmd_k,
+omega_cmd_{k-1}) (planners.rover.unicycle_nmpc.QUERY_NAMES): the pose x_k in path coordinates
+(arc length and the errors against the nearest vertex), the velocity state one step ago from
+consecutive localised poses ([Ostafew16] section 4.1), and the command now and one step ago.
+Output: the body-frame disturbance rates (along [m/s], lateral [m/s], yaw [rad/s]) observed as
 (x_{k+1} - f(x_k, u_k)) / dt ([Ostafew16] eq. 21). Experiences are kept in gp.local_gp bins with
 [Ostafew16] section 5.2's c_vertex 5, c_velocity 1, v_bin 0.25 m/s, c_bin 4; one local GP is
 built per control step from at most 11 * 3 * 4 = 132 experiences (:class:`LocalDisturbance`:
@@ -29,7 +29,7 @@ __all__ = ["QUERY_NAMES", "LocalDisturbance", "make_history_gp", "observed_distu
 PAPER_BINS = ExperienceBinsConfig(
     speed_bin_mps=0.25, bin_capacity=4, vertex_window=5, speed_window=1
 )
-_LENGTHSCALES = np.array([0.5, 1.0, 1.5, 0.5, 0.8, 1.5])
+_LENGTHSCALES = np.array([0.5, 0.3, 0.3, 1.0, 1.5, 0.5, 0.8, 1.5])
 _SIGNAL_STD = (0.15, 0.15, 0.4)
 _NOISE_STD = (0.06, 0.06, 0.1)
 
@@ -41,7 +41,7 @@ def make_history_gp(bins: ExperienceBinsConfig = PAPER_BINS) -> LocalGP:
 
 
 class LocalDisturbance:
-    """The local GP's posterior mean g(a) (3,) and Jacobian dg/da (3, 6) at one query.
+    """The local GP's posterior mean g(a) (3,) and Jacobian dg/da (3, 8) at one query.
 
     mean_j(a) = sum_i alpha_ji k_j(a, a_i),  d mean_j / da = -sum_i alpha_ji k_j(a, a_i)
     (a - a_i) / l_j^2, with alpha_j = (K_j + s2_j I)^-1 g_j over the local experiences.
@@ -81,7 +81,7 @@ class LocalDisturbance:
         return mean, jac
 
     def mean(self, queries: np.ndarray) -> np.ndarray:
-        """Means (n, 3) at queries (n, 6)."""
+        """Means (n, 3) at queries (n, 8)."""
         return np.array([self.mean_and_jacobian(q)[0] for q in np.atleast_2d(queries)])
 
 
@@ -97,6 +97,8 @@ def observed_disturbance(
 
 def experience_query(
     s_m: float,
+    e_lat_m: float,
+    e_head_rad: float,
     pose_prev: np.ndarray,
     pose: np.ndarray,
     v_cmd_mps: float,
@@ -104,10 +106,12 @@ def experience_query(
     w_cmd_prev_radps: float,
     dt_s: float,
 ) -> np.ndarray:
-    """a_k (6,) of one step as it happened (the same layout the NMPC predicts with)."""
+    """a_k (8,) of one step as it happened (the same layout the NMPC predicts with)."""
     v_act = math.hypot(*(pose[:2] - pose_prev[:2])) / dt_s
     dth = math.atan2(math.sin(pose[2] - pose_prev[2]), math.cos(pose[2] - pose_prev[2]))
-    return np.array([s_m, v_act, dth / dt_s, v_cmd_mps, w_cmd_radps, w_cmd_prev_radps])
+    return np.array(
+        [s_m, e_lat_m, e_head_rad, v_act, dth / dt_s, v_cmd_mps, w_cmd_radps, w_cmd_prev_radps]
+    )
 
 
 def store_pass(gp: LocalGP, experiences: list) -> None:

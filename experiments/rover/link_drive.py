@@ -97,9 +97,11 @@ def drive_path(
 
         w = float(
             solver.solve(pose, v_h, reference, w_prev, pose_prev=pose_prev, s0_m=fix.s_m,
-                         model=model)[0]
+                         model=model, ref0=np.array(path.pose(fix.vertex)))[0]
         )  # fmt: skip
-        a_k = learner.experience_query(fix.s_m, pose_prev, pose, speed_mps, w, w_prev, dt)
+        a_k = learner.experience_query(
+            fix.s_m, fix.e_lat_m, fix.e_head_rad, pose_prev, pose, speed_mps, w, w_prev, dt
+        )
         pending = (fix.vertex, a_k, pose.copy(), w)
         yaw = -pose[2]
         link.send_velocity(

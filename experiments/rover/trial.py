@@ -129,11 +129,22 @@ def run_trial(
         def reference(poses: np.ndarray, vertex: int = fix.vertex) -> np.ndarray:
             return path.ref_at(project_arc_length(path, poses[:, :2], vertex))
 
-        w = nmpc.solve(est, v_h, reference, w_prev, pose_prev=pose_prev, s0_m=fix.s_m, model=model)
+        w = nmpc.solve(
+            est,
+            v_h,
+            reference,
+            w_prev,
+            pose_prev=pose_prev,
+            s0_m=fix.s_m,
+            model=model,
+            ref0=np.array(path.pose(fix.vertex)),
+        )
         step_time = time.perf_counter() - t0
         n_local = model.n_experiences if model is not None else 0
         w_cmd = float(w[0])
-        a_k = learner.experience_query(fix.s_m, pose_prev, est, v_now, w_cmd, w_prev, dt)
+        a_k = learner.experience_query(
+            fix.s_m, fix.e_lat_m, fix.e_head_rad, pose_prev, est, v_now, w_cmd, w_prev, dt
+        )
         pending = (fix.vertex, v_now, a_k, est.copy(), w_cmd)
         feats = quality.count(sc.lighting[fix.vertex], true_fix.e_lat_m, true_fix.e_head_rad,
                               st.speed_mps)  # fmt: skip

@@ -9,10 +9,12 @@ Model per step b (dt = ``dt_s``), with body-frame disturbance rates g_b = g(a_b)
     th_{b+1} = th_b + dt (omega_b + g_yaw)
 
 and the disturbance query of [Ostafew16] eq. 19, a_b = (x_b, v_{b-1}, u_b, u_{b-1}), laid out as
-:data:`QUERY_NAMES`: the path position (arc length s_b, the scheduled advance from the current
-fix), the velocity state (v_act, omega_act) one step back from consecutive predicted poses
-([Ostafew16] section 4.1; pose -1 is the previous localised pose), the commanded speed and turn
-rate now, and the turn rate one step back.
+:data:`QUERY_NAMES`: the pose x_b in path coordinates (arc length s_b, the scheduled advance
+from the current fix, and e_L, e_H against the reference pose of step b: the terrain is placed
+in the world, so where the robot is across the path and how it is turned matter, not only how
+far along it is), the velocity state (v_act, omega_act) one step back from consecutive predicted
+poses ([Ostafew16] section 4.1; pose -1 is the previous localised pose), the commanded speed
+and turn rate now, and the turn rate one step back.
 
 The speed v_b is fixed to the schedule; only the turn rates omega_0..omega_{K-1} are optimised
 ([Ostafew16] section 4.1). The cost is a sum of squares, with e_L/e_H of each predicted pose
@@ -37,13 +39,13 @@ from typing import Protocol
 
 import numpy as np
 
-QUERY_NAMES = ("s_m", "v_act_prev_mps", "w_act_prev_radps", "v_cmd_mps", "w_cmd_radps",
-               "w_cmd_prev_radps")  # fmt: skip
+QUERY_NAMES = ("s_m", "e_lat_m", "e_head_rad", "v_act_prev_mps", "w_act_prev_radps",
+               "v_cmd_mps", "w_cmd_radps", "w_cmd_prev_radps")  # fmt: skip
 N_QUERY = len(QUERY_NAMES)
 
 
 class DisturbanceModel(Protocol):
-    """A learned disturbance g(a): mean (3,) and its Jacobian (3, 6) at one query a (6,)."""
+    """A learned disturbance g(a): mean (3,) and its Jacobian (3, 8) at one query a (8,)."""
 
     def mean_and_jacobian(self, query: np.ndarray) -> tuple[np.ndarray, np.ndarray]: ...
 
@@ -88,7 +90,7 @@ class UnicycleNmpcConfig:
 @dataclass(frozen=True, eq=False)
 class Rollout:
     """Predicted poses (K+1, 3), their derivatives (K+1, 3, K) w.r.t. the turn rates, the
-    disturbances used (K, 3) and the queries a_b (K, 6)."""
+    disturbances used (K, 3) and the queries a_b (K, 8)."""
 
     poses: np.ndarray
     d_poses: np.ndarray
@@ -109,6 +111,7 @@ def rollout(
     omega_prev_radps: float,
     dt_s: float,
     model: DisturbanceModel | None = None,
+    ref_poses: np.ndarray | None = None,
 ) -> Rollout:
     """Model (18) along the horizon with forward-mode derivatives w.r.t. omega (K,).
 
@@ -118,6 +121,8 @@ def rollout(
         v_mps, omega_radps: scheduled speeds and turn rates (K,).
         omega_prev_radps: the turn rate commanded one step earlier.
         model: the learned disturbance, or None for the a-priori model alone.
+        ref_poses: path poses (K, 3) the poses 0..K-1 are measured against for the query's
+            e_L, e_H (default: zero errors).
     """
     K = len(v_mps)
     P = np.empty((K + 1, 3))
@@ -133,7 +138,14 @@ def rollout(
         dx, dy = x - prev[0], y - prev[1]
         dist = math.hypot(dx, dy)
         w_prev = omega_prev_radps if b == 0 else omega_radps[b - 1]
-        A[b] = (s, dist / dt_s, _wrap(th - prev[2]) / dt_s, v_mps[b], omega_radps[b], w_prev)
+        if ref_poses is not None:
+            xr, yr, tr = ref_poses[b]
+            sr, cr = math.sin(tr), math.cos(tr)
+            e_lat, e_head = -sr * (xr - x) + cr * (yr - y), _wrap(tr - th)
+        else:
+            sr = cr = e_lat = e_head = 0.0
+        A[b] = (s, e_lat, e_head, dist / dt_s, _wrap(th - prev[2]) / dt_s, v_mps[b],
+                omega_radps[b], w_prev)  # fmt: skip
         va, vl = v_mps[b], 0.0
         dg = None
         if model is not None:
@@ -142,10 +154,12 @@ def rollout(
             va, vl = va + g[0], g[1]
             dD = Db - d_prev
             dv_act = (dx * dD[0] + dy * dD[1]) / (max(dist, 1e-9) * dt_s)
-            dg = np.outer(J[:, 1], dv_act) + np.outer(J[:, 2], dD[2] / dt_s)
-            dg[:, b] += J[:, 4]
+            dg = np.outer(J[:, 3], dv_act) + np.outer(J[:, 4], dD[2] / dt_s)
+            if ref_poses is not None:
+                dg += np.outer(J[:, 1], sr * Db[0] - cr * Db[1]) - np.outer(J[:, 2], Db[2])
+            dg[:, b] += J[:, 6]
             if b > 0:
-                dg[:, b - 1] += J[:, 5]
+                dg[:, b - 1] += J[:, 7]
         c, sn = math.cos(th), math.sin(th)
         Dn = D[b + 1]
         Dn[0] = Db[0] + dt_s * (-sn * va - c * vl) * Db[2]
@@ -217,6 +231,7 @@ class UnicycleNmpc:
         s0_m: float = 0.0,
         model: DisturbanceModel | None = None,
         omega_init: np.ndarray | None = None,
+        ref0: np.ndarray | None = None,
     ) -> np.ndarray:
         """Turn rates (K,).
 
@@ -230,6 +245,8 @@ class UnicycleNmpc:
             s0_m: arc length of the current fix [m] (the query's path position).
             model: learned disturbance, or None.
             omega_init: initial guess (default: the previous solution shifted).
+            ref0: the path pose the current pose is measured against (the nearest vertex),
+                (3,); default: x0 (zero errors).
         """
         c = self.config
         x0 = np.asarray(x0, dtype=float)
@@ -237,11 +254,14 @@ class UnicycleNmpc:
         v = np.asarray(v_mps, dtype=float)
         w = self.warm_start() if omega_init is None else np.asarray(omega_init, dtype=float)
         ql, qh = c.q_lat, c.q_head
-        ref_arr = None if callable(ref) else np.asarray(ref, dtype=float)
+        if callable(ref):  # the reference of the nominal prediction (no learned model)
+            nominal = unicycle_rollout(x0, v, w, np.zeros((len(v), 3)), c.dt_s)
+            ref_arr = np.asarray(ref(nominal[1:]), dtype=float)
+        else:
+            ref_arr = np.asarray(ref, dtype=float)
+        ref_q = np.vstack([x0 if ref0 is None else np.asarray(ref0, dtype=float), ref_arr[:-1]])
         for _ in range(c.iterations):
-            ro = rollout(x0, pose_prev, s0_m, v, w, omega_prev_radps, c.dt_s, model)
-            if ref_arr is None:
-                ref_arr = np.asarray(ref(ro.poses[1:]), dtype=float)
+            ro = rollout(x0, pose_prev, s0_m, v, w, omega_prev_radps, c.dt_s, model, ref_q)
             P, D = ro.poses[1:], ro.d_poses[1:]
             st, ct = np.sin(ref_arr[:, 2]), np.cos(ref_arr[:, 2])
             e_lat = -st * (ref_arr[:, 0] - P[:, 0]) + ct * (ref_arr[:, 1] - P[:, 1])

@@ -19,7 +19,7 @@ def test_local_gp_uses_a_bounded_number_of_experiences_however_many_trials() -> 
         for vertex in range(60):
             for _ in range(6):  # ~6 control steps per vertex at 0.4 m/s and 10 Hz
                 speed = rng.uniform(0.3, 0.6)
-                gp.add(vertex, speed, rng.normal(size=6), rng.normal(size=3))
+                gp.add(vertex, speed, rng.normal(size=8), rng.normal(size=3))
         sizes.append(gp.local_data(30, 0.45)[0].shape[0])
     assert len(gp) == 60 * 2 * 4  # two speed bins (0.25-0.5, 0.5-0.75) of 4 per vertex
     assert set(sizes[4:]) == {11 * 2 * 4}  # full bins: the local GP stops growing
@@ -42,13 +42,13 @@ def test_local_gp_mean_and_jacobian_match_the_gp_and_finite_differences() -> Non
     rng = np.random.default_rng(5)
     gp = learner.make_history_gp()
     for i in range(40):
-        gp.add(i // 4, 0.4, rng.normal(0, 0.5, 6), rng.normal(0, 0.2, 3))
+        gp.add(i // 4, 0.4, rng.normal(0, 0.5, 8), rng.normal(0, 0.2, 3))
     model = learner.LocalDisturbance(gp, 5, 0.4)
     assert model.n_experiences == gp.local_data(5, 0.4)[0].shape[0] == 40
-    q = rng.normal(0, 0.3, 6)
+    q = rng.normal(0, 0.3, 8)
     mean, jac = model.mean_and_jacobian(q)
     assert mean == pytest.approx(gp.predict(5, 0.4, q[None, :])[0][0], abs=1e-9)
-    eye = 1e-6 * np.eye(6)
+    eye = 1e-6 * np.eye(8)
     num = np.array(
         [
             (model.mean_and_jacobian(q + e)[0] - model.mean_and_jacobian(q - e)[0]) / 2e-6
@@ -60,7 +60,7 @@ def test_local_gp_mean_and_jacobian_match_the_gp_and_finite_differences() -> Non
 
 def test_a_pass_fills_each_bin_with_one_experience_the_nearest_to_its_vertex() -> None:
     gp = learner.make_history_gp()
-    a, g = np.zeros(6), np.zeros(3)
+    a, g = np.zeros(8), np.zeros(3)
     for trial in range(6):
         experiences = [(7, 0.4, a + trial, g + d, d) for d in (0.1, 0.02, 0.05)]
         learner.store_pass(gp, experiences)

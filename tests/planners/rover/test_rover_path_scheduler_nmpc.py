@@ -69,7 +69,7 @@ class _LinearYawModel:
         self.c = c
 
     def mean_and_jacobian(self, query: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        J = np.zeros((3, 6))
+        J = np.zeros((3, 8))
         J[2] = self.c
         J[1] = 0.5 * self.c
         return np.array([0.0, 0.5 * self.c @ query, self.c @ query]), J
@@ -78,16 +78,17 @@ class _LinearYawModel:
 def test_rollout_derivatives_match_finite_differences_through_the_learned_model() -> None:
     rng = np.random.default_rng(4)
     K = 8
-    model = _LinearYawModel(rng.normal(0, 0.3, 6))
+    model = _LinearYawModel(rng.normal(0, 0.3, 8))
     x0, prev = np.array([0.2, -0.1, 0.3]), np.array([0.17, -0.11, 0.28])
     v, w = np.full(K, 0.6), rng.normal(0, 0.4, K)
-    ro = rollout(x0, prev, 2.0, v, w, 0.1, 0.1, model)
+    ref = np.column_stack([0.06 * np.arange(K), 0.1 * np.ones(K), 0.05 * np.ones(K)])
+    ro = rollout(x0, prev, 2.0, v, w, 0.1, 0.1, model, ref)
     num = np.empty_like(ro.d_poses)
     for j in range(K):
         e = np.zeros(K)
         e[j] = 1e-6
-        hi = rollout(x0, prev, 2.0, v, w + e, 0.1, 0.1, model).poses
-        lo = rollout(x0, prev, 2.0, v, w - e, 0.1, 0.1, model).poses
+        hi = rollout(x0, prev, 2.0, v, w + e, 0.1, 0.1, model, ref).poses
+        lo = rollout(x0, prev, 2.0, v, w - e, 0.1, 0.1, model, ref).poses
         num[:, :, j] = (hi - lo) / 2e-6
     assert np.abs(num - ro.d_poses).max() < 1e-7
     assert np.abs(ro.d_poses).max() > 0.01
