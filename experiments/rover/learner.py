@@ -55,30 +55,42 @@ class LocalDisturbance:
         self._jacobian = jacobian
         X, Y = gp.local_data(vertex, speed_mps)
         self.n_experiences = int(X.shape[0])
-        self._X = X
-        self._inv_l2 = np.stack([1.0 / k.lengthscales**2 for k in gp.kernels])  # (3, d)
+        ls = np.stack([k.lengthscales for k in gp.kernels])  # (3, d)
+        self._shared = bool(np.all(ls == ls[0]))
+        self._X, self._inv_l2, self._inv_l = X, 1.0 / ls**2, 1.0 / ls[0]
+        self._Xs = X * self._inv_l  # support scaled by the (shared) lengthscales
+        if self.n_experiences == 0:
+            self._alpha = np.zeros((3, 0))
+            return
+        if self._shared:  # one kernel matrix serves all outputs: C_j = s2_j E + n2_j I
+            k0 = gp.kernels[0]
+            E = k0(X, X) / k0.variance
         alphas = []
         for j, (k, s2) in enumerate(zip(gp.kernels, gp.noise_variances, strict=True)):
-            if self.n_experiences == 0:
-                alphas.append(np.zeros(0))
-                continue
-            C = k(X, X)
+            C = k.variance * E if self._shared else k(X, X)
             C[np.diag_indices_from(C)] += s2
-            alphas.append(
-                linalg.cho_solve(linalg.cho_factor(C, lower=True, check_finite=False), Y[:, j],
-                                 check_finite=False) * k.variance
-            )  # fmt: skip
+            factor = linalg.cho_factor(C, lower=True, check_finite=False)
+            alphas.append(linalg.cho_solve(factor, Y[:, j], check_finite=False) * k.variance)
         self._alpha = np.stack(alphas)  # (3, n), each scaled by its signal variance
+
+    @property
+    def has_jacobian(self) -> bool:
+        return self._jacobian and self.n_experiences > 0
 
     def mean_and_jacobian(self, query: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         if self.n_experiences == 0:
             return np.zeros(3), np.zeros((3, N_QUERY))
+        if self._shared:
+            diff = query * self._inv_l - self._Xs  # (n, d), scaled
+            w = self._alpha * np.exp(-0.5 * np.einsum("ij,ij->i", diff, diff))  # (3, n)
+            if not self._jacobian:
+                return w.sum(axis=1), np.zeros((3, N_QUERY))
+            return w.sum(axis=1), -(w @ diff) * self._inv_l
         diff = query[None, :] - self._X  # (n, d)
         d2 = (diff * diff) @ self._inv_l2.T  # (n, 3)
         w = np.exp(-0.5 * d2).T * self._alpha  # (3, n)
-        mean = w.sum(axis=1)
         jac = -(w @ diff) * self._inv_l2 if self._jacobian else np.zeros((3, N_QUERY))
-        return mean, jac
+        return w.sum(axis=1), jac
 
     def mean(self, queries: np.ndarray) -> np.ndarray:
         """Means (n, 3) at queries (n, 8)."""

@@ -45,7 +45,11 @@ N_QUERY = len(QUERY_NAMES)
 
 
 class DisturbanceModel(Protocol):
-    """A learned disturbance g(a): mean (3,) and its Jacobian (3, 8) at one query a (8,)."""
+    """A learned disturbance g(a): mean (3,) and its Jacobian (3, 8) at one query a (8,).
+    ``has_jacobian`` False says the Jacobian is zero (the solver then skips the chain rule)."""
+
+    @property
+    def has_jacobian(self) -> bool: ...
 
     def mean_and_jacobian(self, query: np.ndarray) -> tuple[np.ndarray, np.ndarray]: ...
 
@@ -55,6 +59,7 @@ class ConstantDisturbance:
     """A disturbance that does not depend on the query (e.g. a known drift), g (3,)."""
 
     g: tuple[float, float, float]
+    has_jacobian = False
 
     def mean_and_jacobian(self, query: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return np.asarray(self.g, dtype=float), np.zeros((3, N_QUERY))
@@ -132,6 +137,7 @@ def rollout(
     P[0] = x0
     prev, d_prev = np.asarray(pose_prev, dtype=float), np.zeros((3, K))
     s = s0_m
+    chain = model is not None and model.has_jacobian
     for b in range(K):
         x, y, th = P[b]
         Db = D[b]
@@ -152,6 +158,7 @@ def rollout(
             g, J = model.mean_and_jacobian(A[b])
             G[b] = g
             va, vl = va + g[0], g[1]
+        if chain:
             dD = Db - d_prev
             dv_act = (dx * dD[0] + dy * dD[1]) / (max(dist, 1e-9) * dt_s)
             dg = np.outer(J[:, 3], dv_act) + np.outer(J[:, 4], dD[2] / dt_s)

@@ -65,6 +65,8 @@ def test_nmpc_turns_towards_a_path_on_its_left_and_learned_drift_changes_the_ans
 class _LinearYawModel:
     """g_yaw = c . a: a disturbance that depends on the query, to check the chain rule."""
 
+    has_jacobian = True
+
     def __init__(self, c: np.ndarray) -> None:
         self.c = c
 
