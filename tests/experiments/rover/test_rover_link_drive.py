@@ -64,3 +64,21 @@ def test_pymavlink_link_drives_the_mavlink_rover_with_the_same_loop() -> None:
         endpoint.close()
     assert drive.reached_end
     assert np.max(np.abs(drive.e_lat_m)) < 0.3  # wall clock under load: generous
+
+
+@pytest.mark.slow
+def test_mavsdk_link_drives_the_mavlink_rover_with_the_same_loop() -> None:
+    from companion.mavsdk_link import MavsdkLink
+
+    port = _free_port()
+    sim = RoverSim(rover_preset("husky_50kg"), seed=3)
+    link = MavsdkLink(f"udpin://127.0.0.1:{port}")
+    endpoint = RoverMavlinkEndpoint(sim, port, setpoint_timeout_s=2.0, mode="udpout")
+    endpoint.start()
+    try:
+        drive = drive_path(link, _path(0.5), 0.5, timeout_s=60.0)
+    finally:
+        link.close()
+        endpoint.close()
+    assert drive.reached_end
+    assert np.max(np.abs(drive.e_lat_m)) < 0.3
