@@ -6,6 +6,7 @@ import pytest
 
 from experiments.rover import learner
 from experiments.rover.illustrative import run, tracking_rms
+from experiments.rover.localisation import LocalisationError, LocalisationErrorConfig
 from experiments.rover.scenarios import scenario
 from experiments.rover.trial import run_trials
 
@@ -78,3 +79,14 @@ def test_short_experiment_1_learns_from_past_trials_with_a_bounded_local_gp() ->
     assert records[3].max_e_lat_m < records[0].max_e_lat_m
     sizes = [int(r.n_local.max()) for r in records[1:]]
     assert 0 < max(sizes) <= 132
+
+
+def test_localisation_error_wanders_slowly_with_small_frame_to_frame_noise() -> None:
+    cfg = LocalisationErrorConfig(bias_std=(0.01, 0.01, 0.005), bias_tau_s=3.0)
+    err = LocalisationError(cfg, 0.1, np.random.default_rng(7))
+    e = np.array([err.draw() for _ in range(20000)])
+    assert np.std(e[:, 0]) == pytest.approx(0.01, rel=0.15)
+    step = np.diff(e[:, 0])  # what a velocity from consecutive fixes sees, x dt
+    assert np.std(step) < 0.3 * np.std(e[:, 0])
+    with pytest.raises(ValueError, match="bias_tau_s"):
+        LocalisationErrorConfig(bias_tau_s=0.0)
