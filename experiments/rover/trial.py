@@ -93,6 +93,7 @@ def run_trial(
     loc_error = LocalisationError(sc.localisation, sc.dt_s, rng)
     nmpc = UnicycleNmpc(cfg)
     K, dt, N = cfg.horizon, sc.dt_s, len(path)
+    curvature = path.curvature_1pm()
     rec = {k: [] for k in ("s", "el", "eh", "w", "v", "f", "n", "t")}
     worst = {
         "el": np.full(N, np.nan), "eh": np.full(N, np.nan),
@@ -138,6 +139,9 @@ def run_trial(
             s0_m=fix.s_m,
             model=model,
             ref0=np.array(path.pose(fix.vertex)),
+            omega_ref_radps=v_h * np.interp(s_ahead, path.s_m, curvature)
+            if sc.feedforward
+            else None,
         )
         step_time = time.perf_counter() - t0
         n_local = model.n_experiences if model is not None else 0

@@ -239,6 +239,7 @@ class UnicycleNmpc:
         model: DisturbanceModel | None = None,
         omega_init: np.ndarray | None = None,
         ref0: np.ndarray | None = None,
+        omega_ref_radps: np.ndarray | None = None,
     ) -> np.ndarray:
         """Turn rates (K,).
 
@@ -254,6 +255,8 @@ class UnicycleNmpc:
             omega_init: initial guess (default: the previous solution shifted).
             ref0: the path pose the current pose is measured against (the nearest vertex),
                 (3,); default: x0 (zero errors).
+            omega_ref_radps: turn rates (K,) the r_omega term is measured from (e.g. the
+                path's v * curvature); default zero, i.e. [Ostafew16] eq. 20's u^T R u.
         """
         c = self.config
         x0 = np.asarray(x0, dtype=float)
@@ -261,6 +264,7 @@ class UnicycleNmpc:
         v = np.asarray(v_mps, dtype=float)
         w = self.warm_start() if omega_init is None else np.asarray(omega_init, dtype=float)
         ql, qh = c.q_lat, c.q_head
+        w_ref = 0.0 if omega_ref_radps is None else np.asarray(omega_ref_radps, dtype=float)
         if callable(ref):  # the reference of the nominal prediction (no learned model)
             nominal = unicycle_rollout(x0, v, w, np.zeros((len(v), 3)), c.dt_s)
             ref_arr = np.asarray(ref(nominal[1:]), dtype=float)
@@ -279,7 +283,7 @@ class UnicycleNmpc:
             dw[0] -= omega_prev_radps
             H = ql * J_lat.T @ J_lat + qh * J_head.T @ J_head + self._H_u
             grad = ql * J_lat.T @ e_lat + qh * J_head.T @ e_head
-            grad += c.r_omega * w + c.r_delta * self._Dm.T @ dw
+            grad += c.r_omega * (w - w_ref) + c.r_delta * self._Dm.T @ dw
             w = np.clip(w - np.linalg.solve(H, grad), -c.omega_max_radps, c.omega_max_radps)
         self.last_rollout = ro
         self._warm = w
