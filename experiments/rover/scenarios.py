@@ -13,7 +13,8 @@ yaw efficiency = 0.17 1/m) is wider than the path at any speed, an error no lear
 Experiment 3 measures its heavy turn-rate penalty (r_omega 10, [Ostafew16] section 5.2's 1:1
 weighting for the DMRV) from the path's v * curvature: measured from zero it pulls the robot
 inside every arc (no terrain, 0.35 m/s: max e_L 0.33 m, learning cannot remove it since it is
-the optimum of the cost; from v * curvature: 0.04 m). Experiment 1's horizon is 25 steps (2.5 s, 1 m of path at 0.4 m/s) so the prediction reaches
+the optimum of the cost; from v * curvature: 0.04 m). Experiment 1's horizon is 25 steps
+(2.5 s, 1 m of path at 0.4 m/s) so the prediction reaches
 through its 1 1/m turns on loose ground, where the turn rate nears its limit and only an
 early start holds the line (15 steps: max e_L about 0.075 m after learning, 25: about 0.06 m).
 """
