@@ -10,6 +10,7 @@ from planners.rover.speed_scheduler import TABLE_I, next_schedule
 from planners.rover.unicycle_nmpc import (
     ConstantDisturbance,
     UnicycleNmpc,
+    UnicycleNmpcConfig,
     rollout,
     unicycle_rollout,
 )
@@ -94,3 +95,16 @@ def test_rollout_derivatives_match_finite_differences_through_the_learned_model(
         num[:, :, j] = (hi - lo) / 2e-6
     assert np.abs(num - ro.d_poses).max() < 1e-7
     assert np.abs(ro.d_poses).max() > 0.01
+
+
+def test_turn_rate_penalty_from_the_path_feedforward_keeps_a_heavy_r_omega_on_an_arc() -> None:
+    cfg = UnicycleNmpcConfig(r_omega=10.0, r_delta=1.0, q_lat=10.0, q_head=1.0)
+    K, v, curv = cfg.horizon, 0.5, 0.4
+    s = v * cfg.dt_s * np.arange(1, K + 1)
+    ref = np.column_stack([np.sin(curv * s) / curv, (1 - np.cos(curv * s)) / curv, curv * s])
+    plain = UnicycleNmpc(cfg).solve(np.zeros(3), np.full(K, v), ref, v * curv)
+    ff = UnicycleNmpc(cfg).solve(
+        np.zeros(3), np.full(K, v), ref, v * curv, omega_ref_radps=np.full(K, v * curv)
+    )
+    assert abs(ff[0] - v * curv) < 0.01  # on the arc already: keep turning at v * curvature
+    assert plain[0] < 0.8 * v * curv  # u^T R u pulls the turn rate towards zero (inside the arc)
