@@ -1,11 +1,13 @@
 """Repeat a taught path trial after trial with the LB-NMPC ([Ostafew16] sections 3-4).
 
-Each control step (``dt_s``): localise against the nearest vertex (noisy pose, VT&R stand-in),
-take the scheduled speed there, build ONE local GP from the experience bins at (vertex, speed
-bin), predict the disturbance along the horizon, solve the unicycle NMPC for the turn rates
-(re-predicting the disturbance along the new trajectory once), send (speed, turn rate) to the
-rover and, one step later, store the observed disturbance as a new experience. After a trial the
-speed scheduler (if any) sets the next trial's speeds from the per-vertex records.
+Each control step (``dt_s``): localise against the nearest vertex (VT&R stand-in:
+experiments.rover.localisation), take the scheduled speed there, build ONE local GP from the
+experience bins at (vertex, speed bin), solve the unicycle NMPC for the turn rates (the
+disturbance is predicted along each Gauss-Newton iterate; with ``gp_jacobian`` its derivatives
+enter the step too), send (speed, turn rate) to the rover and, one step later, record the
+observed disturbance. After the pass the experiences go into the bins (the next trials learn
+from them) and the speed scheduler (if any) sets the next trial's speeds from the per-vertex
+records.
 """
 
 from __future__ import annotations
@@ -16,11 +18,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from experiments.rover import learner
+from experiments.rover.localisation import LocalisationError
 from experiments.rover.scenarios import RoverScenario
 from gp.local_gp import LocalGP
 from planners.rover.path import LocalisationQuality, project_arc_length
 from planners.rover.speed_scheduler import initial_schedule, next_schedule
-from planners.rover.unicycle_nmpc import UnicycleNmpc, unicycle_rollout
+from planners.rover.unicycle_nmpc import UnicycleNmpc
 from vehicle_sim.rover import RoverSim, rover_preset
 
 
@@ -87,20 +90,23 @@ def run_trial(
     sim = RoverSim(rover_preset(sc.preset), sc.effects, seed=sc.seed * 1000 + trial_index,
                    pose=start)  # fmt: skip
     sim.arm()
+    loc_error = LocalisationError(sc.localisation, sc.dt_s, rng)
     nmpc = UnicycleNmpc(cfg)
     K, dt, N = cfg.horizon, sc.dt_s, len(path)
+    curvature = path.curvature_1pm()
     rec = {k: [] for k in ("s", "el", "eh", "w", "v", "f", "n", "t")}
     worst = {
         "el": np.full(N, np.nan), "eh": np.full(N, np.nan),
         "w": np.full(N, np.nan), "f": np.full(N, np.nan),
     }  # fmt: skip
     hint, w_prev, pose_prev, pending = 0, 0.0, None, None
+    experiences: list = []
     t_limit = 4.0 * path.length_m / max(float(np.min(schedule_mps)), 0.1) + 20.0
     completed = False
     while sim.state.t_s < t_limit:
         st = sim.state
         truth = np.array([st.x_m, st.y_m, st.heading_rad])
-        est = truth + rng.normal(0, [sc.loc_noise_m, sc.loc_noise_m, sc.loc_noise_rad])
+        est = truth + loc_error.draw()
         if pose_prev is None:
             pose_prev = est.copy()
         fix = path.localise(*est, hint=hint)
@@ -109,7 +115,7 @@ def run_trial(
         if pending is not None and sc.learning:  # experience of the previous step
             vtx, v_c, a_prev, pose_k, w_c = pending
             g_obs = learner.observed_disturbance(pose_k, est, v_c, w_c, dt)
-            gp.add(vtx, v_c, a_prev, g_obs)
+            experiences.append((vtx, v_c, a_prev, g_obs, abs(a_prev[0] - path.s_m[vtx])))
         if fix.vertex >= N - 2:
             completed = True
             break
@@ -117,24 +123,32 @@ def run_trial(
         v_now = float(schedule_mps[fix.vertex])
         s_ahead = fix.s_m + v_now * dt * np.arange(K)
         v_h = np.interp(s_ahead, path.s_m, schedule_mps)
-        post = gp.posterior(fix.vertex, v_now) if sc.learning else None
-        n_local = gp.local_data(fix.vertex, v_now)[0].shape[0] if sc.learning else 0
-        w = nmpc.warm_start()
-        g = np.zeros((K, 3))
-        for _ in range(2):
-            poses = unicycle_rollout(est, v_h, w, g, dt)
-            if post is not None:
-                q = learner.horizon_queries(fix.s_m, poses, pose_prev, v_h, w, w_prev, dt)
-                g = learner.predict(post, q)
-                poses = unicycle_rollout(est, v_h, w, g, dt)
-            s_pred = project_arc_length(path, poses[1:, :2], fix.vertex)
-            ref = path.ref_at(s_pred)
-            w = nmpc.solve(est, v_h, g, ref, w_prev, omega_init=w)
+        model = (
+            learner.LocalDisturbance(gp, fix.vertex, v_now, sc.gp_jacobian) if sc.learning else None
+        )
+
+        def reference(poses: np.ndarray, vertex: int = fix.vertex) -> np.ndarray:
+            return path.ref_at(project_arc_length(path, poses[:, :2], vertex))
+
+        w = nmpc.solve(
+            est,
+            v_h,
+            reference,
+            w_prev,
+            pose_prev=pose_prev,
+            s0_m=fix.s_m,
+            model=model,
+            ref0=np.array(path.pose(fix.vertex)),
+            omega_ref_radps=v_h * np.interp(s_ahead, path.s_m, curvature)
+            if sc.feedforward
+            else None,
+        )
         step_time = time.perf_counter() - t0
+        n_local = model.n_experiences if model is not None else 0
         w_cmd = float(w[0])
-        a_k = learner.horizon_queries(
-            fix.s_m, np.vstack([est, est]), pose_prev, v_h[:1], w[:1], w_prev, dt
-        )[0]
+        a_k = learner.experience_query(
+            fix.s_m, fix.e_lat_m, fix.e_head_rad, pose_prev, est, v_now, w_cmd, w_prev, dt
+        )
         pending = (fix.vertex, v_now, a_k, est.copy(), w_cmd)
         feats = quality.count(sc.lighting[fix.vertex], true_fix.e_lat_m, true_fix.e_head_rad,
                               st.speed_mps)  # fmt: skip
@@ -150,6 +164,8 @@ def run_trial(
         sim.set_setpoint(v_now, w_cmd)
         sim.step(dt)
         pose_prev, w_prev = est, w_cmd
+    if sc.learning:  # this pass's experiences serve the next trials ([Ostafew16] D^(j))
+        learner.store_pass(gp, experiences)
     arr = {k: np.asarray(v, dtype=float) for k, v in rec.items()}
     return TrialRecord(
         arr["s"], arr["el"], arr["eh"], arr["w"], arr["v"], arr["f"], arr["n"].astype(int),

@@ -1,26 +1,68 @@
-"""Path-tracking NMPC on the unicycle model with a learned disturbance ([Ostafew16] eqs. 18, 30).
+"""Path-tracking LB-NMPC on the unicycle model with a learned disturbance ([Ostafew16] eqs. 4-14,
+18-20, 30), solved by Gauss-Newton over the turn rates only.
 
-Model per step b (dt = ``dt_s``), body-frame disturbance rates g_b = (g_along [m/s],
-g_lat [m/s], g_yaw [rad/s]) given by the learned model (zero for the plain NMPC):
+Model per step b (dt = ``dt_s``), with body-frame disturbance rates g_b = g(a_b) = (g_along
+[m/s], g_lat [m/s], g_yaw [rad/s]) from the learned model (zero for the plain NMPC):
 
     x_{b+1} = x_b + dt (cos th_b (v_b + g_along) - sin th_b g_lat)
     y_{b+1} = y_b + dt (sin th_b (v_b + g_along) + cos th_b g_lat)
     th_{b+1} = th_b + dt (omega_b + g_yaw)
 
+and the disturbance query of [Ostafew16] eq. 19, a_b = (x_b, v_{b-1}, u_b, u_{b-1}), laid out as
+:data:`QUERY_NAMES`: the pose x_b in path coordinates (arc length s_b, the scheduled advance
+from the current fix, and e_L, e_H against the reference pose of step b: the terrain is placed
+in the world, so where the robot is across the path and how it is turned matter, not only how
+far along it is), the velocity state (v_act, omega_act) one step back from consecutive predicted
+poses ([Ostafew16] section 4.1; pose -1 is the previous localised pose), the commanded speed
+and turn rate now, and the turn rate one step back.
+
 The speed v_b is fixed to the schedule; only the turn rates omega_0..omega_{K-1} are optimised
 ([Ostafew16] section 4.1). The cost is a sum of squares, with e_L/e_H of each predicted pose
-against its reference pose (the path pose at the predicted arc length), the turn rate and its
-change:  sum_b q_lat e_L^2 + q_head e_H^2 + r omega_b^2 + r_delta (omega_b - omega_{b-1})^2.
-CasADi gives the residuals and their Jacobian; a few projected Gauss-Newton iterations with
-|omega| <= omega_max solve it (K unknowns, warm-started from the previous solution).
+against its reference pose, the turn rate and its change:
+sum_b q_lat e_L^2 + q_head e_H^2 + r omega_b^2 + r_delta (omega_b - omega_{b-1})^2.
+
+Structure: K unknowns. Each Gauss-Newton iteration rolls the model out once and carries the
+derivatives of the poses with respect to the K turn rates forward along it (forward-mode, a
+(3, K) block per step), including the learned model's derivatives through u_b, u_{b-1} and the
+velocity state ([Ostafew16] eq. 6: H_u = df/du + dg/du). Without dg/du the optimiser would treat
+the learned disturbance as an exogenous push and could not use what it learned about the
+robot's own response (actuator lag, turn-rate loss on loose ground). The K x K normal equations
+are solved directly and the turn rates clipped to |omega| <= omega_max (projected Gauss-Newton).
 """
 
 from __future__ import annotations
 
+import math
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Protocol
 
-import casadi as ca
 import numpy as np
+
+QUERY_NAMES = ("s_m", "e_lat_m", "e_head_rad", "v_act_prev_mps", "w_act_prev_radps",
+               "v_cmd_mps", "w_cmd_radps", "w_cmd_prev_radps")  # fmt: skip
+N_QUERY = len(QUERY_NAMES)
+
+
+class DisturbanceModel(Protocol):
+    """A learned disturbance g(a): mean (3,) and its Jacobian (3, 8) at one query a (8,).
+    ``has_jacobian`` False says the Jacobian is zero (the solver then skips the chain rule)."""
+
+    @property
+    def has_jacobian(self) -> bool: ...
+
+    def mean_and_jacobian(self, query: np.ndarray) -> tuple[np.ndarray, np.ndarray]: ...
+
+
+@dataclass(frozen=True)
+class ConstantDisturbance:
+    """A disturbance that does not depend on the query (e.g. a known drift), g (3,)."""
+
+    g: tuple[float, float, float]
+    has_jacobian = False
+
+    def mean_and_jacobian(self, query: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return np.asarray(self.g, dtype=float), np.zeros((3, N_QUERY))
 
 
 @dataclass(frozen=True)
@@ -50,6 +92,101 @@ class UnicycleNmpcConfig:
             raise ValueError("horizon and iterations must be >= 1 and dt_s > 0")
 
 
+@dataclass(frozen=True, eq=False)
+class Rollout:
+    """Predicted poses (K+1, 3), their derivatives (K+1, 3, K) w.r.t. the turn rates, the
+    disturbances used (K, 3) and the queries a_b (K, 8)."""
+
+    poses: np.ndarray
+    d_poses: np.ndarray
+    g: np.ndarray
+    queries: np.ndarray
+
+
+def _wrap(a: float) -> float:
+    return math.atan2(math.sin(a), math.cos(a))
+
+
+def rollout(
+    x0: np.ndarray,
+    pose_prev: np.ndarray,
+    s0_m: float,
+    v_mps: np.ndarray,
+    omega_radps: np.ndarray,
+    omega_prev_radps: float,
+    dt_s: float,
+    model: DisturbanceModel | None = None,
+    ref_poses: np.ndarray | None = None,
+) -> Rollout:
+    """Model (18) along the horizon with forward-mode derivatives w.r.t. omega (K,).
+
+    Args:
+        x0: current pose (3,); pose_prev: the localised pose one step earlier (3,).
+        s0_m: arc length of the current fix [m].
+        v_mps, omega_radps: scheduled speeds and turn rates (K,).
+        omega_prev_radps: the turn rate commanded one step earlier.
+        model: the learned disturbance, or None for the a-priori model alone.
+        ref_poses: path poses (K, 3) the poses 0..K-1 are measured against for the query's
+            e_L, e_H (default: zero errors).
+    """
+    K = len(v_mps)
+    P = np.empty((K + 1, 3))
+    D = np.zeros((K + 1, 3, K))
+    G = np.zeros((K, 3))
+    A = np.empty((K, N_QUERY))
+    P[0] = x0
+    prev, d_prev = np.asarray(pose_prev, dtype=float), np.zeros((3, K))
+    s = s0_m
+    chain = model is not None and model.has_jacobian
+    for b in range(K):
+        x, y, th = P[b]
+        Db = D[b]
+        dx, dy = x - prev[0], y - prev[1]
+        dist = math.hypot(dx, dy)
+        w_prev = omega_prev_radps if b == 0 else omega_radps[b - 1]
+        if ref_poses is not None:
+            xr, yr, tr = ref_poses[b]
+            sr, cr = math.sin(tr), math.cos(tr)
+            e_lat, e_head = -sr * (xr - x) + cr * (yr - y), _wrap(tr - th)
+        else:
+            sr = cr = e_lat = e_head = 0.0
+        A[b] = (s, e_lat, e_head, dist / dt_s, _wrap(th - prev[2]) / dt_s, v_mps[b],
+                omega_radps[b], w_prev)  # fmt: skip
+        va, vl = v_mps[b], 0.0
+        dg = None
+        if model is not None:
+            g, J = model.mean_and_jacobian(A[b])
+            G[b] = g
+            va, vl = va + g[0], g[1]
+        if chain:
+            dD = Db - d_prev
+            dv_act = (dx * dD[0] + dy * dD[1]) / (max(dist, 1e-9) * dt_s)
+            dg = np.outer(J[:, 3], dv_act) + np.outer(J[:, 4], dD[2] / dt_s)
+            if ref_poses is not None:
+                dg += np.outer(J[:, 1], sr * Db[0] - cr * Db[1]) - np.outer(J[:, 2], Db[2])
+            dg[:, b] += J[:, 6]
+            if b > 0:
+                dg[:, b - 1] += J[:, 7]
+        c, sn = math.cos(th), math.sin(th)
+        Dn = D[b + 1]
+        Dn[0] = Db[0] + dt_s * (-sn * va - c * vl) * Db[2]
+        Dn[1] = Db[1] + dt_s * (c * va - sn * vl) * Db[2]
+        Dn[2] = Db[2]
+        Dn[2, b] += dt_s
+        if dg is not None:
+            Dn[0] += dt_s * (c * dg[0] - sn * dg[1])
+            Dn[1] += dt_s * (sn * dg[0] + c * dg[1])
+            Dn[2] += dt_s * dg[2]
+        P[b + 1] = (
+            x + dt_s * (c * va - sn * vl),
+            y + dt_s * (sn * va + c * vl),
+            th + dt_s * (omega_radps[b] + G[b, 2]),
+        )
+        prev, d_prev = P[b], Db
+        s += v_mps[b] * dt_s
+    return Rollout(P, D, G, A)
+
+
 def unicycle_rollout(
     x0: np.ndarray, v_mps: np.ndarray, omega_radps: np.ndarray, g: np.ndarray, dt_s: float
 ) -> np.ndarray:
@@ -67,40 +204,21 @@ def unicycle_rollout(
     return out
 
 
+Reference = np.ndarray | Callable[[np.ndarray], np.ndarray]
+
+
 class UnicycleNmpc:
-    """The solver; ``solve`` returns the optimal turn rates (K,) and the predicted poses."""
+    """The solver; :meth:`solve` returns the optimal turn rates (K,)."""
 
     def __init__(self, config: UnicycleNmpcConfig = UnicycleNmpcConfig()) -> None:  # noqa: B008
         self.config = config
-        c = config
-        K = c.horizon
-        w = ca.SX.sym("w", K)
-        x0 = ca.SX.sym("x0", 3)
-        v = ca.SX.sym("v", K)
-        g = ca.SX.sym("g", K, 3)
-        ref = ca.SX.sym("ref", K, 3)
-        w_prev = ca.SX.sym("w_prev")
-        x, y, th = x0[0], x0[1], x0[2]
-        res = []
-        last = w_prev
-        for b in range(K):
-            va, vl = v[b] + g[b, 0], g[b, 1]
-            x = x + c.dt_s * (ca.cos(th) * va - ca.sin(th) * vl)
-            y = y + c.dt_s * (ca.sin(th) * va + ca.cos(th) * vl)
-            th = th + c.dt_s * (w[b] + g[b, 2])
-            xr, yr, tr = ref[b, 0], ref[b, 1], ref[b, 2]
-            e_lat = -ca.sin(tr) * (xr - x) + ca.cos(tr) * (yr - y)
-            e_head = ca.atan2(ca.sin(tr - th), ca.cos(tr - th))
-            res += [
-                np.sqrt(c.q_lat) * e_lat,
-                np.sqrt(c.q_head) * e_head,
-                np.sqrt(c.r_omega) * w[b],
-                np.sqrt(c.r_delta) * (w[b] - last),
-            ]
-            last = w[b]
-        r = ca.vertcat(*res)
-        self._fun = ca.Function("lbnmpc_res", [w, x0, v, g, ref, w_prev], [r, ca.jacobian(r, w)])
+        c, K = config, config.horizon
+        # constant part of the normal equations: r omega^2 + r_delta (omega_b - omega_{b-1})^2
+        Dm = np.eye(K) - np.eye(K, k=-1)
+        self._H_u = c.r_omega * np.eye(K) + c.r_delta * Dm.T @ Dm
+        self._Dm = Dm
         self._warm = np.zeros(K)
+        self.last_rollout: Rollout | None = None
 
     def reset(self) -> None:
         self._warm = np.zeros(self.config.horizon)
@@ -113,18 +231,60 @@ class UnicycleNmpc:
         self,
         x0: np.ndarray,
         v_mps: np.ndarray,
-        g: np.ndarray,
-        ref: np.ndarray,
+        ref: Reference,
         omega_prev_radps: float,
+        *,
+        pose_prev: np.ndarray | None = None,
+        s0_m: float = 0.0,
+        model: DisturbanceModel | None = None,
         omega_init: np.ndarray | None = None,
+        ref0: np.ndarray | None = None,
+        omega_ref_radps: np.ndarray | None = None,
     ) -> np.ndarray:
-        """Turn rates (K,): x0 (3,), v_mps (K,), g (K, 3), ref (K, 3) for poses 1..K."""
+        """Turn rates (K,).
+
+        Args:
+            x0: current pose (3,); v_mps: scheduled speeds (K,).
+            ref: reference poses (K, 3) for predicted poses 1..K, or a function of the
+                predicted poses (K, 3) returning them (evaluated once, on the first rollout:
+                e.g. the path pose at each predicted pose's arc length).
+            omega_prev_radps: turn rate commanded one step earlier.
+            pose_prev: localised pose one step earlier (3,) (default: x0, i.e. at rest).
+            s0_m: arc length of the current fix [m] (the query's path position).
+            model: learned disturbance, or None.
+            omega_init: initial guess (default: the previous solution shifted).
+            ref0: the path pose the current pose is measured against (the nearest vertex),
+                (3,); default: x0 (zero errors).
+            omega_ref_radps: turn rates (K,) the r_omega term is measured from (e.g. the
+                path's v * curvature); default zero, i.e. [Ostafew16] eq. 20's u^T R u.
+        """
         c = self.config
+        x0 = np.asarray(x0, dtype=float)
+        pose_prev = x0 if pose_prev is None else np.asarray(pose_prev, dtype=float)
+        v = np.asarray(v_mps, dtype=float)
         w = self.warm_start() if omega_init is None else np.asarray(omega_init, dtype=float)
+        ql, qh = c.q_lat, c.q_head
+        w_ref = 0.0 if omega_ref_radps is None else np.asarray(omega_ref_radps, dtype=float)
+        if callable(ref):  # the reference of the nominal prediction (no learned model)
+            nominal = unicycle_rollout(x0, v, w, np.zeros((len(v), 3)), c.dt_s)
+            ref_arr = np.asarray(ref(nominal[1:]), dtype=float)
+        else:
+            ref_arr = np.asarray(ref, dtype=float)
+        ref_q = np.vstack([x0 if ref0 is None else np.asarray(ref0, dtype=float), ref_arr[:-1]])
         for _ in range(c.iterations):
-            r, J = self._fun(w, x0, v_mps, g, ref, omega_prev_radps)
-            r, J = np.asarray(r).ravel(), np.asarray(J)
-            step = np.linalg.solve(J.T @ J + 1e-6 * np.eye(len(w)), J.T @ r)
-            w = np.clip(w - step, -c.omega_max_radps, c.omega_max_radps)
+            ro = rollout(x0, pose_prev, s0_m, v, w, omega_prev_radps, c.dt_s, model, ref_q)
+            P, D = ro.poses[1:], ro.d_poses[1:]
+            st, ct = np.sin(ref_arr[:, 2]), np.cos(ref_arr[:, 2])
+            e_lat = -st * (ref_arr[:, 0] - P[:, 0]) + ct * (ref_arr[:, 1] - P[:, 1])
+            e_head = np.arctan2(np.sin(ref_arr[:, 2] - P[:, 2]), np.cos(ref_arr[:, 2] - P[:, 2]))
+            J_lat = st[:, None] * D[:, 0] - ct[:, None] * D[:, 1]  # (K, K)
+            J_head = -D[:, 2]
+            dw = self._Dm @ w
+            dw[0] -= omega_prev_radps
+            H = ql * J_lat.T @ J_lat + qh * J_head.T @ J_head + self._H_u
+            grad = ql * J_lat.T @ e_lat + qh * J_head.T @ e_head
+            grad += c.r_omega * (w - w_ref) + c.r_delta * self._Dm.T @ dw
+            w = np.clip(w - np.linalg.solve(H, grad), -c.omega_max_radps, c.omega_max_radps)
+        self.last_rollout = ro
         self._warm = w
         return w

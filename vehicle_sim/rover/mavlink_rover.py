@@ -6,8 +6,10 @@ MAV_CMD_COMPONENT_ARM_DISARM and MAV_CMD_DO_SET_MODE (acknowledged; MANUAL, AUTO
 OFFBOARD), SET_MODE, and offboard
 SET_POSITION_TARGET_LOCAL_NED with velocity + yaw rate: in MAV_FRAME_BODY_NED vx is the forward
 speed; in MAV_FRAME_LOCAL_NED the speed is (vx, vy) projected on the heading. Telemetry at
-``telemetry_hz``: HEARTBEAT, LOCAL_POSITION_NED, ATTITUDE. Offboard without a setpoint for
-``setpoint_timeout_s`` stops the rover (PX4's offboard loss failsafe, here: hold).
+``telemetry_hz``: HEARTBEAT, LOCAL_POSITION_NED, ATTITUDE, ATTITUDE_QUATERNION, and at 1 Hz what
+MAVSDK's health check wants (SYS_STATUS with healthy sensors and the pre-arm bit, GPS_RAW_INT,
+GLOBAL_POSITION_INT and HOME_POSITION about a fixed origin, flat-earth). Offboard without
+a setpoint for ``setpoint_timeout_s`` stops the rover (PX4's offboard loss failsafe, here: hold).
 
 World frame mapping: the rover's x is north, its y is west (heading counter-clockwise from x),
 so NED north = x_m, east = -y_m, yaw = -heading_rad.
@@ -27,10 +29,31 @@ _PX4_MAIN_OFFBOARD = 6
 _PX4_MAIN_MANUAL = 1
 _PX4_MAIN_AUTO = 4
 _MAV = mavutil.mavlink
+_ORIGIN_LAT_DEG, _ORIGIN_LON_DEG, _ORIGIN_ALT_M = 47.397742, 8.545594, 488.0  # PX4 SITL home
+_M_PER_DEG_LAT = 111_320.0
+_IGNORE_YAW, _IGNORE_YAW_RATE = 0x400, 0x800  # POSITION_TARGET_TYPEMASK bits
+_YAW_P = 2.0
+_SENSORS = (
+    _MAV.MAV_SYS_STATUS_SENSOR_3D_GYRO
+    | _MAV.MAV_SYS_STATUS_SENSOR_3D_ACCEL
+    | _MAV.MAV_SYS_STATUS_SENSOR_3D_MAG
+    | _MAV.MAV_SYS_STATUS_SENSOR_GPS
+    | _MAV.MAV_SYS_STATUS_PREARM_CHECK
+)
+
+
+def _lat_lon_e7(north_m: float, east_m: float) -> tuple[int, int]:
+    lat = _ORIGIN_LAT_DEG + north_m / _M_PER_DEG_LAT
+    lon = _ORIGIN_LON_DEG + east_m / (_M_PER_DEG_LAT * math.cos(math.radians(_ORIGIN_LAT_DEG)))
+    return int(round(lat * 1e7)), int(round(lon * 1e7))
 
 
 class RoverMavlinkEndpoint:
-    """Runs ``sim`` in real time on a thread, listening on udpin ``host:port``."""
+    """Runs ``sim`` in real time on a thread, on UDP ``host:port``.
+
+    ``mode`` "udpin" listens there (a ground station sends first); "udpout" sends there, as
+    PX4 SITL sends to a companion listening on udpin (companion.pymavlink_link, MAVSDK).
+    """
 
     def __init__(
         self,
@@ -40,10 +63,13 @@ class RoverMavlinkEndpoint:
         physics_period_s: float = 0.02,
         telemetry_hz: float = 10.0,
         setpoint_timeout_s: float = 1.0,
+        mode: str = "udpin",
     ) -> None:
+        if mode not in ("udpin", "udpout"):
+            raise ValueError(f"mode must be 'udpin' or 'udpout', got {mode!r}")
         self.sim = sim
         self._conn = mavutil.mavlink_connection(
-            f"udpin:{host}:{port}", source_system=1, source_component=1
+            f"{mode}:{host}:{port}", source_system=1, source_component=1
         )
         self._period = physics_period_s
         self._telemetry_period = 1.0 / telemetry_hz
@@ -62,7 +88,7 @@ class RoverMavlinkEndpoint:
         self._conn.close()
 
     def _run(self) -> None:
-        next_tel = 0.0
+        next_tel = next_slow = 0.0
         t_prev = time.monotonic()
         while not self._stop.is_set():
             while (msg := self._conn.recv_match(blocking=False)) is not None:
@@ -75,6 +101,9 @@ class RoverMavlinkEndpoint:
             if now >= next_tel and self._conn.mav is not None:
                 self._telemetry()
                 next_tel = now + self._telemetry_period
+            if now >= next_slow and self._conn.mav is not None:
+                self._health_telemetry()
+                next_slow = now + 1.0
             time.sleep(self._period)
 
     def _ack(self, command: int, ok: bool) -> None:
@@ -116,9 +145,20 @@ class RoverMavlinkEndpoint:
                 speed = msg.vx
             else:  # LOCAL_NED: project the ground velocity on the heading (north, east)
                 speed = msg.vx * math.cos(-heading) + msg.vy * math.sin(-heading)
-            yaw_rate = 0.0 if math.isnan(msg.yaw_rate) else -msg.yaw_rate  # NED yaw is CW
+            yaw_rate = self._yaw_rate_sp(msg, heading)
             if self.offboard and self.sim.armed:
                 self.sim.set_setpoint(float(speed), float(yaw_rate))
+
+    @staticmethod
+    def _yaw_rate_sp(msg: object, heading_rad: float) -> float:
+        """Yaw rate [rad/s, counter-clockwise] from a setpoint's yaw rate, or, when the mask
+        uses the yaw angle instead (as MAVSDK's VelocityNedYaw does), from a heading P-loop
+        (gain ``_YAW_P`` 1/s, as PX4 rover's heading controller turns towards a yaw setpoint)."""
+        uses_yaw = not msg.type_mask & _IGNORE_YAW and math.isfinite(msg.yaw)
+        if uses_yaw and msg.type_mask & _IGNORE_YAW_RATE:
+            err = -msg.yaw - heading_rad  # NED yaw is clockwise
+            return _YAW_P * math.atan2(math.sin(err), math.cos(err))
+        return 0.0 if math.isnan(msg.yaw_rate) else -msg.yaw_rate
 
     def _telemetry(self) -> None:
         st = self.sim.state
@@ -137,3 +177,19 @@ class RoverMavlinkEndpoint:
         vy_w = st.speed_mps * s + st.lat_speed_mps * c
         mav.local_position_ned_send(t_ms, st.x_m, -st.y_m, 0.0, vx_w, -vy_w, 0.0)
         mav.attitude_send(t_ms, 0.0, 0.0, -st.heading_rad, 0.0, 0.0, -st.yaw_rate_radps)
+        half = -st.heading_rad / 2
+        mav.attitude_quaternion_send(
+            t_ms, math.cos(half), 0.0, 0.0, math.sin(half), 0.0, 0.0, -st.yaw_rate_radps
+        )
+
+    def _health_telemetry(self) -> None:
+        st, mav = self.sim.state, self._conn.mav
+        mav.sys_status_send(_SENSORS, _SENSORS, _SENSORS, 200, 12600, -1, 100, 0, 0, 0, 0, 0, 0)
+        lat, lon = _lat_lon_e7(st.x_m, -st.y_m)
+        alt_mm = int(_ORIGIN_ALT_M * 1000)
+        t_ms = int(st.t_s * 1000)
+        mav.gps_raw_int_send(int(st.t_s * 1e6), 3, lat, lon, alt_mm, 80, 120, 65535, 65535, 12)
+        hdg = int(round(math.degrees(-st.heading_rad) * 100.0)) % 36000
+        mav.global_position_int_send(t_ms, lat, lon, alt_mm, 0, 0, 0, 0, hdg)
+        lat0, lon0 = _lat_lon_e7(0.0, 0.0)
+        mav.home_position_send(lat0, lon0, alt_mm, 0.0, 0.0, 0.0, (1.0, 0.0, 0.0, 0.0), 0, 0, 0)

@@ -6,6 +6,7 @@ import pytest
 
 from experiments.rover import learner
 from experiments.rover.illustrative import run, tracking_rms
+from experiments.rover.localisation import LocalisationError, LocalisationErrorConfig
 from experiments.rover.scenarios import scenario
 from experiments.rover.trial import run_trials
 
@@ -19,7 +20,7 @@ def test_local_gp_uses_a_bounded_number_of_experiences_however_many_trials() -> 
         for vertex in range(60):
             for _ in range(6):  # ~6 control steps per vertex at 0.4 m/s and 10 Hz
                 speed = rng.uniform(0.3, 0.6)
-                gp.add(vertex, speed, rng.normal(size=6), rng.normal(size=3))
+                gp.add(vertex, speed, rng.normal(size=8), rng.normal(size=3))
         sizes.append(gp.local_data(30, 0.45)[0].shape[0])
     assert len(gp) == 60 * 2 * 4  # two speed bins (0.25-0.5, 0.5-0.75) of 4 per vertex
     assert set(sizes[4:]) == {11 * 2 * 4}  # full bins: the local GP stops growing
@@ -38,9 +39,54 @@ def test_illustrative_example_ranks_feedback_mpc_lbnmpc() -> None:
     assert rms["lbnmpc"] < 0.6 * rms["mpc"] < 0.6 * rms["feedback"]
 
 
+def test_local_gp_mean_and_jacobian_match_the_gp_and_finite_differences() -> None:
+    rng = np.random.default_rng(5)
+    gp = learner.make_history_gp()
+    for i in range(40):
+        gp.add(i // 4, 0.4, rng.normal(0, 0.5, 8), rng.normal(0, 0.2, 3))
+    model = learner.LocalDisturbance(gp, 5, 0.4)
+    assert model.n_experiences == gp.local_data(5, 0.4)[0].shape[0] == 40
+    q = rng.normal(0, 0.3, 8)
+    mean, jac = model.mean_and_jacobian(q)
+    assert mean == pytest.approx(gp.predict(5, 0.4, q[None, :])[0][0], abs=1e-9)
+    eye = 1e-6 * np.eye(8)
+    num = np.array(
+        [
+            (model.mean_and_jacobian(q + e)[0] - model.mean_and_jacobian(q - e)[0]) / 2e-6
+            for e in eye
+        ]
+    ).T
+    assert jac == pytest.approx(num, abs=1e-7)
+
+
+def test_a_pass_fills_each_bin_with_one_experience_the_nearest_to_its_vertex() -> None:
+    gp = learner.make_history_gp()
+    a, g = np.zeros(8), np.zeros(3)
+    for trial in range(6):
+        experiences = [(7, 0.4, a + trial, g + d, d) for d in (0.1, 0.02, 0.05)]
+        learner.store_pass(gp, experiences)
+    X, Y = gp.local_data(7, 0.4)
+    assert len(gp) == 4  # c_bin passes, newest kept
+    assert sorted(X[:, 0]) == [2, 3, 4, 5]
+    assert Y[:, 0] == pytest.approx(np.full(4, 0.02))
+
+
 @pytest.mark.slow
-def test_short_experiment_1_learns() -> None:
+def test_short_experiment_1_learns_from_past_trials_with_a_bounded_local_gp() -> None:
     records = run_trials(scenario("rover_exp1").with_trials(4))
     assert all(r.completed for r in records)
+    assert records[0].n_local.max() == 0  # the first trial has no experience
     assert records[3].max_e_lat_m < records[0].max_e_lat_m
-    assert records[3].n_local.max() <= 132
+    sizes = [int(r.n_local.max()) for r in records[1:]]
+    assert 0 < max(sizes) <= 132
+
+
+def test_localisation_error_wanders_slowly_with_small_frame_to_frame_noise() -> None:
+    cfg = LocalisationErrorConfig(bias_std=(0.01, 0.01, 0.005), bias_tau_s=3.0)
+    err = LocalisationError(cfg, 0.1, np.random.default_rng(7))
+    e = np.array([err.draw() for _ in range(20000)])
+    assert np.std(e[:, 0]) == pytest.approx(0.01, rel=0.15)
+    step = np.diff(e[:, 0])  # what a velocity from consecutive fixes sees, x dt
+    assert np.std(step) < 0.3 * np.std(e[:, 0])
+    with pytest.raises(ValueError, match="bias_tau_s"):
+        LocalisationErrorConfig(bias_tau_s=0.0)

@@ -7,7 +7,13 @@ import pytest
 
 from planners.rover.path import TaughtPath
 from planners.rover.speed_scheduler import TABLE_I, next_schedule
-from planners.rover.unicycle_nmpc import UnicycleNmpc, unicycle_rollout
+from planners.rover.unicycle_nmpc import (
+    ConstantDisturbance,
+    UnicycleNmpc,
+    UnicycleNmpcConfig,
+    rollout,
+    unicycle_rollout,
+)
 
 
 def test_errors_against_the_nearest_vertex_follow_the_paper_sign_convention() -> None:
@@ -46,11 +52,59 @@ def test_nmpc_turns_towards_a_path_on_its_left_and_learned_drift_changes_the_ans
     K = nmpc.config.horizon
     v = np.full(K, 0.5)
     ref = np.column_stack([0.05 * np.arange(1, K + 1), np.full(K, 0.3), np.zeros(K)])
-    w0 = nmpc.solve(np.zeros(3), v, np.zeros((K, 3)), ref, 0.0)
+    w0 = nmpc.solve(np.zeros(3), v, ref, 0.0)
     assert w0[0] > 0
-    drift = np.tile([0.0, 0.2, 0.0], (K, 1))  # a learned push to the left: turn less
+    drift = ConstantDisturbance((0.0, 0.2, 0.0))  # a learned push to the left: turn less
     nmpc.reset()
-    w1 = nmpc.solve(np.zeros(3), v, drift, ref, 0.0)
+    w1 = nmpc.solve(np.zeros(3), v, ref, 0.0, model=drift)
     assert w1[0] < w0[0]
-    poses = unicycle_rollout(np.zeros(3), v, w1, drift, 0.1)
+    poses = unicycle_rollout(np.zeros(3), v, w1, np.tile([0.0, 0.2, 0.0], (K, 1)), 0.1)
     assert poses.shape == (K + 1, 3)
+    assert nmpc.last_rollout is not None
+
+
+class _LinearYawModel:
+    """g_yaw = c . a: a disturbance that depends on the query, to check the chain rule."""
+
+    has_jacobian = True
+
+    def __init__(self, c: np.ndarray) -> None:
+        self.c = c
+
+    def mean_and_jacobian(self, query: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        J = np.zeros((3, 8))
+        J[2] = self.c
+        J[1] = 0.5 * self.c
+        return np.array([0.0, 0.5 * self.c @ query, self.c @ query]), J
+
+
+def test_rollout_derivatives_match_finite_differences_through_the_learned_model() -> None:
+    rng = np.random.default_rng(4)
+    K = 8
+    model = _LinearYawModel(rng.normal(0, 0.3, 8))
+    x0, prev = np.array([0.2, -0.1, 0.3]), np.array([0.17, -0.11, 0.28])
+    v, w = np.full(K, 0.6), rng.normal(0, 0.4, K)
+    ref = np.column_stack([0.06 * np.arange(K), 0.1 * np.ones(K), 0.05 * np.ones(K)])
+    ro = rollout(x0, prev, 2.0, v, w, 0.1, 0.1, model, ref)
+    num = np.empty_like(ro.d_poses)
+    for j in range(K):
+        e = np.zeros(K)
+        e[j] = 1e-6
+        hi = rollout(x0, prev, 2.0, v, w + e, 0.1, 0.1, model, ref).poses
+        lo = rollout(x0, prev, 2.0, v, w - e, 0.1, 0.1, model, ref).poses
+        num[:, :, j] = (hi - lo) / 2e-6
+    assert np.abs(num - ro.d_poses).max() < 1e-7
+    assert np.abs(ro.d_poses).max() > 0.01
+
+
+def test_turn_rate_penalty_from_the_path_feedforward_keeps_a_heavy_r_omega_on_an_arc() -> None:
+    cfg = UnicycleNmpcConfig(r_omega=10.0, r_delta=1.0, q_lat=10.0, q_head=1.0)
+    K, v, curv = cfg.horizon, 0.5, 0.4
+    s = v * cfg.dt_s * np.arange(1, K + 1)
+    ref = np.column_stack([np.sin(curv * s) / curv, (1 - np.cos(curv * s)) / curv, curv * s])
+    plain = UnicycleNmpc(cfg).solve(np.zeros(3), np.full(K, v), ref, v * curv)
+    ff = UnicycleNmpc(cfg).solve(
+        np.zeros(3), np.full(K, v), ref, v * curv, omega_ref_radps=np.full(K, v * curv)
+    )
+    assert abs(ff[0] - v * curv) < 0.01  # on the arc already: keep turning at v * curvature
+    assert plain[0] < 0.8 * v * curv  # u^T R u pulls the turn rate towards zero (inside the arc)

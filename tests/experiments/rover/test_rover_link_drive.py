@@ -1,0 +1,84 @@
+"""The same path-repeating loop drives the rover over the companion's Links: in process
+(lockstep) and over MAVLink (pymavlink Link against the PX4-rover-like endpoint)."""
+
+import socket
+
+import numpy as np
+import pytest
+
+from companion.inprocess_rover_link import InProcessRoverLink
+from companion.pymavlink_link import PymavlinkLink
+from experiments.rover import learner
+from experiments.rover.link_drive import drive_path, pose_of
+from planners.rover.path import TaughtPath
+from vehicle_sim.rover import RoverSim, rover_preset
+from vehicle_sim.rover.mavlink_rover import RoverMavlinkEndpoint
+
+
+def _path(length_scale: float = 1.0) -> TaughtPath:
+    return TaughtPath.from_segments(
+        [(2.0 * length_scale, 0.0), (2.0 * length_scale, 0.4), (2.0 * length_scale, 0.0)],
+        start=(0.0, 0.0, 0.0),
+    )
+
+
+def test_inprocess_link_drives_the_rover_along_a_taught_path_and_reports_its_pose() -> None:
+    sim = RoverSim(rover_preset("husky_50kg"), seed=1, pose=(0.0, 0.05, 0.02))
+    link = InProcessRoverLink(sim, {"seed": 1})
+    path = _path()
+    gp = learner.make_history_gp()
+    drive = drive_path(link, path, 0.5, timeout_s=60.0, gp=gp)
+    assert drive.reached_end
+    assert np.max(np.abs(drive.e_lat_m)) < 0.1
+    st = sim.state
+    assert pose_of(link) == pytest.approx([st.x_m, st.y_m, st.heading_rad], abs=1e-9)
+    assert link.read_state().mode == "HOLD"  # the drive ends in hold
+    assert 0 < len(gp) <= len(path) * 4  # one experience per vertex and speed bin per pass
+
+
+def test_inprocess_rover_link_refuses_what_a_rover_cannot_do() -> None:
+    link = InProcessRoverLink.from_preset("roc6_150kg", seed=0)
+    assert not link.takeoff(5.0).accepted
+    assert not link.land().accepted
+    assert not link.start_offboard().accepted  # no setpoint streamed yet
+    assert link.metadata()["mass_kg"] == 150.0
+
+
+def _free_port() -> int:
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.mark.slow
+def test_pymavlink_link_drives_the_mavlink_rover_with_the_same_loop() -> None:
+    port = _free_port()
+    sim = RoverSim(rover_preset("husky_50kg"), seed=2)
+    link = PymavlinkLink(f"udpin://127.0.0.1:{port}")  # listens, as for PX4 SITL
+    endpoint = RoverMavlinkEndpoint(sim, port, setpoint_timeout_s=2.0, mode="udpout")
+    endpoint.start()
+    try:
+        drive = drive_path(link, _path(0.5), 0.5, timeout_s=60.0)
+    finally:
+        link.close()
+        endpoint.close()
+    assert drive.reached_end
+    assert np.max(np.abs(drive.e_lat_m)) < 0.3  # wall clock under load: generous
+
+
+@pytest.mark.slow
+def test_mavsdk_link_drives_the_mavlink_rover_with_the_same_loop() -> None:
+    from companion.mavsdk_link import MavsdkLink
+
+    port = _free_port()
+    sim = RoverSim(rover_preset("husky_50kg"), seed=3)
+    link = MavsdkLink(f"udpin://127.0.0.1:{port}")
+    endpoint = RoverMavlinkEndpoint(sim, port, setpoint_timeout_s=2.0, mode="udpout")
+    endpoint.start()
+    try:
+        drive = drive_path(link, _path(0.5), 0.5, timeout_s=60.0)
+    finally:
+        link.close()
+        endpoint.close()
+    assert drive.reached_end
+    assert np.max(np.abs(drive.e_lat_m)) < 0.3
