@@ -16,6 +16,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from diagnosis.closed_loop import NEAR_GROUND_ALT_M
 from diagnosis.diagnosis import Diagnosis
 from diagnosis.report_plots import plot_closed_loop, plot_replay, plot_residuals
 
@@ -59,6 +60,10 @@ def report_document(diagnosis: Diagnosis) -> dict[str, Any]:
             "baseline_vel_rmse_mps": _num(cl.baseline_rmse_mps()),
             "extended_vel_rmse_mps": _num(cl.extended_rmse_mps()),
             "gain": _num(cl.gain() if diagnosis.added_effects else 1.0),
+            "ground_hold_gain": _num(cl.ground_hold_gain() if diagnosis.added_effects else 1.0),
+            "segments": cl.segments,
+            "segments_reanchored": cl.reanchored,
+            "scored_rows": int(cl.scored.sum()),
         },
     }
 
@@ -147,16 +152,22 @@ def _closed_loop_markdown(doc: dict[str, Any], plot: Path) -> str:
         )
     )
     gain = "n/a" if cl["gain"] is None else f"{cl['gain']:.1f}x"
+    ground = "n/a" if cl["ground_hold_gain"] is None else f"{cl['ground_hold_gain']:.1f}x"
     return "\n".join(
         [
             "",
             "## Closed-loop tracking",
             "",
-            "Each configuration, anchored once at the start of every airborne run, flies the "
-            "logged setpoints under its own flight control; its velocity is compared with the "
-            "measured one (the real vehicle) on the held-out rows.",
+            "Each configuration, anchored once at the start of every airborne segment (flights "
+            f"and ground holds below {NEAR_GROUND_ALT_M} m apart), flies the logged setpoints "
+            "under its own flight control; its velocity is compared with the measured one (the "
+            "real vehicle) on the held-out rows. A simulated vehicle that touches down where "
+            "the real one flew is re-anchored, and its segment is left out of the figures.",
             "",
-            f"- Velocity RMSE: {figures} (gain {gain})",
+            f"- Velocity RMSE over whole flight segments: {figures} (gain {gain}; "
+            f"{cl['scored_rows']} rows)",
+            f"- Ground holds, scored apart: gain {ground}",
+            f"- Segments re-anchored: {cl['segments_reanchored']} of {cl['segments']}",
             "",
             f"![{plot.stem}]({plot.name})",
             "",
