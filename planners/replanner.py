@@ -1,0 +1,125 @@
+"""[Kulathunga23]'s replanner and regeneration: keep the reference out of the known obstacles.
+
+Following the paper (its ref. 9): the B-spline reference is pushed out of the obstacles the
+map knows, with a clearance, and refined again whenever the map grows; when the vehicle is
+more than ``regenerate_distance_m`` (~2 m, Fig. 7) from the reference, the reference is
+regenerated from the vehicle's position to the goal and pushed again, which is how the paper
+escapes the local minima a pushed reference can leave.
+
+Our choices (the paper does not give them): the reference is a cubic B-spline through
+waypoints spaced ``waypoint_spacing_m`` apart (:class:`~planners.bspline.BSplineReference`);
+a waypoint near a too-close stretch of the spline moves away from the nearest obstacle point,
+across the path (sideways, so a trunk standing on the path is passed, not backed away from),
+by the missing clearance; iterations stop when the whole spline keeps the clearance or after
+``max_iterations`` (then ``ok`` is False and the best reference so far is kept); a side is
+chosen once per obstacle contact by the side with more room. Pure: no I/O.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from planners.bspline import BSplineReference
+from planners.path_reference import PolylinePath
+
+_SAMPLES_PER_SEGMENT = 8
+
+
+class ObstacleMap(Protocol):
+    def nearest_points(self, points_ned_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]: ...
+
+    def clearance_m(self, points_ned_m: np.ndarray) -> np.ndarray: ...
+
+
+@dataclass(frozen=True)
+class ReplannerConfig:
+    """Attributes:
+    clearance_m: least distance [m] from the reference to an obstacle surface.
+    waypoint_spacing_m: distance between the spline's waypoints [m].
+    max_iterations: pushes per replan.
+    regenerate_distance_m: vehicle-to-reference distance [m] that triggers regeneration
+        ([Kulathunga23] Fig. 7: ~2 m).
+    """
+
+    clearance_m: float = 0.9
+    waypoint_spacing_m: float = 1.0
+    max_iterations: int = 40
+    regenerate_distance_m: float = 2.0
+
+
+@dataclass(frozen=True)
+class Replan:
+    """A replanned reference: its waypoints (m, 3), dense path, and whether it is clear."""
+
+    waypoints_ned_m: np.ndarray
+    path: PolylinePath
+    ok: bool
+    min_clearance_m: float
+
+
+def resample(points_ned_m: np.ndarray, spacing_m: float) -> np.ndarray:
+    """A polyline (n, 3) resampled every ~``spacing_m`` [m], keeping both ends."""
+    path = PolylinePath(points_ned_m)
+    n = max(1, int(np.ceil(path.length_m / spacing_m)))
+    pos, _ = path.at(np.linspace(0.0, path.length_m, n + 1))
+    return pos
+
+
+def spline_path(waypoints_ned_m: np.ndarray) -> PolylinePath:
+    """The B-spline through the waypoints (m, 3), as a dense polyline."""
+    spline = BSplineReference(waypoints_ned_m)
+    n_seg = waypoints_ned_m.shape[0] - 1
+    t = np.linspace(0.0, spline.duration_s, n_seg * _SAMPLES_PER_SEGMENT + 1)
+    return PolylinePath(spline.sample(t).pos_ned_m)
+
+
+def push_out(
+    waypoints_ned_m: np.ndarray, obstacle_map: ObstacleMap, config: ReplannerConfig
+) -> Replan:
+    """Push the spline through ``waypoints_ned_m`` (m, 3) out of the map's obstacles (ends
+    fixed); see the module docstring."""
+    wp = np.array(waypoints_ned_m, dtype=float)
+    m = wp.shape[0]
+    path = spline_path(wp)
+    for _ in range(config.max_iterations):
+        pts = path.points_ned_m
+        dist, nearest = obstacle_map.nearest_points(pts)
+        clear = obstacle_map.clearance_m(pts)
+        bad = np.flatnonzero(clear < config.clearance_m)
+        if bad.size == 0 or m <= 2:
+            break
+        moves = np.zeros_like(wp)
+        counts = np.zeros(m)
+        for j in bad:
+            i = int(np.clip(round(j / _SAMPLES_PER_SEGMENT), 1, m - 2))
+            tangent = wp[min(i + 1, m - 1)] - wp[max(i - 1, 0)]
+            tangent[2] = 0.0
+            tangent /= max(np.linalg.norm(tangent), 1e-9)
+            away = pts[j] - nearest[j]
+            away[2] = 0.0
+            side = away - (away @ tangent) * tangent
+            if np.linalg.norm(side) < 0.05 * max(dist[j], 1e-3):  # dead ahead: pick a side
+                normal = np.array([-tangent[1], tangent[0], 0.0])
+                probe = obstacle_map.clearance_m(np.vstack([pts[j] + normal, pts[j] - normal]))
+                side = normal if probe[0] >= probe[1] else -normal
+            side /= max(np.linalg.norm(side), 1e-9)
+            moves[i] += side * (config.clearance_m - clear[j] + 0.05)
+            counts[i] += 1
+        moved = counts > 0
+        wp[moved] += moves[moved] / counts[moved, None]
+        path = spline_path(wp)
+    clear = obstacle_map.clearance_m(path.points_ned_m)
+    min_clear = float(np.min(clear)) if clear.size else float("inf")
+    return Replan(wp, path, min_clear >= config.clearance_m, min_clear)
+
+
+def needs_regeneration(
+    vehicle_ned_m: np.ndarray, reference_point_ned_m: np.ndarray, config: ReplannerConfig
+) -> bool:
+    """True when the vehicle is more than ``regenerate_distance_m`` from where the reference
+    is now ([Kulathunga23] Fig. 7)."""
+    gap = np.asarray(vehicle_ned_m, dtype=float) - np.asarray(reference_point_ned_m, dtype=float)
+    return bool(np.linalg.norm(gap) > config.regenerate_distance_m)
