@@ -136,10 +136,12 @@ class InProcessLink:
         return self._sim
 
     def metadata(self) -> Mapping[str, object]:
+        contacts = {} if self._sim.world is None else {"contacts": len(self._sim.contacts)}
         return {
             "link": self.name,
             "mass_kg": float(self._sim.config.mass_kg),
             "physics_dt_s": float(self._sim.physics_dt_s),
+            **contacts,
             **self._metadata,
         }
 
