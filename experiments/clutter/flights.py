@@ -52,6 +52,7 @@ class ClutterFlight:
         cycle_ms: (n,) computation time of each planning cycle [ms].
         path_ne_m: (n, 2) the flown path in forest coordinates [m].
         log: the schema-v1 log; regenerations: how often the reference was regenerated.
+        failures: why the planner returned the safe command, reason -> cycles.
     """
 
     kind: str
@@ -62,6 +63,7 @@ class ClutterFlight:
     path_ne_m: np.ndarray
     log: FlightLog
     regenerations: int
+    failures: dict[str, int]
 
 
 def fly_pair(
@@ -99,12 +101,16 @@ def fly_pair(
     recorder = FlightRecorder(period_s=1.0 / RATE_HZ, wall_clock_columns=False)
     cycles: list[float] = []
     path: list[np.ndarray] = []
+    failures: dict[str, int] = {}
 
     def on_tick(tick: Tick) -> None:
         recorder.record(tick)
         if tick.state.mode == "OFFBOARD" and tick.decision.ref_pos_ned_m is not None:
             cycles.append(1000.0 * tick.decision.solve_time_s)
             path.append(tick.state.pos_ned_m[:2] + start)
+            if not tick.decision.ok:
+                reason = tick.decision.reason.split(" by ")[0][:60]
+                failures[reason] = failures.get(reason, 0) + 1
 
     runner = RunnerConfig(rate_hz=RATE_HZ, settle_timeout_s=settle_s)
     outcome = fly_mission(link, planner, reference, mission, runner, on_tick, lambda _m: None)
@@ -121,6 +127,7 @@ def fly_pair(
         flown,
         log,
         getattr(planner, "regenerations", 0),
+        failures,
     )
 
 
