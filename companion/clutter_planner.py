@@ -34,6 +34,7 @@ from planners.reference import PlannerState, Reference
 from planners.replanner import ReplannerConfig, needs_regeneration, push_out, resample
 
 _PATH_SAMPLES_PER_S = 10.0
+_REFINE_ITERATIONS = 8  # pushes per control cycle while the stretch ahead is not clear
 
 
 @dataclass(frozen=True)
@@ -82,6 +83,7 @@ class ClutterNmpc:
         self._initial: PolylinePath | None = None
         self._waypoints: np.ndarray | None = None
         self._map_version = -1
+        self._clear = True
         self._s_m = 0.0
         self._last_t_s: float | None = None
         self._last_scan_t_s = -np.inf
@@ -134,7 +136,7 @@ class ClutterNmpc:
         ref_point = path.at(self._s_m)[0][0]
         if s.regenerate and needs_regeneration(pos, ref_point, s.replanner):
             self._regenerate(pos)
-        elif self.obstacle_map.version != self._map_version:
+        elif self.obstacle_map.version != self._map_version or not self._clear:
             self._refine()
         return self._profile(self.path, self._s_m, t_s)
 
@@ -142,18 +144,30 @@ class ClutterNmpc:
         s = self.settings
         return PathReference(path, s0_m, t0_s, s.max_speed_mps, s.max_acc_mps2)
 
-    def _set_waypoints(self, waypoints: np.ndarray) -> None:
-        replan = push_out(waypoints, self.obstacle_map, self.settings.replanner)
+    def _set_waypoints(
+        self,
+        waypoints: np.ndarray,
+        window: tuple[int, int] | None = None,
+        iterations: int | None = None,
+    ) -> None:
+        replan = push_out(waypoints, self.obstacle_map, self.settings.replanner, window, iterations)
         self._map_version = self.obstacle_map.version
+        self._clear = replan.ok
         self._waypoints = replan.waypoints_ned_m
         self.path = replan.path
         self.replans += 1
 
     def _refine(self) -> None:
-        """Push the current reference out of the grown map; keep the progress point."""
+        """Push the stretch of the reference ahead (the map's range, twice) out of the grown
+        map, a few iterations per cycle (the next cycles go on while it is not clear); keep
+        the progress point."""
         ref_point = self.path.at(self._s_m)[0][0]
         s_old = self._s_m
-        self._set_waypoints(self._waypoints)
+        here = int(np.argmin(np.linalg.norm(self._waypoints - ref_point, axis=1)))
+        reach = int(
+            np.ceil(2.0 * self.settings.update_range_m / self.settings.replanner.waypoint_spacing_m)
+        )
+        self._set_waypoints(self._waypoints, (here - 1, here + reach), _REFINE_ITERATIONS)
         self._s_m = self.path.project(ref_point, max(0.0, s_old - 3.0), s_old + 3.0)
 
     def _regenerate(self, pos: np.ndarray) -> None:

@@ -94,8 +94,11 @@ class ObstacleWorld:
         o = np.asarray(origin_ned_m, dtype=float)
         d = np.atleast_2d(np.asarray(directions_ned, dtype=float))
         best = np.full(d.shape[0], np.inf)
-        for obstacle in self.obstacles:
-            best = np.minimum(best, _ray_hit_m(obstacle, o, d))
+        if not self.obstacles:
+            return best
+        in_range = np.flatnonzero(self.surface_distance_m(o[None, :])[0] <= max_range_m)
+        for k in in_range:
+            best = np.minimum(best, _ray_hit_m(self.obstacles[k], o, d))
         best[best > max_range_m] = np.inf
         return best
 

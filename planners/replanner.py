@@ -7,7 +7,8 @@ regenerated from the vehicle's position to the goal and pushed again, which is h
 escapes the local minima a pushed reference can leave.
 
 Our choices (the paper does not give them): the reference is a cubic B-spline through
-waypoints spaced ``waypoint_spacing_m`` apart (:class:`~planners.bspline.BSplineReference`);
+waypoints spaced ``waypoint_spacing_m`` apart (the geometry of
+:class:`~planners.bspline.BSplineReference`);
 a waypoint near a too-close stretch of the spline moves away from the nearest obstacle point,
 across the path (sideways, so a trunk standing on the path is passed, not backed away from),
 by the missing clearance; iterations stop when the whole spline keeps the clearance or after
@@ -22,7 +23,7 @@ from typing import Protocol
 
 import numpy as np
 
-from planners.bspline import BSplineReference
+from planners.bspline import spline_points
 from planners.path_reference import PolylinePath
 
 _SAMPLES_PER_SEGMENT = 8
@@ -70,48 +71,58 @@ def resample(points_ned_m: np.ndarray, spacing_m: float) -> np.ndarray:
 
 def spline_path(waypoints_ned_m: np.ndarray) -> PolylinePath:
     """The B-spline through the waypoints (m, 3), as a dense polyline."""
-    spline = BSplineReference(waypoints_ned_m)
-    n_seg = waypoints_ned_m.shape[0] - 1
-    t = np.linspace(0.0, spline.duration_s, n_seg * _SAMPLES_PER_SEGMENT + 1)
-    return PolylinePath(spline.sample(t).pos_ned_m)
+    return PolylinePath(spline_points(waypoints_ned_m, _SAMPLES_PER_SEGMENT))
 
 
 def push_out(
-    waypoints_ned_m: np.ndarray, obstacle_map: ObstacleMap, config: ReplannerConfig
+    waypoints_ned_m: np.ndarray,
+    obstacle_map: ObstacleMap,
+    config: ReplannerConfig,
+    window: tuple[int, int] | None = None,
+    max_iterations: int | None = None,
 ) -> Replan:
-    """Push the spline through ``waypoints_ned_m`` (m, 3) out of the map's obstacles (ends
-    fixed); see the module docstring."""
+    """Push the spline through ``waypoints_ned_m`` (m, 3) out of the map's obstacles (see the
+    module docstring). Only waypoints ``window`` = (first, last) (default: all but the ends)
+    move, and only the spline between them is checked: a vehicle needs the stretch ahead of
+    it clear, and refining only that keeps a replan cheap. ``ok`` is about that stretch."""
     wp = np.array(waypoints_ned_m, dtype=float)
     m = wp.shape[0]
+    first, last = (1, m - 2) if window is None else (max(1, window[0]), min(m - 2, window[1]))
+    lo, hi = (first - 1) * _SAMPLES_PER_SEGMENT, (last + 1) * _SAMPLES_PER_SEGMENT + 1
     path = spline_path(wp)
-    for _ in range(config.max_iterations):
-        pts = path.points_ned_m
-        dist, nearest = obstacle_map.nearest_points(pts)
+    for _ in range(config.max_iterations if max_iterations is None else max_iterations):
+        if last < first:
+            break
+        pts = path.points_ned_m[lo:hi]
         clear = obstacle_map.clearance_m(pts)
         bad = np.flatnonzero(clear < config.clearance_m)
-        if bad.size == 0 or m <= 2:
+        if bad.size == 0:
             break
+        _, nearest = obstacle_map.nearest_points(pts[bad])
+        j = bad + lo
+        i = np.clip(np.rint(j / _SAMPLES_PER_SEGMENT).astype(int), first, last)
+        tangent = wp[np.minimum(i + 1, m - 1)] - wp[np.maximum(i - 1, 0)]
+        tangent[:, 2] = 0.0
+        tangent /= np.maximum(np.linalg.norm(tangent, axis=1), 1e-9)[:, None]
+        away = pts[bad] - nearest
+        away[:, 2] = 0.0
+        side = away - np.sum(away * tangent, axis=1)[:, None] * tangent
+        normal = np.column_stack([-tangent[:, 1], tangent[:, 0], np.zeros(bad.size)])
+        ahead = np.linalg.norm(side, axis=1) < 0.05 * np.maximum(np.linalg.norm(away, axis=1), 1e-3)
+        if np.any(ahead):  # dead ahead: the side with more room
+            probe_l = obstacle_map.clearance_m(pts[bad][ahead] + normal[ahead])
+            probe_r = obstacle_map.clearance_m(pts[bad][ahead] - normal[ahead])
+            side[ahead] = np.where((probe_l >= probe_r)[:, None], normal[ahead], -normal[ahead])
+        side /= np.maximum(np.linalg.norm(side, axis=1), 1e-9)[:, None]
+        step = side * (config.clearance_m - clear[bad] + 0.05)[:, None]
         moves = np.zeros_like(wp)
         counts = np.zeros(m)
-        for j in bad:
-            i = int(np.clip(round(j / _SAMPLES_PER_SEGMENT), 1, m - 2))
-            tangent = wp[min(i + 1, m - 1)] - wp[max(i - 1, 0)]
-            tangent[2] = 0.0
-            tangent /= max(np.linalg.norm(tangent), 1e-9)
-            away = pts[j] - nearest[j]
-            away[2] = 0.0
-            side = away - (away @ tangent) * tangent
-            if np.linalg.norm(side) < 0.05 * max(dist[j], 1e-3):  # dead ahead: pick a side
-                normal = np.array([-tangent[1], tangent[0], 0.0])
-                probe = obstacle_map.clearance_m(np.vstack([pts[j] + normal, pts[j] - normal]))
-                side = normal if probe[0] >= probe[1] else -normal
-            side /= max(np.linalg.norm(side), 1e-9)
-            moves[i] += side * (config.clearance_m - clear[j] + 0.05)
-            counts[i] += 1
+        np.add.at(moves, i, step)
+        np.add.at(counts, i, 1.0)
         moved = counts > 0
         wp[moved] += moves[moved] / counts[moved, None]
         path = spline_path(wp)
-    clear = obstacle_map.clearance_m(path.points_ned_m)
+    clear = obstacle_map.clearance_m(path.points_ned_m[lo:hi])
     min_clear = float(np.min(clear)) if clear.size else float("inf")
     return Replan(wp, path, min_clear >= config.clearance_m, min_clear)
 
