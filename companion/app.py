@@ -116,9 +116,11 @@ def run_companion(config: CompanionConfig, progress: Callable[[str], None]) -> C
 
 
 def _obstacle_world(config: CompanionConfig, mission: Mission) -> object | None:
-    """The mission's obstacle world for the in-process simulator (None without one); refuses
-    (CompanionInputError, one line) a mission whose obstacles the flight cannot honour: a
-    planner that ignores obstacles, or a link that brings no range scans."""
+    """The mission's obstacle world for the in-process simulator (None without one, or on a
+    MAVLink link: there the vehicle's own sensor sees the world, e.g. vehicle-sim --world);
+    refuses (CompanionInputError, one line) a mission whose obstacles the flight cannot
+    honour: a planner that ignores obstacles, or a link that brings no range scans (MAVSDK
+    has no OBSTACLE_DISTANCE telemetry). The planner itself brakes when scans stop coming."""
     if mission.obstacles_world is None:
         return None
     where = config.mission_path
@@ -127,15 +129,16 @@ def _obstacle_world(config: CompanionConfig, mission: Mission) -> object | None:
             f"{where}: obstacles_world is set, but planner {config.planner!r} ignores obstacles "
             f"and would fly through them; refusing (use --planner {' or '.join(OBSTACLE_PLANNERS)})"
         )
-    if config.link != "inprocess":
+    if config.link == "mavsdk":
         raise CompanionInputError(
-            f"{where}: obstacles_world is set, but the {config.link} link brings no range scans "
-            "(OBSTACLE_DISTANCE) to the companion yet, so it would fly blind; refusing (fly "
-            "--link inprocess)"
+            f"{where}: obstacles_world is set, but the mavsdk link brings no range scans "
+            "(OBSTACLE_DISTANCE) to the companion, so it would fly blind; refusing (use --link "
+            "pymavlink or inprocess)"
         )
     from planners.world_file import load_world
 
-    return load_world(mission.obstacles_world)
+    world = load_world(mission.obstacles_world)  # checked before flying, on every link
+    return world if config.link == "inprocess" else None
 
 
 def open_link(config: CompanionConfig, world: object | None = None) -> Link:

@@ -29,7 +29,7 @@ from companion.link import ObstacleDistances
 from companion.nmpc_planner import CompanionNmpc
 from planners.obstacle_map import PointObstacleMap
 from planners.path_reference import PathReference, PolylinePath
-from planners.plan_result import PlanResult
+from planners.plan_result import PlanResult, safe_result
 from planners.reference import PlannerState, Reference
 from planners.replanner import ReplannerConfig, needs_regeneration, push_out, resample
 
@@ -48,6 +48,8 @@ class ClutterSettings:
         max_speed_mps, max_acc_mps2: the reference's speed and braking limits.
         lead_m: how far the reference point may run ahead of the vehicle's projection [m].
         voxel_m, point_radius_m, update_range_m: the map (see PointObstacleMap).
+        max_scan_age_s: without a new range scan for longer than this [s] the planner gives
+            the safe command (brake and hover): it would be flying blind.
     """
 
     regenerate: bool = True
@@ -58,6 +60,7 @@ class ClutterSettings:
     voxel_m: float = 0.15
     point_radius_m: float = 0.1
     update_range_m: float = 5.0
+    max_scan_age_s: float = 0.5
 
 
 class ClutterNmpc:
@@ -87,6 +90,7 @@ class ClutterNmpc:
         self._s_m = 0.0
         self._last_t_s: float | None = None
         self._last_scan_t_s = -np.inf
+        self._scan_age_s = np.inf
 
     @property
     def augmented(self) -> bool:
@@ -99,6 +103,7 @@ class ClutterNmpc:
         """Take a range scan into the map (each scan once)."""
         if scan.t_s > self._last_scan_t_s:
             self._last_scan_t_s = scan.t_s
+            self._scan_age_s = 0.0
             self.obstacle_map.add_scan(scan.origin_ned_m, scan.angles_rad, scan.distances_m)
 
     def reference_point_ned_m(self) -> np.ndarray | None:
@@ -108,6 +113,13 @@ class ClutterNmpc:
     def plan(self, state: PlannerState, reference: Reference, t_s: float) -> PlanResult:
         """One cycle (see the module docstring); never raises."""
         start = time.perf_counter()
+        if self._last_t_s is not None:
+            self._scan_age_s += max(0.0, float(t_s) - self._last_t_s)
+        if self._scan_age_s > self.settings.max_scan_age_s:
+            m = self._nmpc.model
+            age = "never" if np.isinf(self._scan_age_s) else f"{self._scan_age_s:.1f} s ago"
+            self._last_t_s = float(t_s)
+            return safe_result(m.nu, m.nx, f"no range scan (last {age}): flying blind")
         try:
             snapshot = self._reference(state, reference, float(t_s))
         except Exception as exc:  # noqa: BLE001 - the flight must get a command

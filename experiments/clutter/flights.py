@@ -7,7 +7,8 @@ sensor. The forest is moved so that the start is the simulator's origin.
 Planners (``kind``):
     proposed         NMPC + GP residual + map + replanner + regeneration ([Kulathunga23])
     no_regeneration  the NMPC replanner without regeneration and without GP (their ref. 9)
-    rrtstar          OMPL's RRT* path in the known forest, tracked by the nominal NMPC
+    rrtstar          OMPL's RRT* path in the known forest, tracked by the nominal NMPC that
+                     also keeps d_o from the (known) trunks: a global planner with the full map
     pd               the PD regulator on the initial (straight) reference
 """
 
@@ -91,6 +92,8 @@ def fly_pair(
     reference = reference_of(mission)
     planner = _planner(kind, residual_model)
     if kind == "rrtstar":
+        planner.set_obstacles(shifted(world, start))
+    if kind == "rrtstar":
         if rrt_path_ne_m is None:
             raise ValueError("the rrtstar flight needs rrt_path_ne_m (from plan_rrtstar)")
         pts = np.column_stack([rrt_path_ne_m - start, np.full(len(rrt_path_ne_m), -ALTITUDE_M)])
@@ -139,7 +142,7 @@ def _planner(kind: PlannerKind, residual_model: ResidualModel | None):
         speed_limit_mps=SPEED_MPS,
         period_s=1.0 / RATE_HZ,
         time_budget_s=LOCKSTEP_PLAN_BUDGET_S,
-        n_obstacles=CLUTTER_N_OBSTACLES if clutter else 0,
+        n_obstacles=CLUTTER_N_OBSTACLES,
         safe_distance_m=CLUTTER_SAFE_DISTANCE_M,
     )
     nmpc = CompanionNmpc(settings, residual_model if kind == "proposed" else None)

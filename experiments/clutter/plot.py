@@ -17,7 +17,7 @@ from planners.obstacles import Cylinder  # noqa: E402
 _STYLE = {
     "proposed": ("tab:green", "proposed (NMPC+GP+replanner+regeneration)"),
     "no_regeneration": ("tab:blue", "NMPC replanner, no regeneration"),
-    "rrtstar": ("tab:orange", "RRT* (OMPL) + NMPC tracking"),
+    "rrtstar": ("tab:orange", "RRT* (OMPL, known forest) + NMPC tracking"),
     "pd": ("tab:red", "PD on the initial reference"),
 }
 

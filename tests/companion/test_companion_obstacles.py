@@ -49,7 +49,6 @@ def test_the_forest_mission_is_flown_around_the_trunks(tmp_path):
         ("pd", "inprocess", "planner 'pd' ignores obstacles and would fly through them"),
         ("nmpc", "inprocess", "planner 'nmpc' ignores obstacles"),
         ("nmpc_clutter", "mavsdk", "brings no range scans"),
-        ("nmpc_clutter", "pymavlink", "brings no range scans"),
     ],
 )
 def test_a_mission_whose_obstacles_cannot_be_honoured_is_refused(tmp_path, planner, link, message):
