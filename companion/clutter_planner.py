@@ -3,8 +3,9 @@
 Each control cycle:
 1. new range scans enter the incremental KD-tree map (:mod:`planners.obstacle_map`), hits
    within ``update_range_m`` (paper: u_r 4-6 m);
-2. when the map has grown, the reference is pushed out of the known obstacles again
-   (:func:`planners.replanner.push_out`, the paper's replanner);
+2. when the map has grown, the stretch of reference ahead is pushed out of the known
+   obstacles again (:func:`planners.replanner.push_out`, the paper's replanner), a few
+   iterations per cycle;
 3. with ``regenerate`` on, a vehicle more than ~2 m from the reference point regenerates the
    reference from where it is to the goal (paper, Fig. 7);
 4. the NMPC (N_o nearest map points per node as hard constraints with safe distance d_o,
@@ -46,7 +47,9 @@ class ClutterSettings:
         replanner: the replanner's clearance, waypoint spacing, iterations, regeneration
             distance.
         max_speed_mps, max_acc_mps2: the reference's speed and braking limits.
-        lead_m: how far the reference point may run ahead of the vehicle's projection [m].
+        lead_m: how far the reference point may run ahead of the vehicle's projection [m];
+            above the regeneration distance, so that a vehicle held up head-on by an
+            obstacle falls far enough behind to regenerate (paper, Fig. 7).
         voxel_m, point_radius_m, update_range_m: the map (see PointObstacleMap).
         max_scan_age_s: without a new range scan for longer than this [s] the planner gives
             the safe command (brake and hover): it would be flying blind.
@@ -56,7 +59,7 @@ class ClutterSettings:
     replanner: ReplannerConfig = field(default_factory=ReplannerConfig)
     max_speed_mps: float = 1.5
     max_acc_mps2: float = 1.0
-    lead_m: float = 1.5
+    lead_m: float = 2.5
     voxel_m: float = 0.15
     point_radius_m: float = 0.1
     update_range_m: float = 5.0
@@ -85,8 +88,8 @@ class ClutterNmpc:
         self.path: PolylinePath | None = None
         self._initial: PolylinePath | None = None
         self._waypoints: np.ndarray | None = None
+        self._anchor: np.ndarray | None = None
         self._map_version = -1
-        self._clear = True
         self._s_m = 0.0
         self._last_t_s: float | None = None
         self._last_scan_t_s = -np.inf
@@ -135,9 +138,8 @@ class ClutterNmpc:
             n = max(2, int(reference.duration_s * _PATH_SAMPLES_PER_S) + 1)
             pts = reference.sample(np.linspace(0.0, reference.duration_s, n)).pos_ned_m
             self._initial = PolylinePath(np.vstack([pos, pts]))
-            self._set_waypoints(
-                resample(self._initial.points_ned_m, s.replanner.waypoint_spacing_m)
-            )
+            spacing = s.replanner.waypoint_spacing_m
+            self._set_waypoints(resample(self._initial.points_ned_m, spacing), anchor=True)
             self._last_t_s = t_s
         path = self.path
         dt_s = max(0.0, t_s - self._last_t_s)
@@ -148,7 +150,7 @@ class ClutterNmpc:
         ref_point = path.at(self._s_m)[0][0]
         if s.regenerate and needs_regeneration(pos, ref_point, s.replanner):
             self._regenerate(pos)
-        elif self.obstacle_map.version != self._map_version or not self._clear:
+        elif self.obstacle_map.version != self._map_version:
             self._refine()
         return self._profile(self.path, self._s_m, t_s)
 
@@ -161,10 +163,21 @@ class ClutterNmpc:
         waypoints: np.ndarray,
         window: tuple[int, int] | None = None,
         iterations: int | None = None,
+        anchor: bool = False,
     ) -> None:
-        replan = push_out(waypoints, self.obstacle_map, self.settings.replanner, window, iterations)
+        """Push ``waypoints`` out; ``anchor``: they are newly generated (the reference a
+        refinement may not stray from by more than max_shift_m)."""
+        if anchor:
+            self._anchor = np.array(waypoints, dtype=float)
+        replan = push_out(
+            waypoints,
+            self.obstacle_map,
+            self.settings.replanner,
+            window,
+            iterations,
+            self._anchor,
+        )
         self._map_version = self.obstacle_map.version
-        self._clear = replan.ok
         self._waypoints = replan.waypoints_ned_m
         self.path = replan.path
         self.replans += 1
@@ -191,6 +204,6 @@ class ClutterNmpc:
             rest = initial.points_ned_m[-1:]
         start = np.array([pos[0], pos[1], rest[0][2]])
         spacing = self.settings.replanner.waypoint_spacing_m
-        self._set_waypoints(resample(np.vstack([start, rest]), spacing))
+        self._set_waypoints(resample(np.vstack([start, rest]), spacing), anchor=True)
         self._s_m = 0.0
         self.regenerations += 1

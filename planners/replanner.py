@@ -13,7 +13,8 @@ a waypoint near a too-close stretch of the spline moves away from the nearest ob
 across the path (sideways, so a trunk standing on the path is passed, not backed away from),
 by the missing clearance; iterations stop when the whole spline keeps the clearance or after
 ``max_iterations`` (then ``ok`` is False and the best reference so far is kept); a side is
-chosen once per obstacle contact by the side with more room. Pure: no I/O.
+chosen once per obstacle contact by the side with more room; no waypoint moves more than
+``max_shift_m`` from where it was generated. Pure: no I/O.
 """
 
 from __future__ import annotations
@@ -43,12 +44,17 @@ class ReplannerConfig:
     max_iterations: pushes per replan.
     regenerate_distance_m: vehicle-to-reference distance [m] that triggers regeneration
         ([Kulathunga23] Fig. 7: ~2 m).
+    max_shift_m: farthest a waypoint may be pushed from where it was generated [m]: a
+        refinement stays local (pushes between close obstacles on both sides would otherwise
+        walk a waypoint away without end); farther detours are the NMPC's and the
+        regeneration's.
     """
 
     clearance_m: float = 0.9
     waypoint_spacing_m: float = 1.0
     max_iterations: int = 40
     regenerate_distance_m: float = 2.0
+    max_shift_m: float = 4.0
 
 
 @dataclass(frozen=True)
@@ -80,12 +86,16 @@ def push_out(
     config: ReplannerConfig,
     window: tuple[int, int] | None = None,
     max_iterations: int | None = None,
+    anchor_ned_m: np.ndarray | None = None,
 ) -> Replan:
     """Push the spline through ``waypoints_ned_m`` (m, 3) out of the map's obstacles (see the
     module docstring). Only waypoints ``window`` = (first, last) (default: all but the ends)
     move, and only the spline between them is checked: a vehicle needs the stretch ahead of
-    it clear, and refining only that keeps a replan cheap. ``ok`` is about that stretch."""
+    it clear, and refining only that keeps a replan cheap. ``ok`` is about that stretch.
+    ``anchor_ned_m`` (m, 3): where the waypoints were generated; no waypoint ends farther
+    than ``max_shift_m`` from its anchor (default: from where it is now)."""
     wp = np.array(waypoints_ned_m, dtype=float)
+    origin = wp.copy() if anchor_ned_m is None else np.asarray(anchor_ned_m, dtype=float)
     m = wp.shape[0]
     first, last = (1, m - 2) if window is None else (max(1, window[0]), min(m - 2, window[1]))
     lo, hi = (first - 1) * _SAMPLES_PER_SEGMENT, (last + 1) * _SAMPLES_PER_SEGMENT + 1
@@ -121,6 +131,10 @@ def push_out(
         np.add.at(counts, i, 1.0)
         moved = counts > 0
         wp[moved] += moves[moved] / counts[moved, None]
+        shift = wp - origin
+        norm = np.linalg.norm(shift, axis=1)
+        far = norm > config.max_shift_m
+        wp[far] = origin[far] + shift[far] * (config.max_shift_m / norm[far])[:, None]
         path = spline_path(wp)
     clear = obstacle_map.clearance_m(path.points_ned_m[lo:hi])
     min_clear = float(np.min(clear)) if clear.size else float("inf")

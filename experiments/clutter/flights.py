@@ -6,6 +6,7 @@ sensor. The forest is moved so that the start is the simulator's origin.
 
 Planners (``kind``):
     proposed         NMPC + GP residual + map + replanner + regeneration ([Kulathunga23])
+    nominal          the same without the GP (what the GP adds, our ablation)
     no_regeneration  the NMPC replanner without regeneration and without GP (their ref. 9)
     rrtstar          OMPL's RRT* path in the known forest, tracked by the nominal NMPC that
                      also keeps d_o from the (known) trunks: a global planner with the full map
@@ -37,7 +38,7 @@ from planners.path_reference import PathReference, PolylinePath
 from planners.pd_regulator import PdGains, PdRegulator
 from vehicle_sim import Simulator, load_sim_config
 
-PlannerKind = Literal["proposed", "no_regeneration", "rrtstar", "pd"]
+PlannerKind = Literal["proposed", "nominal", "no_regeneration", "rrtstar", "pd"]
 RATE_HZ = 20.0  # [Kulathunga23] Table 3: s_t = 50 ms
 SPEED_MPS = 1.5  # [Kulathunga23]: v_max 1.5 m/s in cluttered flight
 VEHICLE = "iris_study"
@@ -137,7 +138,7 @@ def fly_pair(
 def _planner(kind: PlannerKind, residual_model: ResidualModel | None):
     if kind == "pd":
         return PdRegulator(PdGains(max_speed_mps=SPEED_MPS))
-    clutter = kind in ("proposed", "no_regeneration")
+    clutter = kind in ("proposed", "nominal", "no_regeneration")
     settings = NmpcSettings(
         speed_limit_mps=SPEED_MPS,
         period_s=1.0 / RATE_HZ,
@@ -148,5 +149,5 @@ def _planner(kind: PlannerKind, residual_model: ResidualModel | None):
     nmpc = CompanionNmpc(settings, residual_model if kind == "proposed" else None)
     if not clutter:
         return nmpc
-    regenerate = kind == "proposed"
+    regenerate = kind in ("proposed", "nominal")
     return ClutterNmpc(nmpc, ClutterSettings(regenerate=regenerate, max_speed_mps=SPEED_MPS))

@@ -16,6 +16,7 @@ from planners.obstacles import Cylinder  # noqa: E402
 
 _STYLE = {
     "proposed": ("tab:green", "proposed (NMPC+GP+replanner+regeneration)"),
+    "nominal": ("tab:purple", "proposed without GP"),
     "no_regeneration": ("tab:blue", "NMPC replanner, no regeneration"),
     "rrtstar": ("tab:orange", "RRT* (OMPL, known forest) + NMPC tracking"),
     "pd": ("tab:red", "PD on the initial reference"),
