@@ -39,7 +39,8 @@ class ObstacleMap(Protocol):
 @dataclass(frozen=True)
 class ReplannerConfig:
     """Attributes:
-    clearance_m: least distance [m] from the reference to an obstacle surface.
+    clearance_m: least distance [m] from the reference to an obstacle surface (our choice: the
+        RRT* baseline's clearance; the NMPC keeps d_o + a point's radius = 0.6 m).
     waypoint_spacing_m: distance between the spline's waypoints [m].
     max_iterations: pushes per replan.
     regenerate_distance_m: vehicle-to-reference distance [m] that triggers regeneration
@@ -50,7 +51,7 @@ class ReplannerConfig:
         regeneration's.
     """
 
-    clearance_m: float = 0.9
+    clearance_m: float = 0.8
     waypoint_spacing_m: float = 1.0
     max_iterations: int = 40
     regenerate_distance_m: float = 2.0

@@ -8,8 +8,9 @@ Planners (``kind``):
     proposed         NMPC + GP residual + map + replanner + regeneration ([Kulathunga23])
     nominal          the same without the GP (what the GP adds, our ablation)
     no_regeneration  the NMPC replanner without regeneration and without GP (their ref. 9)
-    rrtstar          OMPL's RRT* path in the known forest, tracked by the nominal NMPC that
-                     also keeps d_o from the (known) trunks: a global planner with the full map
+    rrtstar          OMPL's RRT* path in the known forest, tracked by the proposed planner's
+                     NMPC (with its GP) that also keeps d_o from the known trunks: a global
+                     planner with the full map, compared path against path
     pd               the PD regulator on the initial (straight) reference
 """
 
@@ -33,6 +34,7 @@ from companion.runner import RunnerConfig, fly_mission
 from experiments.clutter.scenario import ALTITUDE_M, shifted
 from flightlog.schema import FlightLog
 from gp.model_io import ResidualModel
+from planners.obstacle_map import PointObstacleMap
 from planners.obstacles import ObstacleWorld
 from planners.path_reference import PathReference, PolylinePath
 from planners.pd_regulator import PdGains, PdRegulator
@@ -42,6 +44,7 @@ PlannerKind = Literal["proposed", "nominal", "no_regeneration", "rrtstar", "pd"]
 RATE_HZ = 20.0  # [Kulathunga23] Table 3: s_t = 50 ms
 SPEED_MPS = 1.5  # [Kulathunga23]: v_max 1.5 m/s in cluttered flight
 VEHICLE = "iris_study"
+POINT_RADIUS_M = PointObstacleMap().point_radius_m
 
 
 @dataclass(frozen=True, eq=False)
@@ -108,6 +111,8 @@ def fly_pair(
     failures: dict[str, int] = {}
 
     def on_tick(tick: Tick) -> None:
+        if sim.crashed:
+            raise _Crashed  # the flight is over: no need to wait out the follow deadline
         recorder.record(tick)
         if tick.state.mode == "OFFBOARD" and tick.decision.ref_pos_ned_m is not None:
             cycles.append(1000.0 * tick.decision.solve_time_s)
@@ -117,14 +122,18 @@ def fly_pair(
                 failures[reason] = failures.get(reason, 0) + 1
 
     runner = RunnerConfig(rate_hz=RATE_HZ, settle_timeout_s=settle_s)
-    outcome = fly_mission(link, planner, reference, mission, runner, on_tick, lambda _m: None)
+    try:
+        outcome = fly_mission(link, planner, reference, mission, runner, on_tick, lambda _m: None)
+        completed = outcome.status == "completed"
+    except _Crashed:
+        completed = False
     flown = np.array(path).reshape(-1, 2)
     distance = float(np.sum(np.linalg.norm(np.diff(flown, axis=0), axis=1)))
     contacts = len(sim.contacts)
     log = recorder.to_log({"source": "clutter-bench", "planner": kind, **link.metadata()})
     return ClutterFlight(
         kind,
-        outcome.status == "completed" and contacts == 0,
+        completed and contacts == 0,
         contacts,
         distance,
         np.asarray(cycles),
@@ -133,6 +142,10 @@ def fly_pair(
         getattr(planner, "regenerations", 0),
         failures,
     )
+
+
+class _Crashed(Exception):
+    """The vehicle touched an obstacle (the simulator disarmed it)."""
 
 
 def _planner(kind: PlannerKind, residual_model: ResidualModel | None):
@@ -144,9 +157,10 @@ def _planner(kind: PlannerKind, residual_model: ResidualModel | None):
         period_s=1.0 / RATE_HZ,
         time_budget_s=LOCKSTEP_PLAN_BUDGET_S,
         n_obstacles=CLUTTER_N_OBSTACLES,
-        safe_distance_m=CLUTTER_SAFE_DISTANCE_M,
+        # from a trunk's surface: d_o plus a map point's radius, as the sensing planners keep
+        safe_distance_m=CLUTTER_SAFE_DISTANCE_M + (0.0 if clutter else POINT_RADIUS_M),
     )
-    nmpc = CompanionNmpc(settings, residual_model if kind == "proposed" else None)
+    nmpc = CompanionNmpc(settings, residual_model if kind in ("proposed", "rrtstar") else None)
     if not clutter:
         return nmpc
     regenerate = kind in ("proposed", "nominal")

@@ -18,7 +18,7 @@ _STYLE = {
     "proposed": ("tab:green", "proposed (NMPC+GP+replanner+regeneration)"),
     "nominal": ("tab:purple", "proposed without GP"),
     "no_regeneration": ("tab:blue", "NMPC replanner, no regeneration"),
-    "rrtstar": ("tab:orange", "RRT* (OMPL, known forest) + NMPC tracking"),
+    "rrtstar": ("tab:orange", "RRT* (OMPL, known forest) + NMPC+GP tracking"),
     "pd": ("tab:red", "PD on the initial reference"),
 }
 

@@ -26,6 +26,7 @@ def test_two_pairs_in_a_small_forest(tmp_path):
         n_pairs=2,
         training_flights=2,
         rrt_iterations=2000,
+        planners=("proposed", "rrtstar", "pd"),
     )
     plot = tmp_path / "forest.png"
     figures = clutter.run(progress=lambda _m: None, config=config, plot_path=plot)
