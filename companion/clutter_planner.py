@@ -53,6 +53,8 @@ class ClutterSettings:
         voxel_m, point_radius_m, update_range_m: the map (see PointObstacleMap).
         max_scan_age_s: without a new range scan for longer than this [s] the planner gives
             the safe command (brake and hover): it would be flying blind.
+        rejoin_m: a regenerated reference runs straight from the vehicle to the initial one
+            this far [m] ahead of the vehicle's projection on it, then along it.
     """
 
     regenerate: bool = True
@@ -64,6 +66,7 @@ class ClutterSettings:
     point_radius_m: float = 0.1
     update_range_m: float = 5.0
     max_scan_age_s: float = 0.5
+    rejoin_m: float = 1.0
 
 
 class ClutterNmpc:
@@ -196,10 +199,11 @@ class ClutterNmpc:
         self._s_m = self.path.project(ref_point, max(0.0, s_old - 3.0), s_old + 3.0)
 
     def _regenerate(self, pos: np.ndarray) -> None:
-        """A new reference from ``pos`` along the rest of the initial one, pushed out."""
+        """A new reference from ``pos`` straight to the initial one ``rejoin_m`` ahead (our
+        choice), then along it, pushed out."""
         initial = self._initial
         s_here = initial.project(pos, 0.0, initial.length_m)
-        rest = initial.points_ned_m[initial.s_m > s_here + 1.0]
+        rest = initial.points_ned_m[initial.s_m > s_here + self.settings.rejoin_m]
         if rest.shape[0] == 0:
             rest = initial.points_ned_m[-1:]
         start = np.array([pos[0], pos[1], rest[0][2]])

@@ -1,8 +1,9 @@
 """Clutter benchmark (`bench --only clutter`): [Kulathunga23] Table 3 in a seeded forest.
 
 Ten seeded start/goal pairs in one seeded 60 m x 60 m forest (two with ``quick``), flown
-closed loop in process by the proposed planner, the same without its GP (nominal), the NMPC
-replanner without regeneration, OMPL's RRT* and the PD regulator (experiments/clutter).
+closed loop in process by the proposed planner, the same without its GP (nominal) and
+without regeneration (gp_no_regeneration), the paper's NMPC replanner (no GP, no
+regeneration), OMPL's RRT* and the PD regulator (experiments/clutter).
 Figures:
     clutter_success_fraction         proposed: goal reached without contact / pairs [-]
     clutter_mean_cycle_ms            proposed: mean computation time per planning cycle [ms]
@@ -53,7 +54,7 @@ def run(
     if "rrtstar" in rows:
         figures["clutter_rrtstar_distance_mean_m"] = rows["rrtstar"]["distance_mean_m"]
         figures["clutter_rrtstar_success_fraction"] = rows["rrtstar"]["success_fraction"]
-    for kind in ("nominal", "no_regeneration", "pd"):
+    for kind in ("nominal", "gp_no_regeneration", "no_regeneration", "pd"):
         if kind in rows:
             figures[f"clutter_{kind}_success_fraction"] = rows[kind]["success_fraction"]
             figures[f"clutter_{kind}_distance_mean_m"] = rows[kind]["distance_mean_m"]

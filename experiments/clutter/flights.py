@@ -7,6 +7,7 @@ sensor. The forest is moved so that the start is the simulator's origin.
 Planners (``kind``):
     proposed         NMPC + GP residual + map + replanner + regeneration ([Kulathunga23])
     nominal          the same without the GP (what the GP adds, our ablation)
+    gp_no_regeneration  the same with the GP but without regeneration (what regeneration adds)
     no_regeneration  the NMPC replanner without regeneration and without GP (their ref. 9)
     rrtstar          OMPL's RRT* path in the known forest, tracked by the proposed planner's
                      NMPC (with its GP) that also keeps d_o from the known trunks: a global
@@ -40,7 +41,9 @@ from planners.path_reference import PathReference, PolylinePath
 from planners.pd_regulator import PdGains, PdRegulator
 from vehicle_sim import Simulator, load_sim_config
 
-PlannerKind = Literal["proposed", "nominal", "no_regeneration", "rrtstar", "pd"]
+PlannerKind = Literal[
+    "proposed", "nominal", "gp_no_regeneration", "no_regeneration", "rrtstar", "pd"
+]
 RATE_HZ = 20.0  # [Kulathunga23] Table 3: s_t = 50 ms
 SPEED_MPS = 1.5  # [Kulathunga23]: v_max 1.5 m/s in cluttered flight
 VEHICLE = "iris_study"
@@ -151,7 +154,7 @@ class _Crashed(Exception):
 def _planner(kind: PlannerKind, residual_model: ResidualModel | None):
     if kind == "pd":
         return PdRegulator(PdGains(max_speed_mps=SPEED_MPS))
-    clutter = kind in ("proposed", "nominal", "no_regeneration")
+    clutter = kind in ("proposed", "nominal", "gp_no_regeneration", "no_regeneration")
     settings = NmpcSettings(
         speed_limit_mps=SPEED_MPS,
         period_s=1.0 / RATE_HZ,
@@ -160,7 +163,8 @@ def _planner(kind: PlannerKind, residual_model: ResidualModel | None):
         # from a trunk's surface: d_o plus a map point's radius, as the sensing planners keep
         safe_distance_m=CLUTTER_SAFE_DISTANCE_M + (0.0 if clutter else POINT_RADIUS_M),
     )
-    nmpc = CompanionNmpc(settings, residual_model if kind in ("proposed", "rrtstar") else None)
+    with_gp = kind in ("proposed", "gp_no_regeneration", "rrtstar")
+    nmpc = CompanionNmpc(settings, residual_model if with_gp else None)
     if not clutter:
         return nmpc
     regenerate = kind in ("proposed", "nominal")

@@ -17,6 +17,7 @@ from planners.obstacles import Cylinder  # noqa: E402
 _STYLE = {
     "proposed": ("tab:green", "proposed (NMPC+GP+replanner+regeneration)"),
     "nominal": ("tab:purple", "proposed without GP"),
+    "gp_no_regeneration": ("tab:cyan", "proposed without regeneration"),
     "no_regeneration": ("tab:blue", "NMPC replanner, no regeneration"),
     "rrtstar": ("tab:orange", "RRT* (OMPL, known forest) + NMPC+GP tracking"),
     "pd": ("tab:red", "PD on the initial reference"),

@@ -28,7 +28,14 @@ from experiments.study.metrics import residual_rmse_mps
 from planners.forest import ForestSpec
 from planners.trajectory_generator import TrajectorySpec, generate_trajectories
 
-PLANNERS: tuple[PlannerKind, ...] = ("proposed", "nominal", "no_regeneration", "rrtstar", "pd")
+PLANNERS: tuple[PlannerKind, ...] = (
+    "proposed",
+    "nominal",
+    "gp_no_regeneration",
+    "no_regeneration",
+    "rrtstar",
+    "pd",
+)
 
 
 @dataclass(frozen=True)
