@@ -1,12 +1,13 @@
 """The RRT* baseline of [Kulathunga23] Table 3 (their ref. 13), from OMPL's Python bindings.
 
-OMPL's ``RRTstar`` ([OMPL]) plans a 2-D path (north, east) at flight altitude in the full,
-known forest (a global planner: it is given the map the NMPC companion has to sense), with
-a state valid when its clearance to every trunk is at least ``clearance_m``, and stops after
-``iterations`` iterations (the paper: max_iterations = 10000). Validity is looked up in a
-grid of 5 cm cells computed once per problem (conservative by half a cell diagonal). OMPL's
-random generator is seeded once per process (``ompl.util.RNG.setSeed`` works only before its
-first use), so a fresh process planning the same problems in the same order gets the same paths.
+OMPL's ``RRTstar`` ([OMPL]; RRT* is [Karaman11]) plans a 2-D path (north, east) at flight
+altitude in the full, known forest (a global planner: it is given the map the NMPC
+companion has to sense), a state being valid when its clearance to every trunk is at least
+``clearance_m``; it stops after ``iterations`` iterations (the paper: max_iterations =
+10000). Validity is looked up in a grid of 5 cm cells computed once per problem
+(conservative by half a cell diagonal). OMPL's random generator is seeded once per process
+(``ompl.util.RNG.setSeed`` works only before its first use), so a fresh process planning the
+same problems in the same order gets the same paths.
 """
 
 from __future__ import annotations

@@ -72,3 +72,21 @@ def test_the_message_refuses_impossible_sector_counts(n):
     scan = RangeScan(0.0, np.zeros(3), np.zeros(n), np.zeros(n), 5.0)
     with pytest.raises(ValueError, match="1..72 sectors"):
         obstacle_distance_message(scan, 0.2)
+
+
+@pytest.mark.parametrize(("offset_m", "regenerated"), [(1.8, False), (2.3, True)])
+def test_the_planner_regenerates_its_reference_when_the_vehicle_is_far_from_it(
+    offset_m, regenerated
+):
+    nmpc = CompanionNmpc(NmpcSettings(speed_limit_mps=1.5, period_s=0.05, n_obstacles=4))
+    planner = ClutterNmpc(nmpc)
+    ref = BSplineReference(np.array([[0.0, 0.0, -2.5], [10.0, 0.0, -2.5]]))
+    scan = ObstacleDistances(0.0, np.zeros(3), np.zeros(1), np.array([np.inf]), 5.0)
+    planner.observe_obstacles(scan)
+    planner.plan(PlannerState(np.array([0.0, 0.0, -2.5]), np.zeros(3), 0.0), ref, 0.0)
+    aside = np.array([0.0, offset_m, -2.5])  # beside the reference's start, at rest
+    planner.plan(PlannerState(aside, np.zeros(3), 0.0), ref, 0.05)
+    assert planner.regenerations == int(regenerated)
+    start = planner.path.points_ned_m[0]
+    np.testing.assert_allclose(start[:2], aside[:2] if regenerated else [0.0, 0.0], atol=1e-6)
+    np.testing.assert_allclose(planner.path.points_ned_m[-1], [10.0, 0.0, -2.5], atol=1e-6)
