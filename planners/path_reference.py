@@ -3,7 +3,8 @@ planner hands its NMPC each cycle.
 
 The path is a dense polyline (n, 3) [m] with its arc length. ``PathReference(path, s0, t0)``
 starts at arc length ``s0`` [m] at time ``t0`` [s] and moves along the path at
-v(s) = min(v_max, sqrt(2 a_max (L - s))) (cruise, then brake to rest at the end), so the NMPC
+v(s) = min(v_max, sqrt(v_0^2 + 2 a_max s), sqrt(2 a_max (L - s))) (accelerate from the path's
+start, where the vehicle was, cruise, brake to rest at the end), so the NMPC
 gets position and velocity feed-forward on its horizon grid. Progress is the caller's: the
 clutter planner moves ``s0`` with the vehicle, so a vehicle held up by an obstacle is not left
 behind by a clock (our choice; [Kulathunga23] instead regenerates when the vehicle is ~2 m
@@ -17,6 +18,7 @@ import numpy as np
 from planners.reference import ReferenceSample, SampledReference
 
 _V_FLOOR_MPS = 0.05
+_V_START_MPS = 0.2  # speed at the path's start [m/s] (a path starts where the vehicle is)
 
 
 class PolylinePath:
@@ -88,9 +90,14 @@ class PathReference(SampledReference):
         self.duration_s = float(self._t_grid[-1])
 
     def speed_at(self, s_m: np.ndarray) -> np.ndarray:
-        """Profile speed [m/s] at arc lengths ``s_m``."""
-        rest = np.maximum(self.path.length_m - np.asarray(s_m, dtype=float), 0.0)
-        return np.minimum(self.max_speed_mps, np.sqrt(2.0 * self.max_acc_mps2 * rest))
+        """Profile speed [m/s] at arc lengths ``s_m``: accelerating from (nearly) rest at the
+        path's start, cruising, braking to rest at its end."""
+        s = np.asarray(s_m, dtype=float)
+        rest = np.maximum(self.path.length_m - s, 0.0)
+        start = np.sqrt(_V_START_MPS**2 + 2.0 * self.max_acc_mps2 * np.maximum(s, 0.0))
+        return np.minimum(
+            np.minimum(self.max_speed_mps, start), np.sqrt(2.0 * self.max_acc_mps2 * rest)
+        )
 
     def s_at(self, t_s: np.ndarray | float) -> np.ndarray:
         """Arc length [m] reached at times ``t_s`` (held before t0 and after the end)."""
