@@ -16,7 +16,7 @@ from companion.link import Link
 from companion.live_flight_log import LiveFlightLog
 from companion.mission import Mission, load_mission
 from companion.mission_reference import reference_of
-from companion.planner_registry import make_planner
+from companion.planner_registry import OBSTACLE_PLANNERS, honours_obstacles, make_planner
 from companion.runner import FlightOutcome, RunnerConfig, fly_mission
 from flightlog.atomic_output import OutputError
 from flightlog.schema import sidecar_path
@@ -82,12 +82,7 @@ def run_companion(config: CompanionConfig, progress: Callable[[str], None]) -> C
     """
     try:
         mission = load_mission(config.mission_path)
-        if mission.obstacles_world is not None:
-            raise CompanionInputError(
-                f"{config.mission_path}: obstacles_world is set, but no companion planner honours "
-                "obstacles yet and it would fly through them; refusing (remove the key to fly "
-                "without obstacles)"
-            )
+        world = _obstacle_world(config, mission)
         planner = make_planner(
             config.planner,
             mission.horizontal_command_limit_mps,
@@ -96,7 +91,7 @@ def run_companion(config: CompanionConfig, progress: Callable[[str], None]) -> C
             time_budget_s=LOCKSTEP_PLAN_BUDGET_S if config.link == "inprocess" else None,
         )
         reference = reference_of(mission)
-        link = open_link(config)
+        link = open_link(config, world)
     except ValueError as exc:  # MissionError, SimConfigError, unknown planner or URL
         raise CompanionInputError(str(exc)) from None
     try:
@@ -120,8 +115,35 @@ def run_companion(config: CompanionConfig, progress: Callable[[str], None]) -> C
     return CompanionResult(outcome, log_path)
 
 
-def open_link(config: CompanionConfig) -> Link:
-    """The link ``config`` asks for (not yet connected)."""
+def _obstacle_world(config: CompanionConfig, mission: Mission) -> object | None:
+    """The mission's obstacle world for the in-process simulator (None without one, or on a
+    MAVLink link: there the vehicle's own sensor sees the world, e.g. vehicle-sim --world);
+    refuses (CompanionInputError, one line) a mission whose obstacles the flight cannot
+    honour: a planner that ignores obstacles, or a link that brings no range scans (MAVSDK
+    has no OBSTACLE_DISTANCE telemetry). The planner itself brakes when scans stop coming."""
+    if mission.obstacles_world is None:
+        return None
+    where = config.mission_path
+    if not honours_obstacles(config.planner):
+        raise CompanionInputError(
+            f"{where}: obstacles_world is set, but planner {config.planner!r} ignores obstacles "
+            f"and would fly through them; refusing (use --planner {' or '.join(OBSTACLE_PLANNERS)})"
+        )
+    if config.link == "mavsdk":
+        raise CompanionInputError(
+            f"{where}: obstacles_world is set, but the mavsdk link brings no range scans "
+            "(OBSTACLE_DISTANCE) to the companion, so it would fly blind; refusing (use --link "
+            "pymavlink or inprocess)"
+        )
+    from planners.world_file import load_world
+
+    world = load_world(mission.obstacles_world)  # checked before flying, on every link
+    return world if config.link == "inprocess" else None
+
+
+def open_link(config: CompanionConfig, world: object | None = None) -> Link:
+    """The link ``config`` asks for (not yet connected); in process, the simulator is put in
+    ``world`` (obstacles it can hit and its range sensor sees)."""
     if config.link == "mavsdk":
         from companion.mavsdk_link import MavsdkLink
 
@@ -132,7 +154,7 @@ def open_link(config: CompanionConfig) -> Link:
         return PymavlinkLink(config.url)
     from companion.inprocess_link import InProcessLink
 
-    return InProcessLink.from_vehicle(config.vehicle, config.seed)
+    return InProcessLink.from_vehicle(config.vehicle, config.seed, world)
 
 
 def _log_metadata(config: CompanionConfig, mission: Mission, link: Link) -> dict[str, object]:

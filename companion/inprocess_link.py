@@ -8,6 +8,7 @@ This is the only companion module that imports vehicle_sim's simulator.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Mapping
 
@@ -18,6 +19,7 @@ from companion.link import (
     LandedPhase,
     LinkError,
     LinkState,
+    ObstacleDistances,
     VelocityCommand,
 )
 from vehicle_sim import CommandResult, Simulator, load_sim_config
@@ -52,18 +54,35 @@ class InProcessLink:
         self._sim = sim
         self._clock = SimClock(sim)
         self._metadata = dict(metadata or {})
+        self._scan: ObstacleDistances | None = None
 
     @classmethod
-    def from_vehicle(cls, vehicle: str, seed: int) -> InProcessLink:
-        """A fresh simulator of preset (or config file) ``vehicle`` with ``seed``.
+    def from_vehicle(cls, vehicle: str, seed: int, world: object | None = None) -> InProcessLink:
+        """A fresh simulator of preset (or config file) ``vehicle`` with ``seed``, in
+        ``world`` (obstacles it can hit and its range sensor sees; see
+        ``Simulator.set_world``) when given.
 
         Raises:
             SimConfigError: (a ValueError) unknown preset or bad config file, one line.
         """
         config = load_sim_config(vehicle)
-        return cls(
-            Simulator(config, seed=seed), {"vehicle_preset": config.preset_name, "seed": seed}
-        )
+        sim = Simulator(config, seed=seed)
+        if world is not None:
+            sim.set_world(world)
+        return cls(sim, {"vehicle_preset": config.preset_name, "seed": seed})
+
+    def _obstacle_distances(self) -> ObstacleDistances | None:
+        """The simulator's range sensor, scanned at its own rate (None without a world)."""
+        sensor = self._sim.range_sensor
+        t_s = float(self._sim.t_s)
+        if self._sim.world is None:
+            return None
+        if self._scan is None or t_s - self._scan.t_s >= 1.0 / sensor.rate_hz - 1e-9:
+            scan = self._sim.range_scan()
+            self._scan = ObstacleDistances(
+                scan.t_s, scan.origin_ned_m, scan.angles_rad, scan.distances_m, scan.max_range_m
+            )
+        return self._scan
 
     @property
     def name(self) -> str:
@@ -78,7 +97,9 @@ class InProcessLink:
             raise LinkError("in-process simulator has a non-finite state; cannot fly it")
 
     def read_state(self) -> LinkState:
-        return link_state_of(self._sim.state)
+        state = link_state_of(self._sim.state)
+        scan = self._obstacle_distances()
+        return state if scan is None else dataclasses.replace(state, obstacle_distances=scan)
 
     def arm(self) -> CommandOutcome:
         return _outcome(self._sim.arm())
@@ -109,11 +130,18 @@ class InProcessLink:
     def land(self) -> CommandOutcome:
         return _outcome(self._sim.land())
 
+    @property
+    def simulator(self) -> Simulator:
+        """The simulated vehicle (for contact counts and truth after a flight)."""
+        return self._sim
+
     def metadata(self) -> Mapping[str, object]:
+        contacts = {} if self._sim.world is None else {"contacts": len(self._sim.contacts)}
         return {
             "link": self.name,
             "mass_kg": float(self._sim.config.mass_kg),
             "physics_dt_s": float(self._sim.physics_dt_s),
+            **contacts,
             **self._metadata,
         }
 

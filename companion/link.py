@@ -45,6 +45,25 @@ class LinkError(RuntimeError):
 
 
 @dataclass(frozen=True)
+class ObstacleDistances:
+    """A horizontal range scan, as MAVLink OBSTACLE_DISTANCE carries it ([MAVLink]), in SI.
+
+    Attributes:
+        t_s: when it was measured, on the link's clock [s].
+        origin_ned_m: (3,) sensor position (the vehicle's, at measurement) [m].
+        angles_rad: (k,) beam directions from north, clockwise seen from above (towards east).
+        distances_m: (k,) range per beam [m]; inf where nothing is within ``max_range_m``.
+        max_range_m: the sensor's range [m].
+    """
+
+    t_s: float
+    origin_ned_m: np.ndarray
+    angles_rad: np.ndarray
+    distances_m: np.ndarray
+    max_range_m: float
+
+
+@dataclass(frozen=True)
 class LinkState:
     """A telemetry snapshot, as the companion sees it.
 
@@ -59,6 +78,7 @@ class LinkState:
         acc_ned_mps2: (3,) measured acceleration [m/s^2], or None when the link has none.
         thrust_n: total rotor thrust [N], or None when the link has none.
         battery_v: battery voltage [V], or None when unknown.
+        obstacle_distances: the newest range scan, or None when the link has no range sensor.
     """
 
     t_s: float
@@ -72,6 +92,7 @@ class LinkState:
     acc_ned_mps2: np.ndarray | None = None
     thrust_n: float | None = None
     battery_v: float | None = None
+    obstacle_distances: ObstacleDistances | None = None
 
     @property
     def yaw_rad(self) -> float:

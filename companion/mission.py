@@ -11,7 +11,9 @@ A mission file looks like this (units in the names; NED, so altitude is -down)::
     goal_tolerance_m = 0.3     # "arrived" radius at the goal (optional, default 0.3)
     endurance_s = 900.0        # optional: the vehicle's hover time on a full battery [s];
                                # a mission longer than it allows is refused before take-off
-    obstacles_world = "w.toml" # optional obstacle world, relative to the mission file
+    obstacles_world = "w.toml" # optional obstacle world (planners/world_file.py), relative
+                               # to the mission file; flown only by a planner that honours
+                               # obstacles (nmpc_clutter), refused otherwise
 
     [reference]
     kind = "waypoints"         # "waypoints" (straight legs) or "bspline" (spline through them)

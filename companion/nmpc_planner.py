@@ -62,6 +62,9 @@ class NmpcSettings:
             (link delay plus solve time). Before planning, the state is predicted forward over
             it with the planner's own model (and residual) under the last command sent, and
             the plan starts at t + latency_s, as practical NMPCs compensate dead time. 0: off.
+        n_obstacles: N_o obstacle slots per plan ([Kulathunga23] eq. 4); 0 flies without
+            obstacle constraints (give the obstacles with :meth:`CompanionNmpc.set_obstacles`).
+        safe_distance_m: d_o, the clearance kept from every obstacle [m].
     """
 
     speed_limit_mps: float
@@ -75,6 +78,8 @@ class NmpcSettings:
     max_iterations: int | None = None
     compile_functions: bool = False
     latency_s: float = 0.0
+    n_obstacles: int = 0
+    safe_distance_m: float = 0.5
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.latency_s < self.horizon_steps * self.dt_s:
@@ -118,7 +123,8 @@ class CompanionNmpc:
             horizon_steps=settings.horizon_steps,
             dt_s=settings.dt_s,
             input_max=(v, v, v, w),
-            n_obstacles=0,
+            n_obstacles=settings.n_obstacles,
+            safe_distance_m=settings.safe_distance_m,
             time_budget_s=settings.time_budget_s,
             max_iterations=settings.max_iterations,
         )
@@ -145,6 +151,12 @@ class CompanionNmpc:
         self._planner.reset()
         self._last_command = None
         self._last_ok = None
+
+    def set_obstacles(self, world: object | None) -> None:
+        """Obstacles to keep d_o from: anything with ``clearance_m(points)`` and
+        ``slots(points, count, safe_distance_m)`` (an ObstacleWorld, a PointObstacleMap), or
+        None; used only when ``n_obstacles`` > 0."""
+        self._planner.world = world
 
     @property
     def augmented(self) -> bool:

@@ -39,7 +39,8 @@ class PlannerPolicy:
     The logged one-step velocity prediction is what the planner's ``one_step_velocity`` says
     for the sent command (see :class:`OneStepVelocityModel`), else the command itself (the
     kinematic model flies it at once). Predictions are logged only when the planner returns a
-    predicted trajectory.
+    predicted trajectory. A planner with ``observe_obstacles(ObstacleDistances)`` (an
+    obstacle-aware one) is given every range scan the link delivers, before it plans.
     """
 
     def __init__(
@@ -65,6 +66,9 @@ class PlannerPolicy:
             return safe_decision("non-finite telemetry", ref_pos_ned_m=ref_pos)
         pstate = PlannerState(state.pos_ned_m.copy(), state.vel_ned_mps.copy(), state.yaw_rad)
         try:
+            observe = getattr(self._planner, "observe_obstacles", None)
+            if observe is not None and state.obstacle_distances is not None:
+                observe(state.obstacle_distances)
             result = self._planner.plan(pstate, self._reference, t_ref_s)
         except Exception as exc:  # noqa: BLE001 - a planner bug must not reach the flight
             return safe_decision(

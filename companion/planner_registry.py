@@ -6,7 +6,16 @@ from pathlib import Path
 
 from planners.reference import Planner
 
-PLANNER_NAMES: tuple[str, ...] = ("pd", "nmpc")
+PLANNER_NAMES: tuple[str, ...] = ("pd", "nmpc", "nmpc_clutter")
+OBSTACLE_PLANNERS: tuple[str, ...] = ("nmpc_clutter",)  # planners that honour obstacles
+CLUTTER_N_OBSTACLES = 12  # N_o map points per plan ([Kulathunga23] eq. 4; our number)
+CLUTTER_SAFE_DISTANCE_M = 0.5  # d_o [m] beyond a map point's radius (our number)
+
+
+def honours_obstacles(name: str) -> bool:
+    """True when planner ``name`` keeps clear of sensed obstacles (it may fly a mission with
+    an obstacle world); the others would fly straight through them."""
+    return name in OBSTACLE_PLANNERS
 
 
 def make_planner(
@@ -26,6 +35,8 @@ def make_planner(
     nmpc: [Kulathunga23]'s NMPC on the kinematic model (20 x 0.1 s, velocity feed-forward),
     nominal, or augmented with the residual model file ``gp_model`` (from fit-gp, measured at
     ``rate_hz``). ``time_budget_s`` [s] defaults to one control period.
+    nmpc_clutter: the same NMPC with the N_o nearest sensed obstacles as hard constraints,
+    the incremental map, the replanner and regeneration (companion.clutter_planner).
 
     Raises:
         ValueError: unknown name, a model file for a planner that takes none, or a missing,
@@ -42,9 +53,17 @@ def make_planner(
     from companion.nmpc_planner import NmpcSettings, load_nmpc
 
     period_s = 1.0 / rate_hz
+    clutter = name == "nmpc_clutter"
     settings = NmpcSettings(
         speed_limit_mps=speed_limit_mps,
         period_s=period_s,
         time_budget_s=period_s if time_budget_s is None else time_budget_s,
+        n_obstacles=CLUTTER_N_OBSTACLES if clutter else 0,
+        safe_distance_m=CLUTTER_SAFE_DISTANCE_M,
     )
-    return load_nmpc(settings, gp_model)
+    nmpc = load_nmpc(settings, gp_model)
+    if not clutter:
+        return nmpc
+    from companion.clutter_planner import ClutterNmpc, ClutterSettings
+
+    return ClutterNmpc(nmpc, ClutterSettings(max_speed_mps=speed_limit_mps))

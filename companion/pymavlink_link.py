@@ -22,8 +22,10 @@ from companion.link import (
     LandedPhase,
     LinkError,
     LinkState,
+    ObstacleDistances,
     VelocityCommand,
 )
+from companion.obstacle_distance_wire import obstacle_distances_of
 from companion.px4_modes import PX4_MAIN_SUB, mode_name_of
 
 _MAV = mavutil.mavlink
@@ -117,6 +119,7 @@ class PymavlinkLink:
         self._mode = "UNKNOWN"
         self._landed = LandedPhase.UNKNOWN
         self._battery_v: float | None = None
+        self._obstacle_distances: ObstacleDistances | None = None
 
     @property
     def name(self) -> str:
@@ -160,6 +163,7 @@ class PymavlinkLink:
             mode=self._mode,
             landed=self._landed,
             battery_v=self._battery_v,
+            obstacle_distances=self._obstacle_distances,
         )
 
     def arm(self) -> CommandOutcome:
@@ -310,6 +314,9 @@ class PymavlinkLink:
             value = float(struct.unpack("<i", struct.pack("<f", value))[0])
         self._params[name.rstrip("\x00")] = value
 
+    def _on_obstacle_distance(self, msg: MAVLink_message) -> None:
+        self._obstacle_distances = obstacle_distances_of(msg, self._pos.copy(), self._clock.now_s())
+
     def _on_status_text(self, msg: MAVLink_message) -> None:
         text = msg.text.decode() if isinstance(msg.text, bytes) else msg.text
         self._status_texts.append(text.rstrip("\x00"))
@@ -323,6 +330,7 @@ class PymavlinkLink:
         "COMMAND_ACK": _on_command_ack,
         "PARAM_VALUE": _on_param_value,
         "STATUSTEXT": _on_status_text,
+        "OBSTACLE_DISTANCE": _on_obstacle_distance,
     }
 
     # -- commands ---------------------------------------------------------------------------

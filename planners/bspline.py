@@ -88,6 +88,21 @@ class BSplineReference(SampledReference):
         return float(np.sum(np.linalg.norm(np.diff(pos, axis=0), axis=1)))
 
 
+def spline_points(waypoints_ned_m: np.ndarray, samples_per_segment: int) -> np.ndarray:
+    """Points (M * samples_per_segment + 1, 3) [m] along the cubic B-spline through the
+    waypoints (M+1, 3), evenly in the knot parameter: the geometry of a
+    :class:`BSplineReference` through them, without its timing."""
+    wp = np.asarray(waypoints_ned_m, dtype=float)
+    cp = _interpolating_control_points(wp)
+    n_seg = wp.shape[0] - 1
+    u = np.linspace(0.0, n_seg, n_seg * samples_per_segment + 1)
+    i = np.clip(np.floor(u).astype(int), 0, n_seg - 1)
+    s = u - i
+    powers = np.column_stack([np.ones_like(s), s, s**2, s**3])  # (n, 4)
+    weights = powers @ _BASIS  # (n, 4): weight of control points i..i+3
+    return sum(weights[:, k : k + 1] * cp[i + k] for k in range(4))
+
+
 def _interpolating_control_points(wp: np.ndarray) -> np.ndarray:
     """Control points P_-1..P_M+1 with C(i) = W_i and C'(0) = C'(M) = 0."""
     m = wp.shape[0] - 1

@@ -1,4 +1,9 @@
-"""Obstacle worlds of spheres and vertical cylinders, and the N_o nearest as NMPC slots."""
+"""Obstacle worlds of spheres, vertical cylinders and boxes; the N_o nearest as NMPC slots.
+
+Exact signed surface distances (contact detection, clearance checks) and ray casting (the
+simulated range sensor) are here; the NMPC sees a box as its circumscribed sphere (a
+conservative slot, our choice: [Kulathunga23] eq. 4 has point obstacles with a safe distance).
+"""
 
 from __future__ import annotations
 
@@ -25,7 +30,15 @@ class Cylinder:
     radius_m: float
 
 
-Obstacle = Sphere | Cylinder
+@dataclass(frozen=True)
+class Box:
+    """An axis-aligned box (a wall, a building): centre NED [m] (3,), half extents [m] (3,)."""
+
+    center_ned_m: tuple[float, float, float]
+    half_extents_m: tuple[float, float, float]
+
+
+Obstacle = Sphere | Cylinder | Box
 
 
 class ObstacleWorld:
@@ -35,6 +48,12 @@ class ObstacleWorld:
         self.obstacles = tuple(obstacles)
         rows = [_slot_of(o) for o in self.obstacles]
         self._slots = np.array(rows).reshape(len(rows), OBSTACLE_SLOT_SIZE)
+        is_box = np.array([isinstance(o, Box) for o in self.obstacles], dtype=bool)
+        self._box_index = np.flatnonzero(is_box)
+        self._round_index = np.flatnonzero(~is_box)
+        self._boxes = np.array(
+            [[*o.center_ned_m, *o.half_extents_m] for o in self.obstacles if isinstance(o, Box)]
+        ).reshape(-1, 6)
 
     def surface_distance_m(self, points_ned_m: np.ndarray) -> np.ndarray:
         """Distance from each point to each obstacle surface [m], shape (n_points, n_obs).
@@ -42,9 +61,46 @@ class ObstacleWorld:
         Negative inside an obstacle.
         """
         pts = np.atleast_2d(np.asarray(points_ned_m, dtype=float))
-        diff = pts[:, None, :] - self._slots[None, :, 0:3]
-        dist = np.sqrt(np.sum(self._slots[None, :, 3:6] * diff**2, axis=2))
-        return dist - self._slots[None, :, 6]
+        out = np.empty((pts.shape[0], len(self.obstacles)))
+        rnd = self._slots[self._round_index]
+        diff = pts[:, None, :] - rnd[None, :, 0:3]
+        out[:, self._round_index] = (
+            np.sqrt(np.sum(rnd[None, :, 3:6] * diff**2, axis=2)) - rnd[None, :, 6]
+        )
+        if self._box_index.size:
+            q = np.abs(pts[:, None, :] - self._boxes[None, :, 0:3]) - self._boxes[None, :, 3:6]
+            outside = np.linalg.norm(np.maximum(q, 0.0), axis=2)
+            inside = np.minimum(np.max(q, axis=2), 0.0)
+            out[:, self._box_index] = outside + inside
+        return out
+
+    def segment_clearance_m(
+        self, start_ned_m: np.ndarray, end_ned_m: np.ndarray, step_m: float = 0.002
+    ) -> float:
+        """Smallest clearance [m] along the straight segment start -> end (3,) each, sampled
+        every ``step_m`` [m] or finer (exact to within step_m / 2 for any obstacle)."""
+        a = np.asarray(start_ned_m, dtype=float)
+        b = np.asarray(end_ned_m, dtype=float)
+        n = max(1, int(np.ceil(np.linalg.norm(b - a) / step_m)))
+        s = np.linspace(0.0, 1.0, n + 1)[:, None]
+        return float(np.min(self.clearance_m(a + s * (b - a))))
+
+    def ray_distance_m(
+        self, origin_ned_m: np.ndarray, directions_ned: np.ndarray, max_range_m: float
+    ) -> np.ndarray:
+        """Distance [m] along each unit direction (k, 3) from ``origin_ned_m`` (3,) to the
+        first surface, shape (k,); inf when nothing is hit within ``max_range_m``; 0 from
+        inside an obstacle."""
+        o = np.asarray(origin_ned_m, dtype=float)
+        d = np.atleast_2d(np.asarray(directions_ned, dtype=float))
+        best = np.full(d.shape[0], np.inf)
+        if not self.obstacles:
+            return best
+        in_range = np.flatnonzero(self.surface_distance_m(o[None, :])[0] <= max_range_m)
+        for k in in_range:
+            best = np.minimum(best, _ray_hit_m(self.obstacles[k], o, d))
+        best[best > max_range_m] = np.inf
+        return best
 
     def clearance_m(self, points_ned_m: np.ndarray) -> np.ndarray:
         """Distance from each point to the nearest surface [m], shape (n,); inf if empty."""
@@ -73,7 +129,46 @@ def _slot_of(obstacle: Obstacle) -> np.ndarray:
         return np.array([*obstacle.center_ned_m, 1.0, 1.0, 1.0, obstacle.radius_m])
     if isinstance(obstacle, Cylinder):
         return np.array([*obstacle.center_ne_m, 0.0, 1.0, 1.0, 0.0, obstacle.radius_m])
-    raise TypeError(f"unknown obstacle type {type(obstacle).__name__}; use Sphere or Cylinder")
+    if isinstance(obstacle, Box):  # the circumscribed sphere: conservative for the NMPC
+        return np.array(
+            [*obstacle.center_ned_m, 1.0, 1.0, 1.0, np.linalg.norm(obstacle.half_extents_m)]
+        )
+    raise TypeError(f"unknown obstacle type {type(obstacle).__name__}; use Box, Sphere or Cylinder")
+
+
+def _ray_hit_m(obstacle: Obstacle, o: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """First-hit distance along unit rays d (k, 3) from o (3,), inf when missed."""
+    if isinstance(obstacle, Box):
+        lo = np.asarray(obstacle.center_ned_m) - np.asarray(obstacle.half_extents_m)
+        hi = np.asarray(obstacle.center_ned_m) + np.asarray(obstacle.half_extents_m)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t1 = (lo - o) / d
+            t2 = (hi - o) / d
+        parallel = np.abs(d) < 1e-12
+        inside_slab = (o >= lo) & (o <= hi)
+        t1 = np.where(parallel, np.where(inside_slab, -np.inf, np.inf), t1)
+        t2 = np.where(parallel, np.where(inside_slab, np.inf, np.inf), t2)
+        near = np.max(np.minimum(t1, t2), axis=1)
+        far = np.min(np.maximum(t1, t2), axis=1)
+        hit = far >= np.maximum(near, 0.0)
+        return np.where(hit, np.maximum(near, 0.0), np.inf)
+    if isinstance(obstacle, Cylinder):
+        c = np.array([*obstacle.center_ne_m, 0.0])
+        w = np.array([1.0, 1.0, 0.0])
+    else:
+        c = np.asarray(obstacle.center_ned_m, dtype=float)
+        w = np.ones(3)
+    oc = (o - c) * w
+    dw = d * w
+    a = np.sum(dw * dw, axis=1)
+    b = 2.0 * dw @ oc
+    cc = float(oc @ oc) - obstacle.radius_m**2
+    if cc <= 0.0:
+        return np.zeros(d.shape[0])
+    disc = b * b - 4.0 * a * cc
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (-b - np.sqrt(np.maximum(disc, 0.0))) / (2.0 * a)
+    return np.where((disc >= 0.0) & (a > 1e-12) & (t >= 0.0), t, np.inf)
 
 
 def random_forest(

@@ -29,6 +29,7 @@ PARTS: dict[str, str] = {
     "loop": "experiments.bench.loop",
     "diagnose": "experiments.bench.diagnose",
     "rover": "experiments.bench.rover",
+    "clutter": "experiments.bench.clutter",
 }
 
 

@@ -1,7 +1,7 @@
 """`companion`: fly a mission file over a Link and write a schema-v1 flight log.
 
     companion MISSION --link {mavsdk,pymavlink,inprocess} [--url udpin://127.0.0.1:14540]
-              [--planner pd|nmpc] [--gp-model MODEL.npz] [--rate-hz 50]
+              [--planner pd|nmpc|nmpc_clutter] [--gp-model MODEL.npz] [--rate-hz 50]
               [--log out/flight.csv] [--seed 0] [--vehicle iris]
 
 Progress goes to stderr. Exit codes: 0 mission completed (goal reached, landed, disarmed);
@@ -56,7 +56,8 @@ def parse_args(argv: list[str] | None) -> CompanionConfig:
         "--gp-model",
         type=Path,
         default=None,
-        help="residual model from fit-gp: fly the NMPC augmented with it (needs --planner nmpc)",
+        help="residual model from fit-gp: fly the NMPC augmented with it (--planner nmpc or "
+        "nmpc_clutter)",
     )
     parser.add_argument("--rate-hz", type=float, default=50.0, help="control loop rate [Hz]")
     parser.add_argument("--log", type=Path, default=Path("out/flight.csv"), help="flight log")

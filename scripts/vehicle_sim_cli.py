@@ -58,6 +58,8 @@ class VehicleSimCliConfig:
         offboard_bind_port, gcs_bind_port: the links' own ports (0: any free port).
         signing_key_path: key file to require MAVLink 2 signing on both links, or None.
         duration_s: stop after this wall-clock time [s]; None runs until a signal.
+        world_path: obstacle world file (planners.world_file): trunks the vehicle can hit
+            (a crash disarms it) and its range sensor streams as OBSTACLE_DISTANCE; or None.
     """
 
     vehicle: str = "iris"
@@ -72,6 +74,7 @@ class VehicleSimCliConfig:
     gcs_bind_port: int = 18570
     signing_key_path: str | None = None
     duration_s: float | None = None
+    world_path: str | None = None
 
 
 class _Parser(argparse.ArgumentParser):
@@ -133,6 +136,12 @@ def parse_args(argv: Sequence[str] | None) -> VehicleSimCliConfig:
         help="require MAVLink 2 signing with this key (64 hex digits or a passphrase)",
     )
     parser.add_argument("--duration-s", type=float, help="stop after this wall-clock time")
+    parser.add_argument(
+        "--world",
+        metavar="WORLD.toml",
+        help="obstacle world (cylinders, spheres, boxes): contact crashes the vehicle; its "
+        "range sensor streams OBSTACLE_DISTANCE",
+    )
     args = parser.parse_args(argv)
     if not (math.isfinite(args.speed) and 0.01 <= args.speed <= 100.0):
         raise UsageError(f"--speed {args.speed}: must be within [0.01, 100]")
@@ -151,6 +160,7 @@ def parse_args(argv: Sequence[str] | None) -> VehicleSimCliConfig:
         gcs_bind_port=args.gcs_bind_port,
         signing_key_path=args.signing_key,
         duration_s=args.duration_s,
+        world_path=args.world,
     )
 
 
@@ -160,6 +170,10 @@ def build_endpoint(config: VehicleSimCliConfig) -> MavlinkEndpoint:
     sim = Simulator(
         load_sim_config(config.vehicle, effects=effects), seed=config.seed, backend=config.backend
     )
+    if config.world_path is not None:
+        from planners.world_file import load_world
+
+        sim.set_world(load_world(config.world_path))
     key = load_signing_key(config.signing_key_path) if config.signing_key_path else None
     links = px4_sitl_links(
         offboard_port=config.offboard_port,

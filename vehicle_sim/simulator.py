@@ -29,6 +29,15 @@ from vehicle_sim.mission_plan import MissionItem
 from vehicle_sim.params import Px4Params
 from vehicle_sim.truth_log import truth_row
 from vehicle_sim.vehicle_types import FlightMode, VehicleState, VelocitySetpoint, check_setpoint
+from vehicle_sim.world_contact import (
+    CONTACT_CHECK_STEPS,
+    DEFAULT_VEHICLE_RADIUS_M,
+    Contact,
+    ContactWorld,
+    RangeScan,
+    RangeSensorSpec,
+    scan_world,
+)
 
 NOISE_BLOCK_ROWS = 4096
 
@@ -85,6 +94,46 @@ class Simulator:
         self._pending: deque[tuple[int, VelocitySetpoint]] = deque()
         self._active: ActiveSetpoint | None = None
         fc.reset_controller(self._plant.x, self._cs)
+        self._world: ContactWorld | None = None
+        self._vehicle_radius_m = DEFAULT_VEHICLE_RADIUS_M
+        self._range_sensor = RangeSensorSpec()
+        self.contacts: list[Contact] = []
+
+    # --- the world ------------------------------------------------------------------------------
+    def set_world(
+        self,
+        world: ContactWorld | None,
+        vehicle_radius_m: float = DEFAULT_VEHICLE_RADIUS_M,
+        range_sensor: RangeSensorSpec | None = None,
+    ) -> None:
+        """Obstacles the vehicle can hit and its range sensor sees (see
+        :mod:`vehicle_sim.world_contact`); None removes them. ``vehicle_radius_m`` [m] is the
+        radius of the sphere around the centre that counts as the vehicle."""
+        if not vehicle_radius_m > 0:
+            raise ValueError(f"vehicle_radius_m must be > 0, got {vehicle_radius_m}")
+        self._world = world
+        self._vehicle_radius_m = float(vehicle_radius_m)
+        self._range_sensor = range_sensor or RangeSensorSpec()
+
+    @property
+    def world(self) -> ContactWorld | None:
+        return self._world
+
+    @property
+    def range_sensor(self) -> RangeSensorSpec:
+        return self._range_sensor
+
+    @property
+    def crashed(self) -> bool:
+        """True once the vehicle has touched an obstacle."""
+        return bool(self.contacts)
+
+    def range_scan(self) -> RangeScan | None:
+        """A scan of the world from the vehicle's position now, None without a world."""
+        if self._world is None:
+            return None
+        pos = self._plant.x[ph.POS : ph.POS + 3].copy()
+        return scan_world(self._world, self._range_sensor, self.t_s, pos)
 
     # --- time ---------------------------------------------------------------------------------
     @property
@@ -110,10 +159,15 @@ class Simulator:
                 n = min(n, max(1, math.ceil(round((deadline - self.t_s) / dt, 6))))
             if self._pending:
                 n = min(n, max(1, self._pending[0][0] - self._k))
+            if self._world is not None:
+                n = min(n, CONTACT_CHECK_STEPS)
+                before = plant.x[ph.POS : ph.POS + 3].copy()
             noise = self._noise_rows(n)
             done = plant.advance(n, dt, self._sp, self._cs, self._cp, self._mix, noise)
             if not 0 < done <= n:
                 raise RuntimeError(f"physics backend did {done} of {n} steps; it must do 1..{n}")
+            if self._world is not None:
+                self._check_contact(before, done)
             self._noise_pos += done if self._gust_on else 0
             self._k += done
             remaining -= done
@@ -316,7 +370,10 @@ class Simulator:
             check_setpoint(cmd)
             active = self._to_ned(cmd)
             vel, yaw_rate = active.vel_ned_mps, active.yaw_rate_radps
-        return truth_row(self.state, vel, yaw_rate)
+        row = truth_row(self.state, vel, yaw_rate)
+        if self._world is not None:
+            row["crash"] = 1.0 if self.crashed else 0.0
+        return row
 
     def log_metadata(self) -> dict[str, object]:
         """Sidecar metadata for a truth log of this vehicle (no effect ground truth)."""
@@ -336,6 +393,27 @@ class Simulator:
         result = fn(self._commander, self.t_s, x[ph.POS : ph.POS + 3].copy(), fc.yaw_of(x))
         self._sync_mode()
         return result
+
+    def _check_contact(self, before_ned_m: np.ndarray, steps: int) -> None:
+        """A contact on the segment swept since ``before_ned_m`` crashes the vehicle once."""
+        x = self._plant.x
+        after = x[ph.POS : ph.POS + 3].copy()
+        clearance = self._world.segment_clearance_m(before_ned_m, after)
+        if clearance >= self._vehicle_radius_m or self.crashed:
+            return
+        t_s = (self._k + steps) * self.physics_dt_s
+        speed = float(np.linalg.norm(x[ph.VEL : ph.VEL + 3]))
+        pos = tuple(float(v) for v in after)
+        self.contacts.append(Contact(t_s, pos, speed, float(clearance)))
+        self._commander.disarm(t_s, force=True)
+        self._commander.events.append(
+            (
+                2,  # MAV_SEVERITY_CRITICAL
+                f"Crash: contact with an obstacle at N {pos[0]:.1f} E {pos[1]:.1f} m, "
+                f"{speed:.1f} m/s; motors cut",
+            )
+        )
+        self._sync_mode()
 
     def _refresh_control_params(self) -> None:
         if self._cp_version != self._params.version:

@@ -28,6 +28,7 @@ from pymavlink.dialects.v20 import common as mavlink2
 from vehicle_sim.mavlink.config import EndpointConfig
 from vehicle_sim.mavlink.dispatcher import Dispatcher, Outgoing
 from vehicle_sim.mavlink.link import Address, UdpLink
+from vehicle_sim.mavlink.obstacle_distance import obstacle_distance_message
 from vehicle_sim.mavlink.stats import EndpointStats, StatsCounter
 from vehicle_sim.mavlink.statustext import CHUNK_ID_MAX, NoticeLimiter, statustext_chunks
 from vehicle_sim.mavlink.telemetry import (
@@ -94,6 +95,7 @@ class MavlinkEndpoint:
         self._dispatcher = Dispatcher(sim, self._telemetry, self._stats, self._on_setpoint)
         self._received_s = 0.0
         self._pending: list[tuple[int, float]] = []
+        self._obstacles_due_s = 0.0  # next OBSTACLE_DISTANCE [s of simulated time]
         self._trace: deque[SetpointActuation] = deque(maxlen=TRACE_LENGTH)
         self._notice_limiter = NoticeLimiter(NOTICE_REPEAT_S, NOTICE_MEMORY)
         self._factory = mavlink2.MAVLink(None)
@@ -213,6 +215,7 @@ class MavlinkEndpoint:
                 self._broadcast(heartbeat(state, self._telemetry))
                 self._broadcast(extended_sys_state(state, self._telemetry))
             self._stream(state, time.perf_counter())
+            self._stream_obstacles(state)
             readable, _, _ = select.select(sockets, [], [], cfg.tick_s)
             for link in self._links:
                 if link.sock in readable:
@@ -246,6 +249,19 @@ class MavlinkEndpoint:
                     self._stats.add("handler_errors")
                     continue
                 self._send_to_peers(link, msg)
+
+    def _stream_obstacles(self, state: VehicleState) -> None:
+        """OBSTACLE_DISTANCE at the range sensor's rate of simulated time, when the vehicle
+        flies in a world (vehicle_sim.world_contact)."""
+        if self.sim.world is None:
+            return
+        sensor = self.sim.range_sensor
+        if state.t_s < self._obstacles_due_s:
+            return
+        self._obstacles_due_s = state.t_s + 1.0 / sensor.rate_hz
+        msg = obstacle_distance_message(self.sim.range_scan(), sensor.min_range_m)
+        for link in self._links:
+            self._send_to_peers(link, msg)
 
     def _drain(self, link: UdpLink) -> None:
         for _ in range(MAX_DATAGRAMS_PER_PASS):

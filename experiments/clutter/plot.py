@@ -1,0 +1,52 @@
+"""The forest with every flown path (PNG), written atomically."""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+from experiments.clutter.table3 import Table3Result  # noqa: E402
+from flightlog.atomic_output import write_bytes_atomic  # noqa: E402
+from planners.obstacles import Cylinder  # noqa: E402
+
+_STYLE = {
+    "proposed": ("tab:green", "proposed (NMPC+GP+replanner+regeneration)"),
+    "nominal": ("tab:purple", "proposed without GP"),
+    "gp_no_regeneration": ("tab:cyan", "proposed without regeneration"),
+    "no_regeneration": ("tab:blue", "NMPC replanner, no regeneration"),
+    "rrtstar": ("tab:orange", "RRT* (OMPL, known forest) + NMPC+GP tracking"),
+    "pd": ("tab:red", "PD on the initial reference"),
+}
+
+
+def plot_forest(result: Table3Result, path: Path) -> Path:
+    """Trunks, starts, goals and every flight's path (x east, y north) to ``path``."""
+    fig, ax = plt.subplots(figsize=(8, 8))
+    for o in result.scenario.world.obstacles:
+        if isinstance(o, Cylinder):
+            ax.add_patch(plt.Circle((o.center_ne_m[1], o.center_ne_m[0]), o.radius_m, color="0.3"))
+    for kind, flights in result.flights.items():
+        colour, label = _STYLE.get(kind, ("k", kind))
+        for i, f in enumerate(flights):
+            ax.plot(f.path_ne_m[:, 1], f.path_ne_m[:, 0], color=colour, lw=1.0,
+                    label=label if i == 0 else None, alpha=0.8)  # fmt: skip
+            if f.contacts:
+                ax.plot(f.path_ne_m[-1, 1], f.path_ne_m[-1, 0], "x", color=colour, ms=8)
+    s, g = result.scenario.starts_ne_m, result.scenario.goals_ne_m
+    n = len(next(iter(result.flights.values()), []))
+    ax.plot(s[:n, 1], s[:n, 0], "k^", label="starts")
+    ax.plot(g[:n, 1], g[:n, 0], "k*", ms=10, label="goals")
+    ax.set_aspect("equal")
+    ax.set_xlabel("east [m]")
+    ax.set_ylabel("north [m]")
+    ax.set_title("Forest (Table 3 of [Kulathunga23]); x = contact")
+    ax.legend(loc="upper left", fontsize=8)
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
+    plt.close(fig)
+    return write_bytes_atomic(path, buf.getvalue())
