@@ -1,6 +1,6 @@
 """The velocity controller as a suspect: PX4's velocity-loop gains fitted from the command path.
 
-PX4's velocity controller ([PX4-mc-control] PositionControl::_velocityControl, mirrored by
+PX4's velocity controller ([PX4-PositionControl] PositionControl::_velocityControl, mirrored by
 ``vehicle_sim.flight_control.velocity_control``) commands the acceleration
 
     a_sp = P e + I integral(e) - D a + a_ff,    e = v_sp - v,

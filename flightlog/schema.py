@@ -40,7 +40,7 @@ OPTIONAL_NUMERIC_COLUMNS: tuple[str, ...] = (
     "pred_vel_n_mps", "pred_vel_e_mps", "pred_vel_d_mps",
     "pred_pos_n_m", "pred_pos_e_m", "pred_pos_d_m",
     "ref_pos_n_m", "ref_pos_e_m", "ref_pos_d_m",
-    "solve_time_s", "planner_ok",
+    "solve_time_s", "planner_ok", "crash",
 )  # fmt: skip
 
 TEXT_COLUMNS: tuple[str, ...] = ("mode",)

@@ -129,3 +129,13 @@ def test_without_a_world_there_is_no_scan_and_no_crash_column():
     assert sim.range_scan() is None and "crash" not in sim.log_row()
     with pytest.raises(ValueError, match="vehicle_radius_m"):
         sim.set_world(None, vehicle_radius_m=0.0)
+
+
+def test_a_truth_log_with_a_world_records_the_crash_column(pass_by):
+    from flightlog.schema import FlightLogRecorder
+
+    start, path = pass_by
+    sim = _fly_past(start, _cylinder_beside(path, -0.05))
+    recorder = FlightLogRecorder(sim.log_metadata())
+    recorder.append(sim.log_row())
+    assert recorder.to_log()["crash"][0] == 1.0
