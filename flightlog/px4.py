@@ -27,7 +27,7 @@ POSITION_CONTROLLED_NAV_STATES = frozenset({2, 3, 4, 5, 8, 9, 12, 14, 17, 18, 19
 # vehicle_status.arming_state: ARMED is 2 in every version v1.9 to v1.16 (STANDBY/DISARMED 1).
 ARMING_STATE_ARMED = 2
 
-# vehicle_status.vehicle_type (v1.13+; earlier versions carry is_rotary_wing instead).
+# vehicle_status.vehicle_type (seen from v1.11; v1.6-v1.9 carry is_rotary_wing instead).
 VEHICLE_TYPE_ROTARY_WING = 1
 VEHICLE_TYPE_FIXED_WING = 2
 

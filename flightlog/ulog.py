@@ -1,23 +1,28 @@
 """PX4 ULog files mapped onto flight-log schema v1 (read with pyulog), knowing PX4.
 
-Topics and fields per firmware version ([PX4-msgs] msg/*.msg, v1.9 to v1.16):
+Topics and fields per firmware version ([PX4-msgs] msg/*.msg), checked on the real logs in
+tests/fixtures/ulog (v1.6, v1.9, v1.11, v1.14, v1.15, v1.16, v1.17; tests/flightlog/
+test_ulog_versions.py); v1.10, v1.12 and v1.13 are read from their neighbours. The mapping
+picks fields by presence, so every layout below is read:
 
 - ``vehicle_local_position`` (all versions): the time base. x, y, z, vx, vy, vz, ax, ay, az;
-  validity flags xy_valid, z_valid, v_xy_valid, v_z_valid (all versions); dead_reckoning
-  (absent from the v1.11-era msg/vehicle_local_position.msg, present in the v1.15 fixture; used
-  when present). Rows the estimator marks invalid are dropped and counted.
+  validity flags xy_valid, z_valid, v_xy_valid, v_z_valid (all); dead_reckoning (v1.14+, absent
+  in v1.11; used when present). Rows the estimator marks invalid are dropped and counted.
 - ``vehicle_attitude`` (all): q[0..3], body FRD to NED; interpolated and renormalised.
-- Velocity command: ``vehicle_local_position_setpoint`` vx, vy, vz, yawspeed (all versions) is
-  what PX4's velocity controller was given in every position-controlled mode (POSCTL, AUTO.*,
-  OFFBOARD); ``trajectory_setpoint`` (velocity[0..2] v1.13+, vx/vy/vz before) is used only
-  when the former is absent (then it is what reached the controller, e.g. OFFBOARD logs).
-  Rows outside position-controlled modes, or whose command is NaN (position-only), are dropped.
-- ``vehicle_status`` (all): nav_state -> ``mode``, arming_state -> ``armed``; is_vtol and
-  vehicle_type (v1.13+) or is_rotary_wing (v1.9-v1.12) for the VTOL phase. Rows before its
+- Velocity command: ``vehicle_local_position_setpoint`` vx, vy, vz, yawspeed (all versions;
+  acc_x.. up to v1.9, acceleration[0..2] from v1.14) is what PX4's velocity controller was
+  given in every position-controlled mode (POSCTL, AUTO.*, OFFBOARD); ``trajectory_setpoint``
+  (flat vx, vy, vz up to v1.9, velocity[0..2] from v1.14) is used only when the former is absent
+  (then it is what reached the controller, e.g. OFFBOARD logs). Rows outside position-controlled
+  modes, or whose command is NaN (position-only), are dropped.
+- ``vehicle_status`` (all): nav_state -> ``mode``, arming_state -> ``armed``; is_vtol (all);
+  for the VTOL phase vehicle_type (v1.11+) or is_rotary_wing (v1.6-v1.9). Rows before its
   first sample (a log started in the air) have no known mode and are dropped and counted.
 - ``vehicle_land_detected`` (all): landed -> ``landed``.
-- Thrust, best source first (see :func:`_thrust`), recorded in ``metadata['thrust_source']``.
-- ``vehicle_angular_velocity`` xyz[0..2] (v1.10+), ``battery_status`` voltage_v (all).
+- Thrust, best source first (see :func:`_thrust`), recorded in ``metadata['thrust_source']``;
+  ``esc_status`` (all) RPM kept apart as ``rotor_speed_rms_radps`` (:func:`_rotor_speed_rms`).
+- ``vehicle_angular_velocity`` xyz[0..2] (v1.11+, absent in v1.9), ``battery_status``
+  voltage_v (v1.9+).
 
 Continuous signals are interpolated onto the local-position times, setpoints and states held
 (zero-order). Initial parameters go to ``metadata['px4_params']``, rates per signal to
@@ -315,9 +320,9 @@ def _keep_rows(topics, pos, rows, cols, t_all, vehicle):
         cols["armed"] = (_hold(status, "arming_state", t_all) == px4.ARMING_STATE_ARMED) * 1.0
         pos_ctrl = np.isin(nav, list(px4.POSITION_CONTROLLED_NAV_STATES))
         if vehicle["is_vtol"]:
-            if "vehicle_type" in status:  # v1.13+
+            if "vehicle_type" in status:  # v1.11+
                 rotary = _hold(status, "vehicle_type", t_all) == px4.VEHICLE_TYPE_ROTARY_WING
-            elif "is_rotary_wing" in status:  # v1.9-v1.12
+            elif "is_rotary_wing" in status:  # up to v1.9
                 rotary = _hold(status, "is_rotary_wing", t_all) > 0
             if "in_transition_mode" in status:
                 rotary &= _hold(status, "in_transition_mode", t_all) == 0
@@ -345,10 +350,11 @@ def _thrust(topics: Topics, params: Mapping[str, float], t_us: np.ndarray):
     1. ``actuator_motors`` control[i] (v1.14+), produced: each motor through PX4's thrust
        curve THR_MDL_FAC, averaged over CA_ROTOR_COUNT motors.
     2. ``actuator_outputs`` output[i] PWM (all versions), produced: normalised with PWM_MIN/MAX
-       (v1.9-v1.12) or PWM_MAIN_MIN/MAX (v1.13+), then the thrust curve; motors counted from
-       MAV_TYPE.
-    3. ``vehicle_thrust_setpoint`` -xyz[2] (v1.13+) or ``actuator_controls_0`` control[3]
-       (v1.9-v1.13): commanded, not produced, thrust (kind ``commanded``).
+       (seen in v1.6 and v1.11; UAVCAN vehicles have none) or PWM_MAIN_MIN/MAX where a log
+       holds them, then the thrust curve; motors counted from MAV_TYPE.
+    3. ``vehicle_thrust_setpoint`` -xyz[2] (v1.14+, absent in v1.11) or
+       ``actuator_controls_0`` control[3] (up to v1.11, absent from v1.14): commanded, not
+       produced, thrust (kind ``commanded``).
     ``esc_status`` RPM is kept apart (:func:`_rotor_speed_rms`): turning it into thrust needs
     the vehicle's thrust coefficient, which a log does not hold.
     """
@@ -385,7 +391,7 @@ def _rotor_speed_rms(topics: Topics, params: Mapping[str, float], t_us: np.ndarr
 
     ``esc_status`` carries ``esc_count`` and ``esc[i].esc_rpm`` (int32 revolutions per minute,
     every version v1.9 to v1.16; [PX4-msgs] esc_status.msg, esc_report.msg). The rotors are the
-    first CA_ROTOR_COUNT (v1.13+) or MAV_TYPE's motor count of the ESCs; an ESC count below
+    first CA_ROTOR_COUNT (v1.14+) or MAV_TYPE's motor count of the ESCs; an ESC count below
     that, or RPM that never leaves zero (ESCs without telemetry), gives None. The total thrust
     is then n * k_T * rms^2 with the configuration's thrust coefficient k_T [N/(rad/s)^2].
     """
