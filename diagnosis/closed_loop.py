@@ -22,11 +22,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from diagnosis import sim_anchor
-from diagnosis.replay import MIN_REPLAY_ALT_M, LogArrays, Window, airborne_runs
+from diagnosis.replay import LogArrays, Window, airborne_runs
 from flightlog.schema import FlightLog
 from vehicle_sim import LandedState, SimConfig
 
 NEAR_GROUND_ALT_M = 0.5  # measured rows lower than this are ground holds, scored apart
+# a simulated vehicle on the ground is re-anchored only where the measured one is clearly
+# airborne: a few centimetres decide a touchdown in a ground hold (landing-gear geometry)
+REANCHOR_ALT_M = 0.15
 
 
 @dataclass(frozen=True)
@@ -42,7 +45,8 @@ class ClosedLoopResult:
         near_ground: (m,) rows of the ground holds (measured altitude < ``NEAR_GROUND_ALT_M``).
         whole: (m,) rows of segments both configs flew without being re-anchored.
         segments: number of airborne segments; reanchored: of them, those either config had to
-            be re-anchored in (it touched down where the vehicle flew).
+            be re-anchored in (it touched down where the vehicle flew);
+            reanchored_baseline, reanchored_extended: the same per config.
     """
 
     t_s: np.ndarray
@@ -54,6 +58,8 @@ class ClosedLoopResult:
     whole: np.ndarray
     segments: int = 0
     reanchored: int = 0
+    reanchored_baseline: int = 0
+    reanchored_extended: int = 0
 
     @property
     def scored(self) -> np.ndarray:
@@ -119,6 +125,8 @@ def closed_loop(
         ~cut[runs] if len(cut) else np.zeros(0, bool),
         len(cut),
         int(cut.sum()),
+        int(cut_base.sum()),
+        int(cut_ext.sum()),
     )
 
 
@@ -145,7 +153,7 @@ def _fly(
                     sim.set_velocity_setpoint(a.setpoint[r])
                 state = sim.step(a.t[r + 1] - a.t[r])
                 vel[r + 1 - start] = state.vel_ned_mps
-                if state.landed_state is LandedState.ON_GROUND and alt[r + 1] > MIN_REPLAY_ALT_M:
+                if state.landed_state is LandedState.ON_GROUND and alt[r + 1] > REANCHOR_ALT_M:
                     lead = bool(a.thrust[r + 1] > 0.0)
                     sim.anchor(a.anchor(r + 1, lead), integral="match_thrust" if lead else "keep")
                     reanchored = True

@@ -63,6 +63,8 @@ def report_document(diagnosis: Diagnosis) -> dict[str, Any]:
             "ground_hold_gain": _num(cl.ground_hold_gain() if diagnosis.added_effects else 1.0),
             "segments": cl.segments,
             "segments_reanchored": cl.reanchored,
+            "segments_reanchored_baseline": cl.reanchored_baseline,
+            "segments_reanchored_extended": cl.reanchored_extended,
             "scored_rows": int(cl.scored.sum()),
         },
     }
@@ -167,7 +169,8 @@ def _closed_loop_markdown(doc: dict[str, Any], plot: Path) -> str:
             f"- Velocity RMSE over whole flight segments: {figures} (gain {gain}; "
             f"{cl['scored_rows']} rows)",
             f"- Ground holds, scored apart: gain {ground}",
-            f"- Segments re-anchored: {cl['segments_reanchored']} of {cl['segments']}",
+            f"- Segments re-anchored: {cl['segments_reanchored']} of {cl['segments']} (config "
+            f"{cl['segments_reanchored_baseline']}, extended {cl['segments_reanchored_extended']})",
             "",
             f"![{plot.stem}]({plot.name})",
             "",

@@ -9,9 +9,12 @@ from __future__ import annotations
 
 import numpy as np
 
-# vehicle_status.nav_state, v1.9 to v1.16 [PX4-msgs] vehicle_status.msg. Names follow the
-# MAVLink mode names our simulator and logs use (HOLD is PX4's AUTO.LOITER). Values 6, 7, 11,
-# 16 were retired states (RCRECOVER, RTGS, UNUSED, RATTITUDE) in some versions.
+# vehicle_status.nav_state, v1.9 to v1.16 [PX4-msgs] vehicle_status.msg at each release tag.
+# Names follow the MAVLink mode names our simulator and logs use (HOLD is PX4's AUTO.LOITER).
+# 0-5, 10, 12-15 and 17-21 mean the same in every release; 6 and 7 (RCRECOVER, RTGS) were
+# retired in v1.11 and 6 returned as POSITION_SLOW in v1.15; 8 is unused from v1.14, 9 from
+# v1.13, 16 (RATTITUDE) from v1.12; 22 is VTOL_TAKEOFF from v1.13; 23-30 are EXTERNAL1-8 (modes
+# of external components) from v1.15.
 NAV_STATE_NAMES: dict[int, str] = {
     0: "MANUAL", 1: "ALTCTL", 2: "POSCTL", 3: "MISSION", 4: "HOLD", 5: "RTL",
     6: "AUTO_RCRECOVER", 7: "AUTO_RTGS", 8: "AUTO_LANDENGFAIL", 9: "AUTO_LANDGPSFAIL",
@@ -19,15 +22,48 @@ NAV_STATE_NAMES: dict[int, str] = {
     15: "STAB", 16: "RATTITUDE", 17: "TAKEOFF", 18: "LAND", 19: "FOLLOW_TARGET",
     20: "PRECLAND", 21: "ORBIT", 22: "VTOL_TAKEOFF",
 }  # fmt: skip
+NAV_STATE_NAMES_V1_15: dict[int, str] = {
+    **NAV_STATE_NAMES, 6: "POSITION_SLOW", **{22 + k: f"EXTERNAL{k}" for k in range(1, 9)},
+}  # fmt: skip
 
 # Modes in which PX4's position controller runs and so receives a velocity setpoint
 # (POSCTL, AUTO.*, OFFBOARD, ORBIT, DESCEND); ALTCTL/STAB/ACRO/MANUAL give no horizontal one.
+# External modes (v1.15+) may command anything and are left out.
 POSITION_CONTROLLED_NAV_STATES = frozenset({2, 3, 4, 5, 8, 9, 12, 14, 17, 18, 19, 20, 21, 22})
+POSITION_CONTROLLED_NAV_STATES_V1_15 = POSITION_CONTROLLED_NAV_STATES | {6}
 
-# vehicle_status.arming_state: ARMED is 2 in every version v1.9 to v1.16 (STANDBY/DISARMED 1).
+
+def firmware_tuple(firmware: str | None) -> tuple[int, int, int] | None:
+    """'v1.15.1' -> (1, 15, 1); None for None or an unreadable string."""
+    try:
+        major, minor, patch = (int(x) for x in str(firmware).lstrip("v").split("."))
+    except ValueError:
+        return None
+    return major, minor, patch
+
+
+def _v1_15_or_later(firmware: str | None) -> bool:
+    version = firmware_tuple(firmware)
+    return version is not None and version >= (1, 15, 0)
+
+
+def nav_state_names(firmware: str | None = None) -> dict[int, str]:
+    """nav_state -> mode name for ``firmware`` ('vA.B.C'; None: the pre-v1.15 table)."""
+    return NAV_STATE_NAMES_V1_15 if _v1_15_or_later(firmware) else NAV_STATE_NAMES
+
+
+def position_controlled_nav_states(firmware: str | None = None) -> frozenset[int]:
+    """The nav_state values in which PX4's velocity controller runs, for ``firmware``."""
+    if _v1_15_or_later(firmware):
+        return POSITION_CONTROLLED_NAV_STATES_V1_15
+    return POSITION_CONTROLLED_NAV_STATES
+
+
+# vehicle_status.arming_state: ARMED is 2 in every version v1.9 to v1.16 (STANDBY 1 up to
+# v1.14, DISARMED 1 from v1.15).
 ARMING_STATE_ARMED = 2
 
-# vehicle_status.vehicle_type (seen from v1.11; v1.6-v1.9 carry is_rotary_wing instead).
+# vehicle_status.vehicle_type (v1.10+; up to v1.9 is_rotary_wing instead).
 VEHICLE_TYPE_ROTARY_WING = 1
 VEHICLE_TYPE_FIXED_WING = 2
 
@@ -44,9 +80,10 @@ MAV_TYPE_NAMES: dict[int, str] = {
 }  # fmt: skip
 
 
-def mode_names(nav_state: np.ndarray) -> np.ndarray:
+def mode_names(nav_state: np.ndarray, firmware: str | None = None) -> np.ndarray:
     """nav_state integers -> mode names (``NAV_STATE_<n>`` for unknown values), dtype str."""
-    return np.asarray([NAV_STATE_NAMES.get(int(s), f"NAV_STATE_{int(s)}") for s in nav_state])
+    names = nav_state_names(firmware)
+    return np.asarray([names.get(int(s), f"NAV_STATE_{int(s)}") for s in nav_state])
 
 
 def motor_thrust_fraction(command: np.ndarray, thr_mdl_fac: float) -> np.ndarray:

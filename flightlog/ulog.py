@@ -1,9 +1,9 @@
 """PX4 ULog files mapped onto flight-log schema v1 (read with pyulog), knowing PX4.
 
-Topics and fields per firmware version ([PX4-msgs] msg/*.msg), checked on the real logs in
-tests/fixtures/ulog (v1.6, v1.9, v1.11, v1.14, v1.15, v1.16, v1.17; tests/flightlog/
-test_ulog_versions.py); v1.10, v1.12 and v1.13 are read from their neighbours. The mapping
-picks fields by presence, so every layout below is read:
+Topics and fields per firmware version ([PX4-msgs] msg/*.msg read at each release tag v1.9.0 to
+v1.16.0, tabulated in docs/px4_ulog_fields.md; the layouts are also checked on the real logs in tests/fixtures/ulog, v1.6 to v1.17, by
+tests/flightlog/test_ulog_versions.py). The mapping picks fields by presence, so every layout
+below is read:
 
 - ``vehicle_local_position`` (all versions): the time base. x, y, z, vx, vy, vz, ax, ay, az;
   validity flags xy_valid, z_valid, v_xy_valid, v_z_valid (all); dead_reckoning (v1.14+, absent
@@ -12,17 +12,17 @@ picks fields by presence, so every layout below is read:
 - Velocity command: ``vehicle_local_position_setpoint`` vx, vy, vz, yawspeed (all versions;
   acc_x.. up to v1.9, acceleration[0..2] from v1.14) is what PX4's velocity controller was
   given in every position-controlled mode (POSCTL, AUTO.*, OFFBOARD); ``trajectory_setpoint``
-  (flat vx, vy, vz up to v1.9, velocity[0..2] from v1.14) is used only when the former is absent
+  (flat vx, vy, vz up to v1.13, velocity[0..2] from v1.14) is used only when the former is absent
   (then it is what reached the controller, e.g. OFFBOARD logs). Rows outside position-controlled
   modes, or whose command is NaN (position-only), are dropped.
-- ``vehicle_status`` (all): nav_state -> ``mode``, arming_state -> ``armed``; is_vtol (all);
-  for the VTOL phase vehicle_type (v1.11+) or is_rotary_wing (v1.6-v1.9). Rows before its
+- ``vehicle_status`` (all): nav_state -> ``mode`` (values per version in flightlog/px4.py),
+  arming_state -> ``armed``; is_vtol and in_transition_mode (all); for the VTOL phase
+  vehicle_type (v1.10+) or is_rotary_wing (up to v1.9). Rows before its
   first sample (a log started in the air) have no known mode and are dropped and counted.
 - ``vehicle_land_detected`` (all): landed -> ``landed``.
 - Thrust, best source first (see :func:`_thrust`), recorded in ``metadata['thrust_source']``;
   ``esc_status`` (all) RPM kept apart as ``rotor_speed_rms_radps`` (:func:`_rotor_speed_rms`).
-- ``vehicle_angular_velocity`` xyz[0..2] (v1.11+, absent in v1.9), ``battery_status``
-  voltage_v (v1.9+).
+- ``vehicle_angular_velocity`` xyz[0..2] (v1.10+), ``battery_status`` voltage_v (all).
 
 Continuous signals are interpolated onto the local-position times, setpoints and states held
 (zero-order). Initial parameters go to ``metadata['px4_params']``, rates per signal to
@@ -130,7 +130,7 @@ def read_ulog(path: str | Path) -> FlightLog:
             f"{path}: ULog holds no data messages (truncated after its header?); "
             "copy the complete .ulg from the vehicle"
         )
-    log = flight_log_from_topics(topics, where, params)
+    log = flight_log_from_topics(topics, where, params, meta["firmware"])
     return FlightLog(log.columns, {**log.metadata, **meta}, path)
 
 
@@ -152,6 +152,7 @@ def summarise_ulog(path: str | Path) -> dict[str, object]:
     except Exception as exc:  # pyulog raises several types for corrupt files
         raise FlightLogError(f"{path}: not a readable ULog file ({type(exc).__name__})") from None
     t0, t1 = ulog.start_timestamp, ulog.last_timestamp
+    firmware = px4.firmware_version(ulog.msg_info_dict.get("ver_sw_release"))
     topics = {d.name: d.data for d in ulog.data_list if d.multi_id == 0}
     params = ulog.initial_parameters
     mav_type = int(params["MAV_TYPE"]) if "MAV_TYPE" in params else None
@@ -164,10 +165,10 @@ def summarise_ulog(path: str | Path) -> dict[str, object]:
         cuts = [0, *(np.flatnonzero(nav[1:] != nav[:-1]) + 1).tolist(), len(nav)]
         for a, b in zip(cuts[:-1], cuts[1:], strict=True):
             end = t[b] if b < len(t) else t1
-            modes.append((px4.NAV_STATE_NAMES.get(int(nav[a]), f"NAV_STATE_{nav[a]}"),
+            modes.append((str(px4.mode_names(nav[a : a + 1], firmware)[0]),
                           max(t[a] - t0, 0.0) * 1e-6, (end - t0) * 1e-6))  # fmt: skip
     return {
-        "firmware": px4.firmware_version(ulog.msg_info_dict.get("ver_sw_release")),
+        "firmware": firmware,
         "hardware": ulog.msg_info_dict.get("ver_hw"),
         "vehicle": px4.MAV_TYPE_NAMES.get(mav_type, f"MAV_TYPE {mav_type}") if mav_type else None,
         "duration_s": (t1 - t0) * 1e-6,
@@ -177,7 +178,10 @@ def summarise_ulog(path: str | Path) -> dict[str, object]:
 
 
 def flight_log_from_topics(
-    topics: Topics, where: str = "ulog", params: Mapping[str, float] | None = None
+    topics: Topics,
+    where: str = "ulog",
+    params: Mapping[str, float] | None = None,
+    firmware: str | None = None,
 ) -> FlightLog:
     """Map ULog topics (name -> field -> array, ``timestamp`` in us) onto schema v1.
 
@@ -185,6 +189,7 @@ def flight_log_from_topics(
         topics: first instance of each topic.
         where: file name for error messages.
         params: PX4 parameters (MAV_TYPE, THR_MDL_FAC, PWM_MIN/MAX, ...); may be empty.
+        firmware: 'vA.B.C' (nav_state values differ by version; None: before v1.15).
     """
     params = dict(params or {})
     vehicle = _vehicle(topics, params, where)
@@ -193,7 +198,7 @@ def flight_log_from_topics(
             raise FlightLogError(f"{where}: ULog lacks topic {name}; {FLY_HINT}")
     cmd_name = next((n for n in COMMAND_TOPICS if n in topics), None)
     if cmd_name is None:
-        flown = _modes_flown(topics)
+        flown = _modes_flown(topics, firmware)
         raise FlightLogError(
             f"{where}: ULog lacks topic(s) vehicle_local_position_setpoint or "
             f"trajectory_setpoint (no velocity command{flown}); {FLY_HINT}"
@@ -232,7 +237,7 @@ def flight_log_from_topics(
     rotor_speed, rotor_source = _rotor_speed_rms(topics, params, t_all)
     if rotor_speed is not None:
         cols["rotor_speed_rms_radps"] = rotor_speed
-    keep, dropped, segments = _keep_rows(topics, pos, rows, cols, t_all, vehicle)
+    keep, dropped, segments = _keep_rows(topics, pos, rows, cols, t_all, vehicle, firmware)
     if keep.sum() < 2:
         counts = ", ".join(f"{n} {why}" for why, n in dropped.items() if n) or "none usable"
         raise FlightLogError(
@@ -298,7 +303,7 @@ def _vehicle(topics: Topics, params: Mapping[str, float], where: str) -> dict[st
     }
 
 
-def _keep_rows(topics, pos, rows, cols, t_all, vehicle):
+def _keep_rows(topics, pos, rows, cols, t_all, vehicle, firmware):
     """Rows to keep and why the others were dropped; VTOL multicopter segments (us)."""
     n = len(t_all)
     valid = np.ones(n, dtype=bool)
@@ -316,11 +321,11 @@ def _keep_rows(topics, pos, rows, cols, t_all, vehicle):
     if status is not None:
         known = t_all >= float(np.asarray(status["timestamp"])[0])  # mode unknown before
         nav = _hold(status, "nav_state", t_all).astype(int)
-        cols["mode"] = px4.mode_names(nav)
+        cols["mode"] = px4.mode_names(nav, firmware)
         cols["armed"] = (_hold(status, "arming_state", t_all) == px4.ARMING_STATE_ARMED) * 1.0
-        pos_ctrl = np.isin(nav, list(px4.POSITION_CONTROLLED_NAV_STATES))
+        pos_ctrl = np.isin(nav, list(px4.position_controlled_nav_states(firmware)))
         if vehicle["is_vtol"]:
-            if "vehicle_type" in status:  # v1.11+
+            if "vehicle_type" in status:  # v1.10+
                 rotary = _hold(status, "vehicle_type", t_all) == px4.VEHICLE_TYPE_ROTARY_WING
             elif "is_rotary_wing" in status:  # up to v1.9
                 rotary = _hold(status, "is_rotary_wing", t_all) > 0
@@ -347,14 +352,14 @@ def _keep_rows(topics, pos, rows, cols, t_all, vehicle):
 def _thrust(topics: Topics, params: Mapping[str, float], t_us: np.ndarray):
     """Total thrust as a fraction of the maximum, from the best source present.
 
-    1. ``actuator_motors`` control[i] (v1.14+), produced: each motor through PX4's thrust
-       curve THR_MDL_FAC, averaged over CA_ROTOR_COUNT motors.
+    1. ``actuator_motors`` control[i] (v1.13 with SYS_CTRL_ALLOC = 1, v1.14+), produced: each
+       motor through PX4's thrust curve THR_MDL_FAC, averaged over CA_ROTOR_COUNT motors.
     2. ``actuator_outputs`` output[i] PWM (all versions), produced: normalised with PWM_MIN/MAX
        (seen in v1.6 and v1.11; UAVCAN vehicles have none) or PWM_MAIN_MIN/MAX where a log
        holds them, then the thrust curve; motors counted from MAV_TYPE.
-    3. ``vehicle_thrust_setpoint`` -xyz[2] (v1.14+, absent in v1.11) or
-       ``actuator_controls_0`` control[3] (up to v1.11, absent from v1.14): commanded, not
-       produced, thrust (kind ``commanded``).
+    3. ``vehicle_thrust_setpoint`` -xyz[2] (v1.12+; published by the multicopter rate
+       controller from v1.13) or ``actuator_controls_0`` control[3] (up to v1.13): commanded,
+       not produced, thrust (kind ``commanded``).
     ``esc_status`` RPM is kept apart (:func:`_rotor_speed_rms`): turning it into thrust needs
     the vehicle's thrust coefficient, which a log does not hold.
     """
@@ -412,11 +417,11 @@ def _rotor_speed_rms(topics: Topics, params: Mapping[str, float], t_us: np.ndarr
     return rms, {"topic": "esc_status", "kind": "produced", "rotors": n_rotors, "detail": detail}
 
 
-def _modes_flown(topics: Topics) -> str:
+def _modes_flown(topics: Topics, firmware: str | None) -> str:
     status = topics.get("vehicle_status")
     if status is None:
         return ""
-    names = list(dict.fromkeys(px4.mode_names(np.asarray(status["nav_state"]))))
+    names = list(dict.fromkeys(px4.mode_names(np.asarray(status["nav_state"]), firmware)))
     return f"; flown in {', '.join(names)}"
 
 

@@ -20,7 +20,8 @@ V2_KEYS = {
 V2_CAUSE_KEYS = {"statistic", "at_bound"}
 CLOSED_LOOP_KEYS = {
     "baseline_vel_rmse_mps", "extended_vel_rmse_mps", "gain", "ground_hold_gain", "segments",
-    "segments_reanchored", "scored_rows",
+    "segments_reanchored", "segments_reanchored_baseline", "segments_reanchored_extended",
+    "scored_rows",
 }  # fmt: skip
 
 

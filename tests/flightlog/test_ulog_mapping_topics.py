@@ -146,3 +146,11 @@ def test_esc_rpm_kept_as_rotor_speed_only_when_every_rotor_reports(flight):
         **{f"esc[{i}].esc_rpm": 0 * t for i in range(4)},
     }  # ESCs without telemetry report zeros
     assert not flight_log_from_topics(topics, params={"MAV_TYPE": 2}).has("rotor_speed_rms_radps")
+
+
+def test_nav_state_6_is_position_slow_from_v1_15_and_retired_before(flight):
+    topics = topics_of(flight, nav_state=6)
+    log = flight_log_from_topics(topics, firmware="v1.15.1")
+    assert set(log["mode"]) == {"POSITION_SLOW"}  # position-controlled: kept
+    with pytest.raises(FlightLogError, match="not_position_controlled"):
+        flight_log_from_topics(topics, firmware="v1.10.0")  # AUTO_RCRECOVER then

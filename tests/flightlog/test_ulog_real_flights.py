@@ -58,9 +58,9 @@ def test_command_is_the_velocity_controllers_setpoint_and_modes_come_from_nav_st
     for axis, field in zip("ned", ("vx", "vy", "vz"), strict=True):
         np.testing.assert_allclose(log[f"cmd_vel_{axis}_mps"], held(sp, field, t_us))
     nav = held(raw["vehicle_status"], "nav_state", t_us).astype(int)
-    assert list(log["mode"]) == list(px4.mode_names(nav))
+    assert list(log["mode"]) == list(px4.mode_names(nav, firmware))
     assert set(log["mode"]) == modes
-    assert set(nav) <= px4.POSITION_CONTROLLED_NAV_STATES
+    assert set(nav) <= px4.position_controlled_nav_states(firmware)
     assert np.all(log["armed"] == 1.0)
     assert log.n_rows == meta["rows_in_log"] - sum(meta["dropped_rows"].values())
     pos = raw["vehicle_local_position"]
