@@ -1,9 +1,9 @@
 """PX4 ULog files mapped onto flight-log schema v1 (read with pyulog), knowing PX4.
 
 Topics and fields per firmware version ([PX4-msgs] msg/*.msg read at each release tag v1.9.0 to
-v1.16.0, tabulated in docs/px4_ulog_fields.md; the layouts are also checked on the real logs in tests/fixtures/ulog, v1.6 to v1.17, by
-tests/flightlog/test_ulog_versions.py). The mapping picks fields by presence, so every layout
-below is read:
+v1.16.0, tabulated in docs/px4_ulog_fields.md; the layouts are also checked on the real logs in
+tests/fixtures/ulog, v1.6 to v1.17, by tests/flightlog/test_ulog_versions.py). The mapping picks
+fields by presence, so every layout below is read:
 
 - ``vehicle_local_position`` (all versions): the time base. x, y, z, vx, vy, vz, ax, ay, az;
   validity flags xy_valid, z_valid, v_xy_valid, v_z_valid (all); dead_reckoning (v1.14+, absent
