@@ -36,6 +36,7 @@ from experiments.study.regimes import REGIMES, with_regime
 from experiments.study.run import run_study
 from flightlog.atomic_output import OutputError, check_writable_dir
 from gp.features import FEATURE_SETS
+from scripts.rover import REGIMES as ROVER_REGIMES
 from vehicle_sim.effects.base import SimConfigError
 
 
@@ -94,10 +95,22 @@ def parse_args(argv: list[str] | None) -> StudyConfig:
     return config.quick() if args.quick else config
 
 
+def _rover_regime(args: list[str]) -> bool:
+    """True when ``--regime`` names one of the rover regimes (scripts.rover), which have their
+    own CLI; the multirotor regimes (experiments.study.regimes) and bad names stay here."""
+    for i, arg in enumerate(args):
+        value = arg.split("=", 1)[1] if arg.startswith("--regime=") else None
+        if arg == "--regime" and i + 1 < len(args):
+            value = args[i + 1]
+        if value is not None:
+            return value in ROVER_REGIMES
+    return False
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the study; returns the exit code."""
     args_list = sys.argv[1:] if argv is None else list(argv)
-    if any(a == "--regime" or a.startswith("--regime=") for a in args_list):
+    if _rover_regime(args_list):
         from scripts import rover  # [Ostafew16] on its own robots: study --regime rover_exp1
 
         return rover.main(args_list)

@@ -89,3 +89,12 @@ def test_study_refuses_bad_input_in_one_line(tmp_path, capsys):
     )
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and "cannot feed" in err[-1]
+
+
+def test_multirotor_regimes_stay_with_the_study_cli(tmp_path):
+    from scripts.study import _rover_regime, parse_args
+
+    assert not _rover_regime(["--regime", "agile", "--trajectories", "2"])
+    assert _rover_regime(["--out", str(tmp_path), "--regime=rover_exp1"])
+    config = parse_args(["--regime", "wind_field", "--trajectories", "2", "--out", str(tmp_path)])
+    assert (config.regime, config.n_trajectories) == ("wind_field", 2)
