@@ -4,7 +4,7 @@
           [--workers 2 | --scheduler tcp://HOST:8786] [--vehicle iris_study]
           [--learned-model first_order_lag|kinematic_4dof]
           [--features state_input|velocity] [--seed 0] [--compile] [--quick]
-          [--regime paper000|agile|wind_field]
+          [--regime paper000|agile|wind_field] [--refit-rounds N]
 
 ``--regime`` picks the task (experiments.study.regimes, physics written down there):
 [Kulathunga23]'s low-speed task (default), an agile task at up to 6 m/s, or repeated paths
@@ -64,6 +64,12 @@ def parse_args(argv: list[str] | None) -> StudyConfig:
     )
     parser.add_argument("--features", choices=list(FEATURE_SETS), default=None)
     parser.add_argument("--regime", choices=list(REGIMES), default="paper000")
+    parser.add_argument(
+        "--refit-rounds",
+        type=int,
+        default=None,
+        help="refits on augmented flights of the training seeds (default: the regime's)",
+    )
     parser.add_argument("--seed", type=int, default=0, help="trajectory generator seed")
     parser.add_argument(
         "--compile",
@@ -90,6 +96,8 @@ def parse_args(argv: list[str] | None) -> StudyConfig:
             config = replace(config, vehicle=args.vehicle)
         if args.features is not None:
             config = replace(config, features=args.features)
+        if args.refit_rounds is not None:
+            config = replace(config, refit_rounds=args.refit_rounds)
     except ValueError as exc:
         parser.error(str(exc))
     return config.quick() if args.quick else config

@@ -23,7 +23,13 @@ KINEMATIC = NmpcSettings(2.5, compile_functions=False)
 def test_model_learned_from_one_nominal_flight_tracks_better_on_the_next(tmp_path):
     path = generate_trajectories(1, seed=3, spec=TrajectorySpec(length_range_m=(15.0, 18.0)))[0]
     first = fly(FlightSpec("first", path, "iris_study", 0), KINEMATIC).log
-    fit = fit_residual([first], "low_speed", KINEMATIC.period_s, m=20, restarts=1)
+    # The GP sees the velocity, not the command: a GP on the command (the NMPC's decision
+    # variable) learned from one flight's commands is wrong off them and the optimiser
+    # exploits that (tracking 0.43-0.73 of nominal on seeds 3-5 with state_input features,
+    # 0.22-0.33 with velocity, measured).
+    fit = fit_residual(
+        [first], "low_speed", KINEMATIC.period_s, features="velocity", m=20, restarts=1
+    )
     features = fit.model.features
     assert features.nominal_model == "first_order_lag"
     assert 0.3 < dict(features.nominal_params)["tau_s"] < 1.5  # identified, not given
@@ -35,9 +41,7 @@ def test_model_learned_from_one_nominal_flight_tracks_better_on_the_next(tmp_pat
     )
     assert augmented.outcome.status == "completed"
     assert residual_rmse_mps(augmented.log) < 0.25 * residual_rmse_mps(nominal)
-    # One short trajectory's tracking gain varies with tiny changes of the fit (0.43-0.73 of
-    # nominal on trajectory seeds 3-5, measured); the study's 20-trajectory mean is the figure.
-    assert tracking_rmse_m(augmented.log) < 0.8 * tracking_rmse_m(nominal)
+    assert tracking_rmse_m(augmented.log) < 0.5 * tracking_rmse_m(nominal)
 
 
 def test_regular_rows_drops_catch_up_ticks_only():
