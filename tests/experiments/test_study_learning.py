@@ -55,8 +55,13 @@ def test_regular_rows_drops_catch_up_ticks_only():
 @pytest.mark.slow
 def test_quick_study_runs_end_to_end_and_writes_report_and_plots(tmp_path, capsys):
     out = tmp_path / "study"
-    assert study_main(["--quick", "--out", str(out), "--workers", "2"]) == 0
-    stdout = capsys.readouterr().out
+    args = ["--quick", "--out", str(out), "--workers", "2", "--refit-rounds", "1"]
+    assert study_main(args) == 0
+    captured = capsys.readouterr()
+    stdout = captured.out
+    # [Ostafew16]'s refit on augmented flights of the training seeds ran for both selections
+    assert "refit round 1 flight 4/4" in captured.err
+    assert "refit low_speed round 1" in captured.err and "refit cluster round 1" in captured.err
     for name in (
         "residual_rmse_nominal",
         "residual_rmse_low_speed",
