@@ -10,6 +10,11 @@ Built-in sets (outputs are always the NED velocity-rate residuals in m/s^2):
     position_state: state_input plus the horizontal position (pos_n, pos_e [m]) in front, 9
         features: for a disturbance that depends on where the vehicle is (a wind field on a
         repeated path, [Ostafew16]'s path-dependent disturbance).
+    position_velocity: the horizontal position and the measured velocity (pos_n, pos_e [m],
+        vel_ned [m/s]), 5 features, no command: the residual of a spatial disturbance on top
+        of a model that already carries the command's effect (first_order_lag). Without the
+        command among its inputs the NMPC cannot exploit the GP through its decision variable
+        (a GP fitted on the nominal planner's commands is wrong off them).
     history: [Ostafew16]'s a_k = (x_k, v_{k-1}, u_k, u_{k-1}) for a velocity-commanded
         multirotor: the velocity state now and one step ago, the command now and one step ago
         (vel_ned[k], vel_ned[k-1], cmd_vel_ned[k], cmd_vel_ned[k-1]), 12 features in m/s.
@@ -36,6 +41,7 @@ FEATURE_SETS: dict[str, tuple[tuple[str, int], ...]] = {
     "position_state": tuple(
         (c, 0) for c in ("pos_n_m", "pos_e_m", *_VEL, *_CMD, "cmd_yaw_rate_radps")
     ),
+    "position_velocity": tuple((c, 0) for c in ("pos_n_m", "pos_e_m", *_VEL)),
     "history": tuple(
         [(c, 0) for c in _VEL] + [(c, 1) for c in _VEL]
         + [(c, 0) for c in _CMD] + [(c, 1) for c in _CMD]

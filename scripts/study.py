@@ -4,7 +4,7 @@
           [--workers 2 | --scheduler tcp://HOST:8786] [--vehicle iris_study]
           [--learned-model first_order_lag|kinematic_4dof]
           [--features state_input|velocity] [--seed 0] [--compile] [--quick]
-          [--regime paper000|agile|wind_field]
+          [--regime paper000|agile|wind_field] [--refit-rounds N]
 
 ``--regime`` picks the task (experiments.study.regimes, physics written down there):
 [Kulathunga23]'s low-speed task (default), an agile task at up to 6 m/s, or repeated paths
@@ -36,6 +36,7 @@ from experiments.study.regimes import REGIMES, with_regime
 from experiments.study.run import run_study
 from flightlog.atomic_output import OutputError, check_writable_dir
 from gp.features import FEATURE_SETS
+from scripts.rover import REGIMES as ROVER_REGIMES
 from vehicle_sim.effects.base import SimConfigError
 
 
@@ -63,6 +64,12 @@ def parse_args(argv: list[str] | None) -> StudyConfig:
     )
     parser.add_argument("--features", choices=list(FEATURE_SETS), default=None)
     parser.add_argument("--regime", choices=list(REGIMES), default="paper000")
+    parser.add_argument(
+        "--refit-rounds",
+        type=int,
+        default=None,
+        help="refits on augmented flights of the training seeds (default: the regime's)",
+    )
     parser.add_argument("--seed", type=int, default=0, help="trajectory generator seed")
     parser.add_argument(
         "--compile",
@@ -89,15 +96,29 @@ def parse_args(argv: list[str] | None) -> StudyConfig:
             config = replace(config, vehicle=args.vehicle)
         if args.features is not None:
             config = replace(config, features=args.features)
+        if args.refit_rounds is not None:
+            config = replace(config, refit_rounds=args.refit_rounds)
     except ValueError as exc:
         parser.error(str(exc))
     return config.quick() if args.quick else config
 
 
+def _rover_regime(args: list[str]) -> bool:
+    """True when ``--regime`` names one of the rover regimes (scripts.rover), which have their
+    own CLI; the multirotor regimes (experiments.study.regimes) and bad names stay here."""
+    for i, arg in enumerate(args):
+        value = arg.split("=", 1)[1] if arg.startswith("--regime=") else None
+        if arg == "--regime" and i + 1 < len(args):
+            value = args[i + 1]
+        if value is not None:
+            return value in ROVER_REGIMES
+    return False
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the study; returns the exit code."""
     args_list = sys.argv[1:] if argv is None else list(argv)
-    if any(a == "--regime" or a.startswith("--regime=") for a in args_list):
+    if _rover_regime(args_list):
         from scripts import rover  # [Ostafew16] on its own robots: study --regime rover_exp1
 
         return rover.main(args_list)

@@ -43,6 +43,12 @@ class StudyConfig:
             default: with the identified-lag model gcc needs over 6 minutes and 3 GB per model,
             and the uncompiled solves (about 4 ms) already fit a 50 Hz loop.
         regime: the name of the regime these settings come from (experiments.study.regimes).
+        refit_rounds: [Ostafew16]'s trial-after-trial learning inside [Kulathunga23]'s
+            experiment: after the fit on the nominal flights, each round flies every selection's
+            model on the nominal flights' seeds (never the held-out seeds the comparison flies)
+            and refits it on all flights so far, so the model covers where the augmented
+            planner flies; a refit flies only if it predicts the held-out logs better than
+            the model it replaces (gp.prediction_check). 0: the model from the nominal flights.
     """
 
     out_dir: Path = Path("out/study")
@@ -64,6 +70,7 @@ class StudyConfig:
     gp_restarts: int = 2
     compile_augmented: bool = False
     regime: str = "paper000"
+    refit_rounds: int = 0
 
     def __post_init__(self) -> None:
         if self.n_trajectories < 1 or self.repeats < 1 or self.n_trials < 2:
@@ -71,6 +78,8 @@ class StudyConfig:
                 "need n_trajectories >= 1, repeats >= 1 and n_trials >= 2, got "
                 f"{self.n_trajectories}, {self.repeats}, {self.n_trials}"
             )
+        if self.refit_rounds < 0:
+            raise ValueError(f"refit_rounds must be >= 0, got {self.refit_rounds}")
         if self.workers < 1:
             raise ValueError(f"workers must be >= 1, got {self.workers}")
         if self.scheduler is not None:

@@ -19,7 +19,8 @@ from companion.nmpc_planner import NmpcSettings
 from experiments.study.config import StudyConfig
 from experiments.study.fitting import fit_residual
 from experiments.study.jobs import FlightJob, FlightSummary, run_flight_job, warm_up_planner
-from gp.prediction_check import refusal
+from flightlog.schema import FlightLog
+from gp.prediction_check import Predictor, refusal
 from gp.training import TrainingResult
 from planners.bspline import BSplineReference
 from planners.nominal_models import make_model
@@ -76,6 +77,9 @@ def run_paper000(
         for sel in config.selections
     }
     fits = {sel: fut.result() for sel, fut in futures.items()}
+    augmented_logs: dict[str, list[FlightLog]] = {sel: [] for sel in config.selections}
+    for round_ in range(1, config.refit_rounds + 1):
+        fits = _refit_on_augmented(config, refs, logs, augmented_logs, fits, pool, round_, progress)
     for sel, fit in fits.items():
         nom, aug = fit.metrics["nominal_rmse_mps"], fit.metrics["augmented_rmse_mps"]
         progress(f"fit {sel}: held-out rows nominal {_fmt(nom)} -> augmented {_fmt(aug)} m/s")
@@ -124,6 +128,57 @@ def run_paper000(
     for summary in _fly_all(aug_jobs, pool, "augmented", progress):
         flights.setdefault(summary.planner, []).append(summary)
     return Paper000Result(refs, flights, fits)
+
+
+def _refit_on_augmented(
+    config: StudyConfig,
+    refs: list[BSplineReference],
+    nominal_logs: list[FlightLog],
+    augmented_logs: dict[str, list[FlightLog]],
+    fits: dict[str, TrainingResult],
+    pool: Executor,
+    round_: int,
+    progress: Callable[[str], None],
+) -> dict[str, TrainingResult]:
+    """One round of [Ostafew16]'s trial-after-trial learning: fly each selection's model on
+    the nominal seeds (0..repeats-1; the comparison's seeds stay held out) and refit it on the
+    nominal flights plus its augmented flights of every round so far (``augmented_logs``,
+    extended here). A refit that does not predict the held-out logs better than the model it
+    replaces is dropped (the old fit stays)."""
+    jobs = [
+        FlightJob(i, ref, sel, seed, config.vehicle, config.nmpc, fit.model, False)
+        for sel, fit in fits.items()
+        if fit.may_fly
+        for i, ref in enumerate(refs)
+        for seed in range(config.repeats)
+    ]
+    flown: dict[str, list[FlightLog]] = {}
+    for summary in _fly_all(jobs, pool, f"refit round {round_}", progress):
+        flown.setdefault(summary.planner, []).append(summary.log)
+    futures = {
+        sel: pool.submit(
+            fit_residual,
+            [*nominal_logs, *augmented_logs[sel], *flown[sel]],
+            sel,
+            config.nmpc.period_s,
+            learned_model=config.learned_model,
+            features=config.features,
+            m=config.m,
+            restarts=config.gp_restarts,
+            incumbent=Predictor.of_residual_model(fits[sel].model, "previous"),
+        )
+        for sel in flown
+    }
+    out = dict(fits)
+    for sel, fut in futures.items():
+        augmented_logs[sel].extend(flown[sel])
+        refit = fut.result()
+        if refit.may_fly:
+            out[sel] = refit
+            progress(f"refit {sel} round {round_}: {refit.check.describe()}")
+        else:
+            progress(f"refit {sel} round {round_}: {refusal(refit.model)}; keeping the previous")
+    return out
 
 
 def identified_lag_settings(config: StudyConfig, fit: TrainingResult) -> NmpcSettings | None:

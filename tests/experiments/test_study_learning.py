@@ -23,7 +23,13 @@ KINEMATIC = NmpcSettings(2.5, compile_functions=False)
 def test_model_learned_from_one_nominal_flight_tracks_better_on_the_next(tmp_path):
     path = generate_trajectories(1, seed=3, spec=TrajectorySpec(length_range_m=(15.0, 18.0)))[0]
     first = fly(FlightSpec("first", path, "iris_study", 0), KINEMATIC).log
-    fit = fit_residual([first], "low_speed", KINEMATIC.period_s, m=20, restarts=1)
+    # The GP sees the velocity, not the command: a GP on the command (the NMPC's decision
+    # variable) learned from one flight's commands is wrong off them and the optimiser
+    # exploits that (tracking 0.43-0.73 of nominal on seeds 3-5 with state_input features,
+    # 0.22-0.33 with velocity, measured).
+    fit = fit_residual(
+        [first], "low_speed", KINEMATIC.period_s, features="velocity", m=20, restarts=1
+    )
     features = fit.model.features
     assert features.nominal_model == "first_order_lag"
     assert 0.3 < dict(features.nominal_params)["tau_s"] < 1.5  # identified, not given
@@ -35,9 +41,7 @@ def test_model_learned_from_one_nominal_flight_tracks_better_on_the_next(tmp_pat
     )
     assert augmented.outcome.status == "completed"
     assert residual_rmse_mps(augmented.log) < 0.25 * residual_rmse_mps(nominal)
-    # One short trajectory's tracking gain varies with tiny changes of the fit (0.43-0.73 of
-    # nominal on trajectory seeds 3-5, measured); the study's 20-trajectory mean is the figure.
-    assert tracking_rmse_m(augmented.log) < 0.8 * tracking_rmse_m(nominal)
+    assert tracking_rmse_m(augmented.log) < 0.5 * tracking_rmse_m(nominal)
 
 
 def test_regular_rows_drops_catch_up_ticks_only():
@@ -51,8 +55,13 @@ def test_regular_rows_drops_catch_up_ticks_only():
 @pytest.mark.slow
 def test_quick_study_runs_end_to_end_and_writes_report_and_plots(tmp_path, capsys):
     out = tmp_path / "study"
-    assert study_main(["--quick", "--out", str(out), "--workers", "2"]) == 0
-    stdout = capsys.readouterr().out
+    args = ["--quick", "--out", str(out), "--workers", "2", "--refit-rounds", "1"]
+    assert study_main(args) == 0
+    captured = capsys.readouterr()
+    stdout = captured.out
+    # [Ostafew16]'s refit on augmented flights of the training seeds ran for both selections
+    assert "refit round 1 flight 4/4" in captured.err
+    assert "refit low_speed round 1" in captured.err and "refit cluster round 1" in captured.err
     for name in (
         "residual_rmse_nominal",
         "residual_rmse_low_speed",
@@ -89,3 +98,12 @@ def test_study_refuses_bad_input_in_one_line(tmp_path, capsys):
     )
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and "cannot feed" in err[-1]
+
+
+def test_multirotor_regimes_stay_with_the_study_cli(tmp_path):
+    from scripts.study import _rover_regime, parse_args
+
+    assert not _rover_regime(["--regime", "agile", "--trajectories", "2"])
+    assert _rover_regime(["--out", str(tmp_path), "--regime=rover_exp1"])
+    config = parse_args(["--regime", "wind_field", "--trajectories", "2", "--out", str(tmp_path)])
+    assert (config.regime, config.n_trajectories) == ("wind_field", 2)

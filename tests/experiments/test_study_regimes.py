@@ -4,6 +4,7 @@ import pytest
 
 from experiments.study.config import StudyConfig
 from experiments.study.regimes import REGIMES, with_regime
+from gp.features import FEATURE_SETS
 
 
 def test_agile_raises_speeds_and_the_command_limit_and_keeps_the_rest():
@@ -19,7 +20,8 @@ def test_wind_field_flies_the_wind_field_vehicle_with_position_features():
 
     wind = with_regime(StudyConfig(), "wind_field")
     assert "wind_field" in load_sim_config(wind.vehicle).effect_names
-    assert wind.features == "position_state"
+    assert wind.features == "position_velocity"  # position, not the command (regimes.py)
+    assert wind.refit_rounds == 1 and "pos_n_m" in dict(FEATURE_SETS[wind.features])
 
 
 def test_an_unknown_regime_is_refused_with_the_valid_names():

@@ -4,6 +4,8 @@ a model fitted in between, the comparison and the report."""
 from __future__ import annotations
 
 import re
+import subprocess
+import sys
 
 import pytest
 
@@ -22,8 +24,19 @@ points_ned_m = [[0.0, 0.0, -3.0], [6.0, 4.0, -3.0], [12.0, -2.0, -3.0], [16.0, 0
 """
 
 
+@pytest.fixture
+def cpu_hog():
+    """One busy core beside the test (the wall-clock flights must keep their result)."""
+    hog = subprocess.Popen([sys.executable, "-c", "while True: pass"])
+    try:
+        yield hog
+    finally:
+        hog.kill()
+        hog.wait()
+
+
 @pytest.mark.slow
-def test_demo_flies_nominal_learns_and_flies_augmented_over_mavsdk(tmp_path, capsys):
+def test_demo_flies_nominal_learns_and_flies_augmented_over_mavsdk(tmp_path, capsys, cpu_hog):
     mission = tmp_path / "demo_short.toml"
     mission.write_text(SHORT_MISSION)
     out = tmp_path / "demo"
