@@ -6,10 +6,15 @@ and keeps the one that lowers the held-out squared residual most, if
 
 - it removes at least ``min_gain_fraction`` of what is left *above the noise floor* (the white
   part of the residual, estimated from the data by :func:`.noise_floor.white_noise_std`: no
-  model removes sensor noise, so it must not count in the denominator),
+  model removes sensor noise, so it must not count in the denominator). The floor is itself an
+  estimate, known to a few per cent (:func:`.noise_floor.noise_sse_std_error`); what stands less
+  than ``floor_margin_se`` standard errors above it is not counted as explainable either, so on a
+  noisy log a small, localised but significant effect (ground effect in a few seconds of low
+  holds) is not vetoed by the floor's own uncertainty (issue 18),
 - the removal is significant: block-bootstrap p-value below ``max_p_value``
   (:func:`.noise_floor.block_bootstrap`; why a bootstrap over blocks is explained there),
-- and it explains at least ``min_force_fraction`` of the weight in RMS force.
+- and it explains at least ``min_force_fraction`` of the weight in RMS force over the rows it
+  acts on (all rows for drag or a payload; the low holds for ground effect).
 
 Otherwise selection stops: what does not generalise is not named.
 """
@@ -24,7 +29,12 @@ import numpy as np
 from diagnosis.candidates import Candidate, fit_jointly, make_candidate, residual_sse
 from diagnosis.force_model import BatteryModel, EffectParams, predicted_residual
 from diagnosis.forces import GRAVITY_MPS2, ForceData
-from diagnosis.noise_floor import Significance, block_bootstrap, white_noise_std
+from diagnosis.noise_floor import (
+    Significance,
+    block_bootstrap,
+    noise_sse_std_error,
+    white_noise_std,
+)
 
 
 @dataclass(frozen=True)
@@ -38,6 +48,8 @@ class SelectionConfig:
         min_force_fraction: least RMS force [fraction of the nominal weight] a cause must explain.
         max_fit_rows: training rows used by the fits at most (evenly spaced), to bound the time.
         max_p_value: largest block-bootstrap p-value of the held-out reduction to name a cause.
+        floor_margin_se: standard errors of the noise-floor estimate added to the floor before
+            the ``min_gain_fraction`` rule.
     """
 
     block_s: float = 4.0
@@ -45,6 +57,7 @@ class SelectionConfig:
     min_force_fraction: float = 0.003
     max_fit_rows: int = 2000
     max_p_value: float = 0.01
+    floor_margin_se: float = 2.0
 
 
 @dataclass(frozen=True)
@@ -138,14 +151,15 @@ def select_causes(
     train, test = data.take(train_rows[::stride]), data.take(test_mask)
     noise = white_noise_std(data.resid_ned_n, data.segment)
     noise_sse = test.n_rows * float(np.sum(noise * noise))
+    noise_margin = config.floor_margin_se * noise_sse_std_error(noise, data.n_rows, test.n_rows)
     test_block = np.floor(test.t_s / config.block_s).astype(int) + 100_000 * test.segment
     base = {k: dict(v) for k, v in base.items()}
     current = base
     current_sq = _row_sq(current, test, battery)
     baseline = float(current_sq.sum())
     remaining_sse = baseline
-    floor_sse = test.n_rows * 3 * (config.min_force_fraction * data.mass_kg * GRAVITY_MPS2) ** 2
-    scale = max(baseline - noise_sse, floor_sse)  # explained fractions: of the explainable part
+    least_sse = test.n_rows * 3 * (config.min_force_fraction * data.mass_kg * GRAVITY_MPS2) ** 2
+    scale = max(baseline - noise_sse, least_sse)  # explained fractions: of the explainable part
     chosen: list[Candidate] = []
     accepted: list[CauseScore] = []
     last_try: dict[str, CauseScore] = {}
@@ -163,8 +177,10 @@ def select_causes(
             )
         best_sse, best = _simplest_of_best(tried, remaining_sse)
         removed = remaining_sse - best_sse
-        explainable = max(remaining_sse - noise_sse, 0.0)
+        explainable = max(remaining_sse - noise_sse - noise_margin, 0.0)
         sig = last_try[best.name].significance
+        acting = _acting_rows(current, best.effects, test, battery)
+        floor_sse = acting * 3 * (config.min_force_fraction * data.mass_kg * GRAVITY_MPS2) ** 2
         if (
             removed < config.min_gain_fraction * explainable
             or removed < floor_sse
@@ -191,6 +207,8 @@ def select_causes(
         fit = fit_jointly(others, base, train, battery)
         without_sq = _row_sq(fit.effects, test, battery)
         cost = float(without_sq.sum()) - remaining_sse
+        acting = _acting_rows(fit.effects, current, test, battery)
+        floor_sse = acting * 3 * (config.min_force_fraction * data.mass_kg * GRAVITY_MPS2) ** 2
         sig = block_bootstrap(without_sq, current_sq, test_block)
         if cost < floor_sse or sig.p_value > config.max_p_value:
             progress(f"dropped {score.name}: redundant given the others")
@@ -218,6 +236,16 @@ def _row_sq(effects: EffectParams, data: ForceData, battery: BatteryModel) -> np
     """(n,) squared force residual per row [N^2] left over by ``effects``."""
     err = predicted_residual(effects, data, battery) - data.resid_ned_n
     return np.sum(err * err, axis=1)
+
+
+def _acting_rows(
+    before: EffectParams, after: EffectParams, data: ForceData, battery: BatteryModel
+) -> int:
+    """Rows of ``data`` on which ``after`` predicts another force residual than ``before``: a
+    ground effect acts only in the low holds, and its RMS force counts over those rows."""
+    change = predicted_residual(after, data, battery) - predicted_residual(before, data, battery)
+    size = np.linalg.norm(change, axis=1)
+    return int(np.count_nonzero(size > 1e-9 * max(float(size.max(initial=0.0)), 1e-300)))
 
 
 def _simplest_of_best(tried: list, before: float, tolerance: float = 0.05):

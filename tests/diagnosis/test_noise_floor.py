@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from diagnosis.noise_floor import block_bootstrap, white_noise_std
+from diagnosis.noise_floor import block_bootstrap, noise_sse_std_error, white_noise_std
 
 
 def test_white_noise_std_recovers_the_noise_under_a_smooth_signal():
@@ -25,3 +25,14 @@ def test_block_bootstrap_is_significant_for_a_real_reduction_only():
     assert block_bootstrap(before, real, block).p_value < 0.01
     sig = block_bootstrap(before, noise_only, block, seed=1)
     assert sig.p_value > 0.05 and sig.low < 0.0 < sig.high
+
+
+def test_noise_floor_standard_error_matches_its_spread():
+    """The floor's own uncertainty (used so that it cannot veto a small significant cause) is
+    what repeated draws of white noise show."""
+    rng = np.random.default_rng(8)
+    sigma = rng.uniform(0.2, 0.7, 3)
+    n = 1500
+    floors = [n * np.sum(white_noise_std(rng.normal(size=(n, 3)) * sigma) ** 2) for _ in range(400)]
+    predicted = noise_sse_std_error(sigma, n, n)
+    assert 0.8 < np.std(floors) / predicted < 1.25, (np.std(floors), predicted)
