@@ -35,7 +35,7 @@ from typing import Any, Literal
 
 SegmentKind = Literal["hover", "velocity", "altitude"]
 SEGMENT_KINDS: tuple[str, ...] = ("hover", "velocity", "altitude")
-ALT_GAIN_PER_S = 3.0  # altitude P gain [1/s] of ``altitude`` segments
+ALT_GAIN_PER_S = 1.0  # altitude P gain [1/s] of ``altitude`` segments
 ALT_MAX_SPEED_MPS = 0.6  # vertical speed limit of ``altitude`` segments
 
 
