@@ -38,7 +38,7 @@ from diagnosis.force_model import (
     predicted_residual,
 )
 from diagnosis.forces import GRAVITY_MPS2, ForceData, force_data, with_thrust_n
-from diagnosis.identifiability import NotIdentifiable, check_identifiability
+from diagnosis.identifiability import FLIGHT_FOR, NotIdentifiable, check_identifiability
 from diagnosis.noise_floor import white_noise_std
 from diagnosis.replay import LEAD_IN_S, ReplayResult, replay, windows
 from diagnosis.selection import (
@@ -230,6 +230,12 @@ def diagnose(
         replay_floor_mse,
     )
     causes += accepted
+    tried = [
+        replace(c, evidence=f"{c.evidence}; not named; to tell it apart, fly: {FLIGHT_FOR[c.name]}")
+        if c.name in FLIGHT_FOR
+        else c
+        for c in tried
+    ]
     rejected = [c for c in rejected if c.name not in {t.name for t in tried}] + tried
     added = _added(base, effects)
     extended = current
@@ -378,7 +384,10 @@ def _force_causes(
         elif s.at_bound:
             verb = "at the bound (search wider / the cause may be another)"
         else:
-            verb = "not named: does not generalise enough above the noise floor"
+            verb = (
+                "not named: does not generalise enough above the noise floor; to tell it "
+                f"apart, fly: {FLIGHT_FOR.get(s.name, 'a longer flight')}"
+            )
         p = f", p {s.significance.p_value:.3g}" if s.significance is not None else ""
         cause = Cause(
             s.name,

@@ -22,6 +22,22 @@ MIN_VOLTAGE_DROP_V = 0.02
 MIN_SETPOINT_STEP_MPS = 0.5
 MIN_SETPOINT_STEPS = 4
 
+_STEPS = "fly sharp velocity setpoint steps (e.g. 0 -> 3 m/s and back, several headings)"
+# What to fly to excite each cause: said when the data cannot identify it, and when it was
+# examined but did not stand out from the noise (a weak effect on a short flight).
+FLIGHT_FOR: dict[str, str] = {
+    "rotor_drag": "fly speed sweeps from hover to 8 m/s in several headings",
+    "body_drag": "fly speed sweeps from hover to 8 m/s in several headings",
+    "isotropic_drag": "fly speed sweeps from hover to 8 m/s in several headings",
+    "wind": "fly out and back along at least two crossing headings at the same speed",
+    "ground_effect": "fly altitude holds at 0.05, 0.1, 0.2 and 0.5 m above flat ground",
+    "battery_sag": "log battery voltage over a long flight (several minutes of hover)",
+    "payload": "hover and fly vertical steps (climb and descend at 1-2 m/s)",
+    "command_delay": _STEPS,
+    "motor_lag": _STEPS,
+    "flight_control": _STEPS,
+}
+
 
 @dataclass(frozen=True)
 class NotIdentifiable:
@@ -53,8 +69,7 @@ def check_identifiability(logs: Sequence[FlightLog]) -> tuple[NotIdentifiable, .
                 NotIdentifiable(
                     name,
                     f"only {steps} setpoint steps larger than {MIN_SETPOINT_STEP_MPS} m/s",
-                    "fly sharp velocity setpoint steps (e.g. 0 -> 3 m/s and back, "
-                    "several headings)",
+                    FLIGHT_FOR[name],
                 )
             )
     return tuple(out)
@@ -71,7 +86,7 @@ def _force_checks(logs: Sequence[FlightLog]) -> list[NotIdentifiable]:
                 NotIdentifiable(
                     name,
                     f"horizontal speed spans only {span:.1f} m/s",
-                    "fly speed sweeps from hover to 8 m/s in several headings",
+                    FLIGHT_FOR[name],
                 )
             )
     moving = vel[speed > 1.0]
@@ -85,7 +100,7 @@ def _force_checks(logs: Sequence[FlightLog]) -> list[NotIdentifiable]:
             NotIdentifiable(
                 "wind",
                 "flight directions do not cover two crossing headings",
-                "fly out and back along at least two crossing headings at the same speed",
+                FLIGHT_FOR["wind"],
             )
         )
     alt = np.concatenate([-log["pos_d_m"] for log in logs])
@@ -95,7 +110,7 @@ def _force_checks(logs: Sequence[FlightLog]) -> list[NotIdentifiable]:
             NotIdentifiable(
                 "ground_effect",
                 f"no altitude change below {NEAR_GROUND_M} m",
-                "fly altitude holds at 0.05, 0.1, 0.2 and 0.5 m above flat ground",
+                FLIGHT_FOR["ground_effect"],
             )
         )
     volts = [log["battery_v"] for log in logs if log.has("battery_v")]
@@ -106,7 +121,7 @@ def _force_checks(logs: Sequence[FlightLog]) -> list[NotIdentifiable]:
             NotIdentifiable(
                 "battery_sag",
                 what,
-                "log battery voltage over a long flight (several minutes of hover)",
+                FLIGHT_FOR["battery_sag"],
             )
         )
     return out

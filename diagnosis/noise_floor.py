@@ -30,6 +30,7 @@ MAD_TO_STD = 1.4826  # std / median absolute deviation for a Gaussian
 # stands only that much above it is not evidence of anything left to explain.
 NOISE_VAR_REL_SE_SQRT_N = 2.8
 BOOTSTRAP_SAMPLES = 2000
+MIN_BOOTSTRAP_BLOCKS = 6  # fewer touched blocks: resample finer ones (:func:`block_bootstrap`)
 
 
 def white_noise_std(x: np.ndarray, segment: np.ndarray | None = None) -> np.ndarray:
@@ -87,15 +88,37 @@ class Significance:
 
 
 def block_bootstrap(
-    before_sq: np.ndarray, after_sq: np.ndarray, block: np.ndarray, seed: int = 0
+    before_sq: np.ndarray,
+    after_sq: np.ndarray,
+    block: np.ndarray,
+    seed: int = 0,
+    fine_block: np.ndarray | None = None,
+    min_blocks: int = MIN_BOOTSTRAP_BLOCKS,
 ) -> Significance:
     """Significance of the reduction ``sum(before_sq - after_sq)`` over rows grouped by ``block``.
+
+    A bootstrap over two or three blocks cannot tell anything: when the cause acts in fewer than
+    ``min_blocks`` of them (a ground effect in a few seconds of low holds), the rows are grouped
+    by ``fine_block`` instead (shorter blocks, still long against the white noise's correlation
+    of one row; a drifting IMU bias is near constant over a few such blocks and shifts them
+    alike, which the cause's least force, counted over the rows it acts on, guards against).
 
     Args:
         before_sq, after_sq: (n,) squared error per held-out row without and with the cause.
         block: (n,) block id of each row.
         seed: resampling seed (deterministic result).
+        fine_block: (n,) shorter block ids, used when the cause touches too few ``block``s.
+        min_blocks: least number of touched blocks before ``fine_block`` is used.
     """
+    sig = _bootstrap(before_sq, after_sq, block, seed)
+    if fine_block is not None and sig.n_blocks < min_blocks:
+        return _bootstrap(before_sq, after_sq, fine_block, seed)
+    return sig
+
+
+def _bootstrap(
+    before_sq: np.ndarray, after_sq: np.ndarray, block: np.ndarray, seed: int
+) -> Significance:
     _, inverse = np.unique(np.asarray(block), return_inverse=True)
     diff = np.asarray(before_sq) - np.asarray(after_sq)
     per_block = np.bincount(inverse, weights=diff)

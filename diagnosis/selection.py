@@ -50,6 +50,8 @@ class SelectionConfig:
         max_p_value: largest block-bootstrap p-value of the held-out reduction to name a cause.
         floor_margin_se: standard errors of the noise-floor estimate added to the floor before
             the ``min_gain_fraction`` rule.
+        fine_block_s: block length [s] the bootstrap resamples for a cause acting in only a few
+            held-out blocks (:func:`.noise_floor.block_bootstrap`).
     """
 
     block_s: float = 4.0
@@ -58,6 +60,7 @@ class SelectionConfig:
     max_fit_rows: int = 2000
     max_p_value: float = 0.01
     floor_margin_se: float = 2.0
+    fine_block_s: float = 1.0
 
 
 @dataclass(frozen=True)
@@ -153,6 +156,7 @@ def select_causes(
     noise_sse = test.n_rows * float(np.sum(noise * noise))
     noise_margin = config.floor_margin_se * noise_sse_std_error(noise, data.n_rows, test.n_rows)
     test_block = np.floor(test.t_s / config.block_s).astype(int) + 100_000 * test.segment
+    fine_block = np.floor(test.t_s / config.fine_block_s).astype(int) + 1_000_000 * test.segment
     base = {k: dict(v) for k, v in base.items()}
     current = base
     current_sq = _row_sq(current, test, battery)
@@ -170,7 +174,8 @@ def select_causes(
             fit = fit_jointly([*chosen, make_candidate(name, base)], base, train, battery)
             sse = residual_sse(fit.effects, test, battery)
             tried.append((sse, fit))
-            sig = block_bootstrap(current_sq, _row_sq(fit.effects, test, battery), test_block)
+            after_sq = _row_sq(fit.effects, test, battery)
+            sig = block_bootstrap(current_sq, after_sq, test_block, fine_block=fine_block)
             last_try[name] = _score(name, fit, scale, remaining_sse, sse, test, False, sig)
             progress(
                 f"  {name}: held-out force residual {_rms(sse, test):.3f} N (p {sig.p_value:.3g})"
@@ -209,7 +214,7 @@ def select_causes(
         cost = float(without_sq.sum()) - remaining_sse
         acting = _acting_rows(fit.effects, current, test, battery)
         floor_sse = acting * 3 * (config.min_force_fraction * data.mass_kg * GRAVITY_MPS2) ** 2
-        sig = block_bootstrap(without_sq, current_sq, test_block)
+        sig = block_bootstrap(without_sq, current_sq, test_block, fine_block=fine_block)
         if cost < floor_sse or sig.p_value > config.max_p_value:
             progress(f"dropped {score.name}: redundant given the others")
             accepted.remove(score)

@@ -7,6 +7,7 @@ import pytest
 
 from experiments.jsbsim_diagnosis import main
 from flightlog.schema import read_flight_log
+from vehicle_sim.jsbsim_backend import JsbsimF450Plant
 
 SPEED_MISSION = Path(__file__).resolve().parents[2] / "missions" / "excite_speed.toml"
 
@@ -25,6 +26,10 @@ def test_a_short_excitation_on_jsbsim_is_diagnosed_with_a_gain(tmp_path, capsys)
     assert baseline_mps > report["extended"]["replay_vel_rmse_mps"]
     out = capsys.readouterr().out
     assert "| isotropic_drag | yes |" in out and "| replay | " in out
+    # issue 18: the fitted drag is JSBSim's own 0.5 rho S CD (its DRAG axis), within 15 %
+    fitted = next(c for c in report["causes"] if c["name"] == "isotropic_drag")["params"]
+    own = JsbsimF450Plant().air_drag_coefficient_n_per_mps2()
+    assert abs(fitted["k_n_per_mps2"] / own - 1.0) < 0.15, (fitted, own)
 
 
 def test_a_missing_mission_is_one_line_and_exit_2(tmp_path, capsys):
@@ -33,3 +38,10 @@ def test_a_missing_mission_is_one_line_and_exit_2(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.startswith("jsbsim-diagnosis: error:") and err.count("\n") == 1
     assert "cannot read excitation mission" in err and not (tmp_path / "logs").exists()
+
+
+def test_jsbsim_own_drag_coefficient_is_half_rho_s_cd():
+    """The F450's DRAG axis: qbar * S * CD with S = 0.016129 m^2 and CD = 1 (its Aero.xml),
+    at the density of Zurich's 488 m: about 0.0094 N/(m/s)^2."""
+    k = JsbsimF450Plant().air_drag_coefficient_n_per_mps2()
+    assert 0.5 * 1.10 * 0.016129 < k < 0.5 * 1.225 * 0.016129

@@ -127,6 +127,15 @@ class JsbsimF450Plant:
         self._acc_ned_mps2 = np.zeros(3)
         self._substep_s = self.config.max_substep_s
 
+    def air_drag_coefficient_n_per_mps2(self) -> float:
+        """JSBSim's own drag along the airspeed as k in D = k |v_air| v_air [N/(m/s)^2]: its
+        DRAG axis is qbar * S * CD = (0.5 rho S CD) V^2, with the density at the current
+        position, the reference area and the drag coefficient the model itself uses (the
+        ``isotropic_drag`` the diagnosis should find)."""
+        rho_kgpm3 = self._fdm["atmosphere/rho-slugs_ft3"] * KG_PER_SLUG / M_PER_FT**3
+        area_m2 = self._fdm["metrics/Sw-sqft"] * M_PER_FT**2
+        return 0.5 * rho_kgpm3 * area_m2 * self._fdm["aero/coefficient/CD"]
+
     @property
     def messages(self) -> tuple[str, ...]:
         """JSBSim's recent console messages that were kept off the terminal (empty if verbose)."""
