@@ -27,7 +27,8 @@ from vehicle_sim.vehicle_types import FlightMode, VehicleState, VelocitySetpoint
 
 
 class SimClock:
-    """Simulated time; sleeping advances the simulator (lockstep)."""
+    """Simulated time; sleeping advances the simulator (lockstep). Any simulator with
+    ``state.t_s``, ``physics_dt_s`` and ``step(dt_s)`` will do (the multirotor's, the rover's)."""
 
     def __init__(self, sim: Simulator) -> None:
         self._sim = sim

@@ -17,23 +17,8 @@ from typing import Any
 
 import numpy as np
 
+from companion.inprocess_link import SimClock
 from companion.link import CommandOutcome, LandedPhase, LinkError, LinkState, VelocityCommand
-
-
-class RoverSimClock:
-    """Simulated time; sleeping advances the rover simulation (lockstep)."""
-
-    def __init__(self, sim: Any) -> None:
-        self._sim = sim
-
-    def now_s(self) -> float:
-        return float(self._sim.state.t_s)
-
-    def sleep_until(self, t_s: float) -> None:
-        dt_s = float(self._sim.physics_dt_s)
-        steps = math.ceil((t_s - self.now_s()) / dt_s - 1e-6)
-        if steps > 0:
-            self._sim.step(steps * dt_s)
 
 
 class InProcessRoverLink:
@@ -46,7 +31,7 @@ class InProcessRoverLink:
 
     def __init__(self, sim: Any, metadata: Mapping[str, object] | None = None) -> None:
         self._sim = sim
-        self._clock = RoverSimClock(sim)
+        self._clock = SimClock(sim)
         self._metadata = dict(metadata or {})
         self._offboard = False
         self._have_setpoint = False
@@ -65,7 +50,7 @@ class InProcessRoverLink:
         return "inprocess"
 
     @property
-    def clock(self) -> RoverSimClock:
+    def clock(self) -> SimClock:
         return self._clock
 
     def connect(self, timeout_s: float) -> None:

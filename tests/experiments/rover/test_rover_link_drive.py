@@ -51,10 +51,14 @@ def _free_port() -> int:
 
 
 @pytest.mark.slow
-def test_pymavlink_link_drives_the_mavlink_rover_with_the_same_loop() -> None:
+@pytest.mark.parametrize("client", ["pymavlink", "mavsdk"])
+def test_a_mavlink_link_drives_the_mavlink_rover_with_the_same_loop(client: str) -> None:
+    from companion.mavsdk_link import MavsdkLink
+
+    link_class = PymavlinkLink if client == "pymavlink" else MavsdkLink
     port = _free_port()
-    sim = RoverSim(rover_preset("husky_50kg"), seed=2)
-    link = PymavlinkLink(f"udpin://127.0.0.1:{port}")  # listens, as for PX4 SITL
+    sim = RoverSim(rover_preset("husky_50kg"), seed=2 if client == "pymavlink" else 3)
+    link = link_class(f"udpin://127.0.0.1:{port}")  # listens, as for PX4 SITL
     endpoint = RoverMavlinkEndpoint(sim, port, setpoint_timeout_s=2.0, mode="udpout")
     endpoint.start()
     try:
@@ -64,21 +68,3 @@ def test_pymavlink_link_drives_the_mavlink_rover_with_the_same_loop() -> None:
         endpoint.close()
     assert drive.reached_end
     assert np.max(np.abs(drive.e_lat_m)) < 0.3  # wall clock under load: generous
-
-
-@pytest.mark.slow
-def test_mavsdk_link_drives_the_mavlink_rover_with_the_same_loop() -> None:
-    from companion.mavsdk_link import MavsdkLink
-
-    port = _free_port()
-    sim = RoverSim(rover_preset("husky_50kg"), seed=3)
-    link = MavsdkLink(f"udpin://127.0.0.1:{port}")
-    endpoint = RoverMavlinkEndpoint(sim, port, setpoint_timeout_s=2.0, mode="udpout")
-    endpoint.start()
-    try:
-        drive = drive_path(link, _path(0.5), 0.5, timeout_s=60.0)
-    finally:
-        link.close()
-        endpoint.close()
-    assert drive.reached_end
-    assert np.max(np.abs(drive.e_lat_m)) < 0.3
