@@ -74,7 +74,7 @@ def configured(config: SimConfig, added: Mapping[str, Mapping[str, object]]) -> 
     out = config.with_effects(effects) if effects else config
     gains = added.get(FLIGHT_CONTROL)
     if gains:
-        merged = {**dict(out.px4_params), **{k: float(v) for k, v in gains.items()}}  # type: ignore[arg-type]
+        merged = {**dict(out.px4_params), **{k: float(v) for k, v in gains.items()}}
         out = replace(out, px4_params=tuple(sorted(merged.items())))
     return out
 
