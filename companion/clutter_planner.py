@@ -28,6 +28,7 @@ import numpy as np
 
 from companion.link import ObstacleDistances
 from companion.nmpc_planner import CompanionNmpc
+from planners.local_detour import shortest_detour
 from planners.obstacle_map import PointObstacleMap
 from planners.path_reference import PathReference, PolylinePath
 from planners.plan_result import PlanResult, safe_result
@@ -53,6 +54,9 @@ class ClutterSettings:
         voxel_m, point_radius_m, update_range_m: the map (see PointObstacleMap).
         max_scan_age_s: without a new range scan for longer than this [s] the planner gives
             the safe command (brake and hover): it would be flying blind.
+        shortest_detour: a blocked stretch of reference becomes the shortest detour around
+            the known obstacles before it is pushed out (our choice); off: only pushed out,
+            as the paper's replanner.
         rejoin_m: a regenerated reference runs straight from the vehicle to the initial one
             this far [m] ahead of the vehicle's projection on it, then along it.
     """
@@ -67,6 +71,7 @@ class ClutterSettings:
     update_range_m: float = 5.0
     max_scan_age_s: float = 0.5
     rejoin_m: float = 1.0
+    shortest_detour: bool = True
 
 
 class ClutterNmpc:
@@ -186,17 +191,42 @@ class ClutterNmpc:
         self.replans += 1
 
     def _refine(self) -> None:
-        """Push the stretch of the reference ahead (the map's range, twice) out of the grown
-        map, a few iterations per cycle (the next cycles go on while it is not clear); keep
-        the progress point."""
+        """When the map has grown and the stretch of reference ahead (the map's range, twice)
+        is no longer clear: replace it by the shortest detour around the known obstacles to
+        the first clear waypoint beyond it (:func:`planners.local_detour.shortest_detour`),
+        then push that stretch out (a few iterations per cycle; the next cycles go on while
+        it is not clear); keep the progress point."""
+        s = self.settings
         ref_point = self.path.at(self._s_m)[0][0]
         s_old = self._s_m
-        here = int(np.argmin(np.linalg.norm(self._waypoints - ref_point, axis=1)))
-        reach = int(
-            np.ceil(2.0 * self.settings.update_range_m / self.settings.replanner.waypoint_spacing_m)
-        )
-        self._set_waypoints(self._waypoints, (here - 1, here + reach), _REFINE_ITERATIONS)
+        wp = self._waypoints
+        here = int(np.argmin(np.linalg.norm(wp - ref_point, axis=1)))
+        reach = int(np.ceil(2.0 * s.update_range_m / s.replanner.waypoint_spacing_m))
+        window = (here - 1, here + reach)
+        stretch = push_out(wp, self.obstacle_map, s.replanner, window, 0, self._anchor)
+        if stretch.ok:
+            self._map_version = self.obstacle_map.version
+            return
+        if s.shortest_detour:
+            self._detour(here, reach)
+        self._set_waypoints(self._waypoints, window, _REFINE_ITERATIONS)
         self._s_m = self.path.project(ref_point, max(0.0, s_old - 3.0), s_old + 3.0)
+
+    def _detour(self, here: int, reach: int) -> None:
+        """Waypoints ``here`` to the first clear one from ``here + reach`` on become the
+        shortest detour between them (kept as they are when none exists in reach)."""
+        wp, clearance = self._waypoints, self.settings.replanner.clearance_m
+        clear = self.obstacle_map.clearance_m(wp) >= clearance
+        beyond = np.flatnonzero(clear[min(here + reach, len(wp) - 1) :])
+        if beyond.size == 0:
+            return
+        end = min(here + reach, len(wp) - 1) + int(beyond[0])
+        vertices = shortest_detour(wp[here], wp[end], self.obstacle_map, clearance)
+        if vertices is None or end <= here:
+            return
+        new = resample(vertices, self.settings.replanner.waypoint_spacing_m)[1:-1]
+        self._waypoints = np.vstack([wp[: here + 1], new, wp[end:]])
+        self._anchor = np.vstack([self._anchor[: here + 1], new, self._anchor[end:]])
 
     def _regenerate(self, pos: np.ndarray) -> None:
         """A new reference from ``pos`` straight to the initial one ``rejoin_m`` ahead (our
