@@ -1,4 +1,7 @@
-"""The named effects (docs/design.md section 4), one class each, and their registry.
+"""The named effects (docs/design.md section 4), one class and one file each, and their one
+registry, for the multirotor and the rover alike. Each class owns its parameters (units, valid
+ranges, diagnosis search ranges), its physics, what the diagnosis needs to identify it and what
+to fly to excite it (see :mod:`.base`; how to add one: README.md in this folder).
 
 Build one from code (``RotorDrag(k_n_per_mps=(0.4, 0.4, 0.1))``) or from a config mapping
 (:func:`make_effect`, ``[effects.<name>]`` in TOML), then :func:`pack_effects` them into the
@@ -19,6 +22,9 @@ vector the physics reads. Parameters, units and defaults:
                    rotor_height_m       m            0.1               0..1
     motor_lag      tau_s                s            0.05              0.005..0.5
     command_delay  delay_s              s            0.1               0..2
+    wind_field     see wind_field.py
+
+Rover (terrain) effects, see terrain.py: slope, wheel_slip, surface_patch, rover_payload.
 """
 
 from __future__ import annotations
@@ -39,32 +45,60 @@ from vehicle_sim.effects.layout import neutral_effect_vector
 from vehicle_sim.effects.motor_lag import MotorLag
 from vehicle_sim.effects.payload import Payload
 from vehicle_sim.effects.rotor_drag import RotorDrag
+from vehicle_sim.effects.rover_payload import RoverPayload
+from vehicle_sim.effects.slope import Slope
+from vehicle_sim.effects.surface_patch import SurfacePatch, gravel_patch, mud_patch
+from vehicle_sim.effects.wheel_slip import WheelSlip
 from vehicle_sim.effects.wind import Wind
 from vehicle_sim.effects.wind_field import WindField
 
-EFFECT_CLASSES: dict[str, type] = {
+# The one registry; its order is the order the diagnosis tries and reports causes in.
+REGISTRY: dict[str, type[Effect]] = {
     cls.name: cls
     for cls in (
         RotorDrag, BodyDrag, IsotropicDrag, Wind, Gusts, Payload, BatterySag, GroundEffect,
-        MotorLag, CommandDelay, WindField,
+        CommandDelay, MotorLag, WindField, Slope, WheelSlip, SurfacePatch, RoverPayload,
     )
 }  # fmt: skip
+EFFECT_CLASSES: dict[str, type[Effect]] = {
+    n: c for n, c in REGISTRY.items() if c.VEHICLE == "multirotor"
+}
 EFFECT_NAMES: tuple[str, ...] = tuple(EFFECT_CLASSES)
+ROVER_EFFECTS: dict[str, type[Effect]] = {n: c for n, c in REGISTRY.items() if c.VEHICLE == "rover"}
+ROVER_EFFECT_NAMES: tuple[str, ...] = tuple(ROVER_EFFECTS)
 
 __all__ = [
-    "EFFECT_CLASSES", "EFFECT_NAMES", "BatterySag", "BodyDrag", "CommandDelay", "Effect",
-    "GroundEffect", "Gusts", "IsotropicDrag", "MotorLag", "ParamSpec", "Payload", "RotorDrag",
-    "SimConfigError", "Wind", "make_effect", "pack_effects",
+    "EFFECT_CLASSES", "EFFECT_NAMES", "REGISTRY", "ROVER_EFFECTS", "ROVER_EFFECT_NAMES",
+    "BatterySag", "BodyDrag", "CommandDelay", "Effect", "GroundEffect", "Gusts",
+    "IsotropicDrag", "MotorLag", "ParamSpec", "Payload", "RotorDrag", "RoverPayload",
+    "SimConfigError", "Slope", "SurfacePatch", "WheelSlip", "Wind", "WindField",
+    "effects_with_role", "gravel_patch", "make_effect", "make_rover_effect", "mud_patch",
+    "pack_effects",
 ]  # fmt: skip
 
 
+def effects_with_role(role: str) -> tuple[str, ...]:
+    """Names of the registered effects with ``ROLE`` ``role``, in registry order."""
+    return tuple(n for n, c in REGISTRY.items() if role == c.ROLE)
+
+
 def make_effect(name: str, values: Mapping[str, Any] | None = None) -> Effect:
-    """The effect called ``name`` with ``values`` (missing parameters take their defaults)."""
-    cls = EFFECT_CLASSES.get(name)
+    """The multirotor effect called ``name`` with ``values`` (missing parameters take their
+    defaults)."""
+    return _make(EFFECT_CLASSES, "effect", name, values)
+
+
+def make_rover_effect(name: str, values: Mapping[str, Any] | None = None) -> Effect:
+    """A rover effect from its name and a config mapping (same validation as construction)."""
+    return _make(ROVER_EFFECTS, "rover effect", name, values)
+
+
+def _make(
+    classes: Mapping[str, type[Effect]], what: str, name: str, values: Mapping[str, Any] | None
+) -> Effect:
+    cls = classes.get(name)
     if cls is None:
-        raise SimConfigError(
-            f"effects.{name}: unknown effect; choose from {', '.join(EFFECT_NAMES)}"
-        )
+        raise SimConfigError(f"effects.{name}: unknown {what}; choose from {', '.join(classes)}")
     if values is not None and not isinstance(values, Mapping):
         raise SimConfigError(
             f"effects.{name}: expected a table of parameters, got {values!r}; "
