@@ -363,9 +363,10 @@ def _force_causes(
     accepted, rejected = [], []
     for s in selection.scores:
         fitted = final if s.accepted else s.effects
-        params = flatten_params(s.name, fitted.get(s.name, {}))
-        if s.name == "wind" and "rotor_drag" in fitted:
-            params.update(flatten_params("rotor_drag", fitted["rotor_drag"]))
+        params = flatten_params(fitted.get(s.name, {}))
+        fit_with = EFFECT_CLASSES[s.name].FIT_WITH
+        if fit_with is not None and fit_with in fitted:
+            params.update(flatten_params(fitted[fit_with]))
         if s.accepted:
             verb = "named"
         elif s.at_bound:
