@@ -25,6 +25,7 @@ from vehicle_sim.effects import (
     Effect,
     make_effect,
     make_rover_effect,
+    parameter_table,
 )
 from vehicle_sim.effects.base import REQUIREMENTS, ROLES, SimConfigError, effect_as_mapping
 
@@ -189,3 +190,13 @@ def test_rover_terrain_effects_share_the_registry_and_its_validation():
         assert 0.0 < out.speed_scale <= 1.0 and 0.0 < out.yaw_scale <= 1.0
     with pytest.raises(SimConfigError, match="unknown effect"):
         make_effect("slope", {})
+
+
+def test_parameter_table_lists_every_parameter_with_both_ranges():
+    lines = parameter_table().splitlines()
+    assert len(lines) == 1 + sum(len(c.PARAMS) for c in REGISTRY.values())
+    for name, cls in REGISTRY.items():
+        for spec in cls.PARAMS:
+            row = next(r.split() for r in lines if r.split()[:2] == [name, spec.name])
+            search = "-" if spec.search is None else f"{spec.search.lo:g}..{spec.search.hi:g}"
+            assert row[-2:] == [f"{spec.lo:g}..{spec.hi:g}", search], row
