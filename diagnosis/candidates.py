@@ -23,6 +23,7 @@ from scipy.optimize import least_squares
 from diagnosis.force_model import BatteryModel, EffectParams, predicted_residual
 from diagnosis.forces import ForceData
 from vehicle_sim.effects import EFFECT_CLASSES, ParamSpec, effects_with_role
+from vehicle_sim.effects.base import Search
 
 FORCE_CAUSES: tuple[str, ...] = effects_with_role("force")
 
@@ -88,19 +89,21 @@ def make_candidate(name: str, base: EffectParams) -> Candidate:
 
 @dataclass(frozen=True)
 class _SearchedParam:
-    """One searched parameter of an effect: its spec, free components and start."""
+    """One searched parameter of an effect: its spec and search, and the start of its free
+    components (shape (free,))."""
 
     effect: str
     spec: ParamSpec
+    search: Search
     x0: np.ndarray
 
     @property
     def lower(self) -> np.ndarray:
-        return np.full(len(self.x0), self.spec.search.lo)
+        return np.full(len(self.x0), self.search.lo)
 
     @property
     def upper(self) -> np.ndarray:
-        return np.full(len(self.x0), self.spec.search.hi)
+        return np.full(len(self.x0), self.search.hi)
 
     def value(self, theta: np.ndarray) -> float | tuple[float, ...]:
         """The parameter value for its slice of theta (unsearched components 0)."""
@@ -118,7 +121,7 @@ def _searched(cls: type, base: EffectParams) -> list[_SearchedParam]:
         free = spec.size if s.free is None else s.free
         start = base.get(cls.name, {}).get(spec.name, s.start) if s.warm else s.start
         x0 = np.broadcast_to(np.asarray(start, float), (spec.size,))[:free].copy()
-        out.append(_SearchedParam(cls.name, spec, x0))
+        out.append(_SearchedParam(cls.name, spec, s, x0))
     return out
 
 
