@@ -27,7 +27,13 @@ from vehicle_sim.effects import (
     make_rover_effect,
     parameter_table,
 )
-from vehicle_sim.effects.base import REQUIREMENTS, ROLES, SimConfigError, effect_as_mapping
+from vehicle_sim.effects.base import (
+    REQUIREMENTS,
+    ROLES,
+    SimConfigError,
+    effect_as_mapping,
+    effect_from_mapping,
+)
 
 N_ROWS = 200
 MODELLED = [n for n, c in EFFECT_CLASSES.items() if c.ROLE in MODELLED_ROLES]
@@ -122,7 +128,8 @@ def test_simulator_and_diagnosis_physics_agree(name, seed):
         assert cls.ROLE == "disturbance", name
 
 
-def test_every_effect_has_units_bounds_and_defaults_in_range():
+def test_every_effect_has_units_bounds_defaults_and_typical_values_in_range():
+    rng = np.random.default_rng(5)
     for name, cls in REGISTRY.items():
         assert cls.name == name and cls.PARAMS, name
         assert [s.name for s in cls.PARAMS] == [f.name for f in fields(cls)], name
@@ -134,6 +141,11 @@ def test_every_effect_has_units_bounds_and_defaults_in_range():
             assert np.all((spec.lo <= values) & (values <= spec.hi)), (name, spec.name)
             if spec.search is not None:
                 assert spec.lo <= spec.search.lo < spec.search.hi <= spec.hi, (name, spec.name)
+            inner = spec.search or spec  # a typical value lies where the diagnosis searches
+            for lo, hi in spec.typical_ranges():
+                assert inner.lo <= lo < hi <= inner.hi, (name, spec.name)
+        drawn = effect_as_mapping(effect_from_mapping(cls, cls.draw_typical(rng)))
+        assert set(drawn) == {s.name for s in cls.PARAMS}, name
 
 
 @pytest.mark.parametrize("name", FORCE_CAUSES)

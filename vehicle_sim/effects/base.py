@@ -72,6 +72,9 @@ class ParamSpec:
         lo, hi: inclusive valid range (per component).
         doc: what it means.
         search: how the diagnosis searches it (None: not searched).
+        typical: (lo, hi) range on real vehicles, one pair for all components or one per
+            component; hidden effects in the diagnosis' tests are drawn from it (None: the
+            default is kept).
     """
 
     name: str
@@ -81,6 +84,7 @@ class ParamSpec:
     hi: float
     doc: str
     search: Search | None = None
+    typical: tuple[float, float] | tuple[tuple[float, float], ...] | None = None
 
     def __post_init__(self) -> None:
         s = self.search
@@ -88,6 +92,14 @@ class ParamSpec:
             raise ValueError(
                 f"{self.name}: search range [{s.lo}, {s.hi}] outside [{self.lo}, {self.hi}]"
             )
+
+    def typical_ranges(self) -> tuple[tuple[float, float], ...]:
+        """(size,) (lo, hi) pairs of the typical range per component; () without one."""
+        t = self.typical
+        if t is None:
+            return ()
+        pairs = t if isinstance(t[0], tuple) else (t,) * self.size
+        return tuple((float(lo), float(hi)) for lo, hi in pairs)
 
 
 ROLES = {
@@ -144,6 +156,18 @@ class Effect:
     def mass_ratio_of(self) -> float:
         """True mass / nominal mass this effect makes."""
         return 1.0
+
+    @classmethod
+    def draw_typical(cls, rng: np.random.Generator) -> dict[str, float | list[float]]:
+        """Parameters drawn uniformly, component by component, from their ``typical`` ranges
+        (the others keep their defaults): a hidden effect as a real vehicle might have it."""
+        out: dict[str, float | list[float]] = {}
+        for spec in cls.PARAMS:
+            ranges = spec.typical_ranges()
+            if ranges:
+                values = [float(rng.uniform(lo, hi)) for lo, hi in ranges]
+                out[spec.name] = values[0] if spec.size == 1 else values
+        return out
 
 
 def check_value(spec: ParamSpec, value: Any, where: str) -> float | tuple[float, ...]:

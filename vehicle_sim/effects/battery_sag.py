@@ -28,10 +28,13 @@ class BatterySag(Effect):
 
     name: ClassVar[str] = "battery_sag"
     PARAMS: ClassVar[tuple[ParamSpec, ...]] = (
-        ParamSpec("full_flight_time_s", "s", 1, 10.0, 36000.0, "hover time from full to empty"),
+        ParamSpec(
+            "full_flight_time_s", "s", 1, 10.0, 36000.0, "hover time from full to empty",
+            typical=(300.0, 900.0),
+        ),
         ParamSpec(
             "max_thrust_loss", "fraction", 1, 0.0, 0.6, "fraction of thrust lost when empty",
-            Search(0.0, 0.6, start=0.1),
+            Search(0.0, 0.6, start=0.1), typical=(0.15, 0.35),
         ),
     )  # fmt: skip
     ROLE: ClassVar[str] = "force"

@@ -27,6 +27,7 @@ class BodyDrag(Effect):
         ParamSpec(
             "c_n_per_mps2", "N/(m/s)^2", 3, 0.0, 10.0, "quadratic drag per body axis",
             Search(0.0, 5.0, start=(0.02, 0.02, 0.04), warm=True),
+            typical=((0.02, 0.08), (0.02, 0.08), (0.03, 0.1)),
         ),
     )  # fmt: skip
     ROLE: ClassVar[str] = "force"

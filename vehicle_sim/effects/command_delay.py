@@ -22,7 +22,16 @@ class CommandDelay(Effect):
 
     name: ClassVar[str] = "command_delay"
     PARAMS: ClassVar[tuple[ParamSpec, ...]] = (
-        ParamSpec("delay_s", "s", 1, 0.0, 2.0, "setpoint latency", Search(0.0, 1.2, grid=13)),
+        ParamSpec(
+            "delay_s",
+            "s",
+            1,
+            0.0,
+            2.0,
+            "setpoint latency",
+            Search(0.0, 1.2, grid=13),
+            typical=(0.05, 0.3),
+        ),
     )
     ROLE: ClassVar[str] = "command"
     NEEDS: ClassVar[tuple[str, ...]] = ("setpoint_steps",)

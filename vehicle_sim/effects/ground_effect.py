@@ -29,9 +29,12 @@ class GroundEffect(Effect):
     PARAMS: ClassVar[tuple[ParamSpec, ...]] = (
         ParamSpec(
             "max_gain", "fraction", 1, 0.0, 1.0, "thrust fraction gained at the ground",
-            Search(0.0, 1.0, start=0.2),
+            Search(0.0, 1.0, start=0.2), typical=(0.15, 0.4),
         ),
-        ParamSpec("rotor_radius_m", "m", 1, 0.02, 1.0, "rotor radius", Search(0.03, 0.5, 0.15)),
+        ParamSpec(
+            "rotor_radius_m", "m", 1, 0.02, 1.0, "rotor radius",
+            Search(0.03, 0.5, 0.15), typical=(0.11, 0.16),
+        ),
         ParamSpec("rotor_height_m", "m", 1, 0.0, 1.0, "rotor plane height when landed"),
     )  # fmt: skip
     ROLE: ClassVar[str] = "force"

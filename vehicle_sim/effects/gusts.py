@@ -29,7 +29,15 @@ class Gusts(Effect):
 
     name: ClassVar[str] = "gusts"
     PARAMS: ClassVar[tuple[ParamSpec, ...]] = (
-        ParamSpec("intensity_mps", "m/s", 1, 0.0, 20.0, "turbulence std per NED axis"),
+        ParamSpec(
+            "intensity_mps",
+            "m/s",
+            1,
+            0.0,
+            20.0,
+            "turbulence std per NED axis",
+            typical=(1.0, 2.5),
+        ),
         ParamSpec("length_scale_m", "m", 1, 0.5, 2000.0, "Dryden turbulence length scale"),
     )
     ROLE: ClassVar[str] = "disturbance"

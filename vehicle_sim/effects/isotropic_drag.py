@@ -30,6 +30,7 @@ class IsotropicDrag(Effect):
         ParamSpec(
             "k_n_per_mps2", "N/(m/s)^2", 1, 0.0, 10.0, "drag along the airspeed",
             Search(0.0, 10.0, start=0.03, warm=True),
+            typical=(0.02, 0.08),
         ),
     )  # fmt: skip
     ROLE: ClassVar[str] = "force"

@@ -25,6 +25,7 @@ class MotorLag(Effect):
         ParamSpec(
             "tau_s", "s", 1, 0.005, 0.5, "first-order motor time constant",
             Search(0.008, 0.5, grid=10, geometric=True),
+            typical=(0.03, 0.08),
         ),
     )  # fmt: skip
     ROLE: ClassVar[str] = "command"

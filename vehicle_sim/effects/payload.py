@@ -24,7 +24,14 @@ class Payload(Effect):
     name: ClassVar[str] = "payload"
     PARAMS: ClassVar[tuple[ParamSpec, ...]] = (
         ParamSpec(
-            "mass_ratio", "ratio", 1, 0.5, 1.8, "true mass / nominal mass", Search(0.5, 1.8, 1.0)
+            "mass_ratio",
+            "ratio",
+            1,
+            0.5,
+            1.8,
+            "true mass / nominal mass",
+            Search(0.5, 1.8, 1.0),
+            typical=(1.1, 1.5),
         ),
     )
     ROLE: ClassVar[str] = "force"

@@ -26,6 +26,7 @@ class RotorDrag(Effect):
         ParamSpec(
             "k_n_per_mps", "N/(m/s)", 3, 0.0, 50.0, "linear drag per body axis",
             Search(0.0, 10.0, start=(0.3, 0.3, 0.1), warm=True),
+            typical=((0.2, 0.6), (0.2, 0.6), (0.05, 0.2)),
         ),
     )  # fmt: skip
     ROLE: ClassVar[str] = "force"

@@ -43,5 +43,11 @@ class Wind(Effect):
     def pack(self, ep: np.ndarray) -> None:
         ep[layout.WIND_NED : layout.WIND_NED + 3] = self.vel_ned_mps
 
+    @classmethod
+    def draw_typical(cls, rng: np.random.Generator) -> dict[str, float | list[float]]:
+        """A horizontal breeze of 2-6 m/s from a uniformly drawn direction."""
+        speed, heading = rng.uniform(2.0, 6.0), rng.uniform(0.0, 2.0 * np.pi)
+        return {"vel_ned_mps": [speed * np.cos(heading), speed * np.sin(heading), 0.0]}
+
     def air_velocity_ned(self, pos_ned_m: np.ndarray) -> np.ndarray:
         return np.broadcast_to(np.asarray(self.vel_ned_mps), pos_ned_m.shape)
