@@ -6,7 +6,8 @@ An effect class subclasses :class:`Effect` and declares
 - ``name`` (from the fixed vocabulary of docs/design.md section 4) and ``VEHICLE``,
 - ``PARAMS``: one :class:`ParamSpec` per field, with unit, default and valid range; a spec's
   ``search`` (:class:`Search`) is the range the diagnosis searches, inside the valid range, so
-  config validation and the diagnosis read their bounds from the same place,
+  config validation and the diagnosis read their bounds from the same place; its ``typical``
+  the range real vehicles show (hidden effects in the diagnosis' tests are drawn from it),
 - ``ROLE``: how the diagnosis treats it (:data:`ROLES`),
 - ``NEEDS``: what a log must hold to identify it (:data:`REQUIREMENTS`), ``EXCITE``: what to
   fly to excite it, ``ACTS_THROUGH``/``FIT_WITH``: effects it needs to act at all,
@@ -108,7 +109,8 @@ ROLES = {
     "disturbance": "random or position-bound air; not fitted, the diagnosis reports what it leaves",
     "terrain": "a rover's terrain effect (``terrain`` method); no diagnosis yet",
 }
-# What a log must hold to identify an effect (checked by diagnosis.identifiability).
+# What a log must hold to identify an effect (the multirotor ones are checked by
+# diagnosis.identifiability; the rover has no diagnosis yet).
 REQUIREMENTS = {
     "thrust": "a total rotor thrust column (the force residual needs it)",
     "speed_span": "horizontal speeds spanning several m/s",
