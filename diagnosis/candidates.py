@@ -4,8 +4,10 @@ A candidate maps a parameter vector ``theta`` onto effect parameters (``{name: {
 that are merged over the effects the config already has; its fit minimises the squared force
 residual left over by the merged effects (:mod:`.force_model`) with bounded least squares
 (scipy ``least_squares``; the drag, payload and battery candidates are linear in ``theta`` and
-converge in a few iterations). ``wind`` is a steady horizontal wind; it needs drag to act
-through: if the config has none, the wind candidate fits rotor drag jointly. Causes already
+converge in a few iterations). Which parameters are searched, within which bounds and from
+which start, each effect class says in its parameter specs (``ParamSpec.search``). ``wind`` is a
+steady horizontal wind; it acts through drag (``ACTS_THROUGH``): if the config has none, the
+wind candidate fits its ``FIT_WITH`` effect, rotor drag, jointly. Causes already
 accepted are re-fitted jointly with each new candidate, so an early estimate that absorbed part
 of a later cause is corrected.
 """
@@ -20,11 +22,10 @@ from scipy.optimize import least_squares
 
 from diagnosis.force_model import BatteryModel, EffectParams, predicted_residual
 from diagnosis.forces import ForceData
+from vehicle_sim.effects import EFFECT_CLASSES, ParamSpec, effects_with_role
+from vehicle_sim.effects.base import Search
 
-FORCE_CAUSES: tuple[str, ...] = (
-    "rotor_drag", "body_drag", "isotropic_drag", "wind", "payload", "battery_sag",
-    "ground_effect",
-)  # fmt: skip
+FORCE_CAUSES: tuple[str, ...] = effects_with_role("force")
 
 
 @dataclass(frozen=True)
@@ -63,80 +64,65 @@ def merge(base: EffectParams, extra: EffectParams) -> dict[str, dict[str, object
 
 
 def make_candidate(name: str, base: EffectParams) -> Candidate:
-    """The candidate for cause ``name`` given the effects already in the config."""
-    if name == "rotor_drag":
-        k0 = base.get("rotor_drag", {}).get("k_n_per_mps", (0.3, 0.3, 0.1))
-        return Candidate(
-            name,
-            np.array(k0, float),
-            np.zeros(3),
-            np.full(3, 10.0),
-            lambda th: {"rotor_drag": {"k_n_per_mps": _tup(th)}},
-        )
-    if name == "body_drag":
-        c0 = base.get("body_drag", {}).get("c_n_per_mps2", (0.02, 0.02, 0.04))
-        return Candidate(
-            name,
-            np.array(c0, float),
-            np.zeros(3),
-            np.full(3, 5.0),
-            lambda th: {"body_drag": {"c_n_per_mps2": _tup(th)}},
-        )
-    if name == "isotropic_drag":
-        k0 = base.get("isotropic_drag", {}).get("k_n_per_mps2", 0.03)
-        return Candidate(
-            name,
-            np.array([k0], float),
-            np.zeros(1),
-            np.full(1, 10.0),
-            lambda th: {"isotropic_drag": {"k_n_per_mps2": float(th[0])}},
-        )
-    if name == "wind":
-        if {"rotor_drag", "body_drag", "isotropic_drag"} & set(base):
-            return Candidate(
-                name,
-                np.zeros(2),
-                np.full(2, -30.0),
-                np.full(2, 30.0),
-                lambda th: {"wind": {"vel_ned_mps": (*_tup(th), 0.0)}},
-            )
-        return Candidate(
-            name,
-            np.array([0.0, 0.0, 0.3, 0.3, 0.1]),
-            np.array([-30.0, -30.0, 0.0, 0.0, 0.0]),
-            np.array([30.0] * 2 + [10.0] * 3),
-            lambda th: {
-                "wind": {"vel_ned_mps": (*_tup(th[:2]), 0.0)},
-                "rotor_drag": {"k_n_per_mps": _tup(th[2:])},
-            },
-        )
-    if name == "payload":
-        return Candidate(
-            name,
-            np.array([1.0]),
-            np.array([0.5]),
-            np.array([1.8]),
-            lambda th: {"payload": {"mass_ratio": float(th[0])}},
-        )
-    if name == "battery_sag":
-        return Candidate(
-            name,
-            np.array([0.1]),
-            np.array([0.0]),
-            np.array([0.6]),
-            lambda th: {"battery_sag": {"max_thrust_loss": float(th[0])}},
-        )
-    if name == "ground_effect":
-        return Candidate(
-            name,
-            np.array([0.2, 0.15]),
-            np.array([0.0, 0.03]),
-            np.array([1.0, 0.5]),
-            lambda th: {
-                "ground_effect": {"max_gain": float(th[0]), "rotor_radius_m": float(th[1])}
-            },
-        )
-    raise ValueError(f"no force candidate {name!r}; force causes are {FORCE_CAUSES}")
+    """The candidate for cause ``name`` given the effects already in the config: the searched
+    parameters of the effect's specs (``ParamSpec.search``), and those of its ``FIT_WITH``
+    effect when none of the effects it acts through is in the config."""
+    cls = EFFECT_CLASSES.get(name)
+    if cls is None or cls.ROLE != "force":
+        raise ValueError(f"no force candidate {name!r}; force causes are {FORCE_CAUSES}")
+    flat = _searched(cls, base)
+    if cls.FIT_WITH is not None and not set(cls.ACTS_THROUGH) & set(base):
+        flat += _searched(EFFECT_CLASSES[cls.FIT_WITH], {})
+    x0 = np.concatenate([p.x0 for p in flat])
+    lower = np.concatenate([p.lower for p in flat])
+    upper = np.concatenate([p.upper for p in flat])
+    sizes = np.cumsum([0, *(len(p.x0) for p in flat)])
+
+    def to_effects(theta: np.ndarray) -> dict[str, dict[str, object]]:
+        out: dict[str, dict[str, object]] = {}
+        for p, a, b in zip(flat, sizes[:-1], sizes[1:], strict=True):
+            out.setdefault(p.effect, {})[p.spec.name] = p.value(theta[a:b])
+        return out
+
+    return Candidate(name, x0, lower, upper, to_effects)
+
+
+@dataclass(frozen=True)
+class _SearchedParam:
+    """One searched parameter of an effect: its spec and search, and the start of its free
+    components (shape (free,))."""
+
+    effect: str
+    spec: ParamSpec
+    search: Search
+    x0: np.ndarray
+
+    @property
+    def lower(self) -> np.ndarray:
+        return np.full(len(self.x0), self.search.lo)
+
+    @property
+    def upper(self) -> np.ndarray:
+        return np.full(len(self.x0), self.search.hi)
+
+    def value(self, theta: np.ndarray) -> float | tuple[float, ...]:
+        """The parameter value for its slice of theta (unsearched components 0)."""
+        if self.spec.size == 1:
+            return float(theta[0])
+        return (*_tup(theta), *(0.0,) * (self.spec.size - len(theta)))
+
+
+def _searched(cls: type, base: EffectParams) -> list[_SearchedParam]:
+    out = []
+    for spec in cls.PARAMS:
+        s = spec.search
+        if s is None:
+            continue
+        free = spec.size if s.free is None else s.free
+        start = base.get(cls.name, {}).get(spec.name, s.start) if s.warm else s.start
+        x0 = np.broadcast_to(np.asarray(start, float), (spec.size,))[:free].copy()
+        out.append(_SearchedParam(cls.name, spec, s, x0))
+    return out
 
 
 def fit_jointly(

@@ -24,12 +24,13 @@ class Cause:
     at_bound: bool = False
 
 
-def flatten_params(name: str, params: dict[str, object]) -> dict[str, float]:
-    """Effect parameters as name -> float; vectors get an axis suffix (x/y/z body, n/e/d NED)."""
-    axes = "ned" if name == "wind" else "xyz"
+def flatten_params(params: dict[str, object]) -> dict[str, float]:
+    """Effect parameters as name -> float; vectors get an axis suffix (n/e/d for a parameter
+    whose name says it is NED, ``vel_ned_mps``; x/y/z body axes otherwise)."""
     out: dict[str, float] = {}
     for key, value in params.items():
         if isinstance(value, (tuple, list, np.ndarray)):
+            axes = "ned" if "_ned_" in f"{key}_" else "xyz"
             for axis, v in zip(axes, value, strict=True):
                 out[f"{key}_{axis}"] = float(v)
         else:

@@ -1,7 +1,8 @@
 """Command-path causes (command_delay, motor_lag, flight_control), chosen by replay error.
 
-command_delay and motor_lag have one parameter each; its value is chosen on the training
-windows by a coarse grid followed by a bounded scalar refinement around the best grid point.
+command_delay and motor_lag (the effects with ROLE "command") have one parameter each; its value
+is chosen on the training windows by a coarse grid (the effect's ``ParamSpec.search``) followed
+by a bounded scalar refinement around the best grid point.
 flight_control is PX4's horizontal velocity-loop gains, fitted by regression on the training
 rows (:mod:`.controller_fit`) and refined by training replay error. Each is then judged on the
 held-out
@@ -26,17 +27,19 @@ from diagnosis.noise_floor import block_bootstrap
 from diagnosis.replay import ReplayResult, Window, replay
 from flightlog.schema import FlightLog
 from vehicle_sim import SimConfig
+from vehicle_sim.effects import EFFECT_CLASSES, effects_with_role
 from vehicle_sim.params import PX4_PARAMS
 
 FLIGHT_CONTROL = "flight_control"
 REFINE_EVALUATIONS = 30
-COMMAND_CAUSES: tuple[str, ...] = ("command_delay", "motor_lag", FLIGHT_CONTROL)
+COMMAND_CAUSES: tuple[str, ...] = (*effects_with_role("command"), FLIGHT_CONTROL)
 
-# name -> (parameter, grid of values)
-SEARCH_GRIDS: dict[str, tuple[str, np.ndarray]] = {
-    "command_delay": ("delay_s", np.linspace(0.0, 1.2, 13)),
-    "motor_lag": ("tau_s", np.geomspace(0.008, 0.5, 10)),
-}
+
+def search_grid(name: str) -> tuple[str, np.ndarray]:
+    """(parameter, grid of values) a one-parameter command-path effect is searched on: its
+    spec's ``search`` (vehicle_sim/effects)."""
+    spec = next(s for s in EFFECT_CLASSES[name].PARAMS if s.search is not None)
+    return spec.name, spec.search.grid_values()
 
 
 @dataclass(frozen=True)
@@ -81,7 +84,7 @@ def configured(config: SimConfig, added: Mapping[str, Mapping[str, object]]) -> 
 
 def with_cause(config: SimConfig, name: str, value: float) -> SimConfig:
     """``config`` with one-parameter command-path cause ``name`` set to ``value``."""
-    param, _ = SEARCH_GRIDS[name]
+    param, _ = search_grid(name)
     return config.with_effects({name: {param: float(value)}})
 
 
@@ -108,7 +111,7 @@ def fit_command_cause(
             not PX4_PARAMS[k].lo < v < PX4_PARAMS[k].hi for k, v in gains.items()
         )
         return CommandFit(name, gains, train_rmse, held_out.rmse_mps(), held_out, at_bound)
-    param, grid = SEARCH_GRIDS[name]
+    param, grid = search_grid(name)
 
     def train_rmse(value: float) -> float:
         return replay(with_cause(config, name, value), logs, train).rmse_mps()

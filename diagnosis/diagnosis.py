@@ -31,7 +31,6 @@ from diagnosis.command_path import (
     select_command_causes,
 )
 from diagnosis.force_model import (
-    ASSUMED_ROTOR_HEIGHT_M,
     BatteryModel,
     flight_time_from_voltage,
     gust_intensity_mps,
@@ -49,6 +48,7 @@ from diagnosis.selection import (
 )
 from flightlog.schema import FlightLog
 from vehicle_sim import SimConfig
+from vehicle_sim.effects import EFFECT_CLASSES, BatterySag
 from vehicle_sim.effects.base import effect_as_mapping
 
 Progress = Callable[[str], None]
@@ -165,21 +165,8 @@ def diagnose(
     thrust_sources = tuple(source for _, source in thrust)
     for i, source in enumerate(thrust_sources):
         progress(f"log {i + 1} thrust: {source}")
-    not_ident = check_identifiability(logs)
     base_names = {e.name for e in sim_config.effects}
-    drag_known = bool({"rotor_drag", "body_drag", "isotropic_drag"} & base_names)
-    no_drag = {"rotor_drag", "body_drag", "isotropic_drag"} <= {n.name for n in not_ident}
-    if not drag_known and no_drag and "wind" not in {n.name for n in not_ident}:
-        # wind acts only through drag; without identifiable drag a "wind" would carry the drag
-        # fit under another name (issue 18)
-        not_ident = (
-            *not_ident,
-            NotIdentifiable(
-                "wind",
-                "wind acts through drag, which this flight cannot identify",
-                "fly speed sweeps from hover to 8 m/s along two crossing headings",
-            ),
-        )
+    not_ident = check_identifiability(logs, base_names)
     excluded = {n.name for n in not_ident}
     for n in not_ident:
         progress(f"not identifiable: {n.name} ({n.reason})")
@@ -376,9 +363,10 @@ def _force_causes(
     accepted, rejected = [], []
     for s in selection.scores:
         fitted = final if s.accepted else s.effects
-        params = flatten_params(s.name, fitted.get(s.name, {}))
-        if s.name == "wind" and "rotor_drag" in fitted:
-            params.update(flatten_params("rotor_drag", fitted["rotor_drag"]))
+        params = flatten_params(fitted.get(s.name, {}))
+        fit_with = EFFECT_CLASSES[s.name].FIT_WITH
+        if fit_with is not None and fit_with in fitted:
+            params.update(flatten_params(fitted[fit_with]))
         if s.accepted:
             verb = "named"
         elif s.at_bound:
@@ -406,13 +394,16 @@ def _force_causes(
 def _complete(
     effects: dict[str, dict[str, object]], data: ForceData, battery: BatteryModel
 ) -> dict[str, dict[str, object]]:
-    """Fill the parameters the force fit does not estimate."""
+    """Fill the parameters the force fit does not estimate: battery_sag's endurance from the
+    logged voltage (within its valid range), the others with the effect's defaults."""
     out = {k: dict(v) for k, v in effects.items()}
     if "battery_sag" in out and "full_flight_time_s" not in out["battery_sag"]:
-        endurance = flight_time_from_voltage(data, battery)
-        out["battery_sag"]["full_flight_time_s"] = float(np.clip(endurance or 900.0, 10.0, 36000.0))
-    if "ground_effect" in out:
-        out["ground_effect"].setdefault("rotor_height_m", ASSUMED_ROTOR_HEIGHT_M)
+        spec = next(p for p in BatterySag.PARAMS if p.name == "full_flight_time_s")
+        endurance = flight_time_from_voltage(data, battery) or BatterySag.full_flight_time_s
+        out["battery_sag"]["full_flight_time_s"] = float(np.clip(endurance, spec.lo, spec.hi))
+    for name, params in out.items():
+        defaults = effect_as_mapping(EFFECT_CLASSES[name]())
+        out[name] = {**params, **{k: v for k, v in defaults.items() if k not in params}}
     return out
 
 

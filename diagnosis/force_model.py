@@ -7,20 +7,26 @@ obeys rho * m_nom * (a - g) = f * F_T + D, with F_T = R [0, 0, -T] the logged th
     r = (1 - rho) * m_nom * (a - g) + (f - 1) * F_T + D.
 
 Effects are given as ``{name: {param: value}}`` with the parameter names of vehicle_sim's
-effects; absent effects are neutral. These are the same equations the simulator integrates.
+effects; absent effects are neutral. The physics is each effect class's own NumPy version of the
+equations the simulator integrates (``air_velocity_ned``, ``drag_force_body``, ``thrust_factor``,
+``mass_ratio_of``); a test checks the two agree for every effect. Random gusts (zero mean) add
+nothing; command-path effects act through the replay, not here.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import math
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from diagnosis.forces import GRAVITY_MPS2, ForceData
+from vehicle_sim.effects import EFFECT_CLASSES, Effect
+from vehicle_sim.effects.base import effect_from_mapping
 
 EffectParams = Mapping[str, Mapping[str, float | tuple[float, ...]]]
-ASSUMED_ROTOR_HEIGHT_M = 0.1  # rotor plane above ground when landed, if no config gives it
+MODELLED_ROLES = ("force", "disturbance")  # effects whose air or force the model includes
 
 
 @dataclass(frozen=True)
@@ -37,43 +43,53 @@ class BatteryModel:
         return np.clip(d, 0.0, 1.0)
 
 
-def drag_force_ned(effects: EffectParams, data: ForceData) -> np.ndarray:
-    """(n, 3) rotor, body and isotropic drag in NED [N] on the air-relative velocity."""
-    wind = np.asarray(effects.get("wind", {}).get("vel_ned_mps", (0.0, 0.0, 0.0)), float)
-    k = np.asarray(effects.get("rotor_drag", {}).get("k_n_per_mps", (0.0, 0.0, 0.0)), float)
-    c = np.asarray(effects.get("body_drag", {}).get("c_n_per_mps2", (0.0, 0.0, 0.0)), float)
-    k_iso = float(effects.get("isotropic_drag", {}).get("k_n_per_mps2", 0.0))
-    air = data.vel_ned_mps - wind
+def effect_objects(effects: EffectParams) -> list[Effect]:
+    """The effect objects of ``effects`` that act on the force residual, in registry order
+    (missing parameters take their defaults, as in the simulator)."""
+    return [
+        effect_from_mapping(cls, effects[name])
+        for name, cls in EFFECT_CLASSES.items()
+        if name in effects and cls.ROLE in MODELLED_ROLES
+    ]
+
+
+def drag_force_ned(effects: Sequence[Effect], data: ForceData) -> np.ndarray:
+    """(n, 3) drag force in NED [N] of ``effects`` on the air-relative velocity."""
+    pos = data.positions()
+    air = data.vel_ned_mps
+    for e in effects:
+        wind = e.air_velocity_ned(pos)
+        if wind is not None:
+            air = air - wind
     vb = np.einsum("nji,nj->ni", data.rot, air)
-    fb = -k * vb - c * vb * np.abs(vb)
-    iso = -k_iso * np.linalg.norm(air, axis=1, keepdims=True) * air
-    return np.einsum("nij,nj->ni", data.rot, fb) + iso
+    fb = np.zeros_like(vb)
+    for e in effects:
+        f = e.drag_force_body(vb)
+        if f is not None:
+            fb = fb + f
+    return np.einsum("nij,nj->ni", data.rot, fb)
 
 
-def thrust_factor(effects: EffectParams, data: ForceData, battery: BatteryModel) -> np.ndarray:
-    """(n,) true thrust / nominal thrust from battery sag and ground effect."""
+def thrust_factor(effects: Sequence[Effect], data: ForceData, battery: BatteryModel) -> np.ndarray:
+    """(n,) true thrust / nominal thrust (battery sag, ground effect)."""
     f = np.ones(data.n_rows)
-    sag = effects.get("battery_sag")
-    if sag is not None:
-        f = f - float(sag["max_thrust_loss"]) * battery.discharge(data.battery_v)
-    ground = effects.get("ground_effect")
-    if ground is not None:
-        h = np.maximum(data.alt_m, 0.0) + float(
-            ground.get("rotor_height_m", ASSUMED_ROTOR_HEIGHT_M)
-        )
-        s = np.clip(1.0 - h / (2.0 * float(ground["rotor_radius_m"])), 0.0, None)
-        f = f * (1.0 + float(ground["max_gain"]) * s * s)
+    discharge = battery.discharge(data.battery_v)
+    for e in effects:
+        g = e.thrust_factor(data.alt_m, discharge)
+        if g is not None:
+            f = f * g
     return f
 
 
 def predicted_residual(effects: EffectParams, data: ForceData, battery: BatteryModel) -> np.ndarray:
     """(n, 3) force residual [N] that ``effects`` predict for the rows of ``data``."""
-    rho = float(effects.get("payload", {}).get("mass_ratio", 1.0))
+    objs = effect_objects(effects)
+    rho = math.prod(e.mass_ratio_of() for e in objs)
     g = np.array([0.0, 0.0, GRAVITY_MPS2])
     inertial = (1.0 - rho) * data.mass_kg * (data.acc_ned_mps2 - g)
     thrust_force = data.thrust_axis_ned() * data.thrust_n[:, None]
-    f = thrust_factor(effects, data, battery)
-    return inertial + (f - 1.0)[:, None] * thrust_force + drag_force_ned(effects, data)
+    f = thrust_factor(objs, data, battery)
+    return inertial + (f - 1.0)[:, None] * thrust_force + drag_force_ned(objs, data)
 
 
 def flight_time_from_voltage(data: ForceData, battery: BatteryModel) -> float | None:

@@ -42,6 +42,8 @@ class ForceData:
         battery_v: (n,) battery voltage, NaN when not logged.
         mass_kg: nominal mass used for the residual.
         resid_ned_n: (n, 3) the force residual r defined in the module docstring.
+        pos_ned_m: (n, 3) position NED [m] (None when not known: then an effect whose air is
+            bound to a place, wind_field, predicts NaN).
     """
 
     t_s: np.ndarray
@@ -54,6 +56,7 @@ class ForceData:
     battery_v: np.ndarray
     mass_kg: float
     resid_ned_n: np.ndarray
+    pos_ned_m: np.ndarray | None = None
 
     @property
     def n_rows(self) -> int:
@@ -64,7 +67,14 @@ class ForceData:
         return ForceData(
             **{k: getattr(self, k)[rows] for k in _ROW_FIELDS},
             mass_kg=self.mass_kg,
+            pos_ned_m=None if self.pos_ned_m is None else self.pos_ned_m[rows],
         )
+
+    def positions(self) -> np.ndarray:
+        """(n, 3) position NED [m]; NaN where not known."""
+        if self.pos_ned_m is None:
+            return np.full((self.n_rows, 3), np.nan)
+        return self.pos_ned_m
 
     def thrust_axis_ned(self) -> np.ndarray:
         """(n, 3) unit thrust direction in NED (body -z)."""
@@ -192,6 +202,7 @@ def force_data(logs: list[FlightLog], mass_kg: float) -> ForceData:
             "thrust_n": log["thrust_n"],
             "alt_m": alt,
             "battery_v": battery,
+            "pos_ned_m": log.stack("pos_n_m", "pos_e_m", "pos_d_m"),
         }
         parts.append({k: v[air] for k, v in cols.items()})
     if not any(len(p["t_s"]) for p in parts):

@@ -1,18 +1,21 @@
 """Can the data support a cause at all? Checks per cause, with the flight that would fix it.
 
 A cause the data cannot separate is not fitted and not named; the report says why and what to
-fly instead of guessing.
+fly instead of guessing. Each effect declares what it needs (``NEEDS``, names from
+:data:`vehicle_sim.effects.base.REQUIREMENTS`) and what to fly (``EXCITE``); this module holds
+one check per requirement and runs them over the registry.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
-from diagnosis.candidates import FORCE_CAUSES
+from diagnosis.command_path import FLIGHT_CONTROL
 from flightlog.schema import FlightLog
+from vehicle_sim.effects import EFFECT_CLASSES
 
 NEAR_GROUND_M = 0.3  # ground effect acts below about two rotor radii
 MIN_NEAR_GROUND_SPAN_M = 0.05
@@ -22,20 +25,18 @@ MIN_VOLTAGE_DROP_V = 0.02
 MIN_SETPOINT_STEP_MPS = 0.5
 MIN_SETPOINT_STEPS = 4
 
-_STEPS = "fly sharp velocity setpoint steps (e.g. 0 -> 3 m/s and back, several headings)"
+DIAGNOSED_ROLES = ("force", "command")
+# flight_control is PX4's velocity-loop gains, a cause the diagnosis fits but not a plant effect
+FLIGHT_CONTROL_NEEDS = ("setpoint_steps",)
 # What to fly to excite each cause: said when the data cannot identify it, and when it was
 # examined but did not stand out from the noise (a weak effect on a short flight).
 FLIGHT_FOR: dict[str, str] = {
-    "rotor_drag": "fly speed sweeps from hover to 8 m/s in several headings",
-    "body_drag": "fly speed sweeps from hover to 8 m/s in several headings",
-    "isotropic_drag": "fly speed sweeps from hover to 8 m/s in several headings",
-    "wind": "fly out and back along at least two crossing headings at the same speed",
-    "ground_effect": "fly altitude holds at 0.05, 0.1, 0.2 and 0.5 m above flat ground",
-    "battery_sag": "log battery voltage over a long flight (several minutes of hover)",
-    "payload": "hover and fly vertical steps (climb and descend at 1-2 m/s)",
-    "command_delay": _STEPS,
-    "motor_lag": _STEPS,
-    "flight_control": _STEPS,
+    **{n: c.EXCITE for n, c in EFFECT_CLASSES.items() if c.ROLE in DIAGNOSED_ROLES},
+    FLIGHT_CONTROL: EFFECT_CLASSES["command_delay"].EXCITE,
+}
+_NEEDS: dict[str, tuple[str, ...]] = {
+    **{n: c.NEEDS for n, c in EFFECT_CLASSES.items() if c.ROLE in DIAGNOSED_ROLES},
+    FLIGHT_CONTROL: FLIGHT_CONTROL_NEEDS,
 }
 
 
@@ -48,85 +49,114 @@ class NotIdentifiable:
     flight: str
 
 
-def check_identifiability(logs: Sequence[FlightLog]) -> tuple[NotIdentifiable, ...]:
-    """The causes that ``logs`` cannot identify (empty when all can be)."""
-    out: list[NotIdentifiable] = []
-    if not all(log.has("thrust_n") for log in logs):
-        for name in FORCE_CAUSES:
-            out.append(
-                NotIdentifiable(
-                    name,
-                    "no thrust_n column: the force residual cannot be formed",
-                    "log total rotor thrust (from motor RPM telemetry and the thrust coefficient)",
-                )
-            )
-    else:
-        out.extend(_force_checks(logs))
-    steps = sum(_setpoint_steps(log) for log in logs)
-    if steps < MIN_SETPOINT_STEPS:
-        for name in ("command_delay", "motor_lag", "flight_control"):
-            out.append(
-                NotIdentifiable(
-                    name,
-                    f"only {steps} setpoint steps larger than {MIN_SETPOINT_STEP_MPS} m/s",
-                    FLIGHT_FOR[name],
-                )
-            )
-    return tuple(out)
+# A check returns None when the logs meet the requirement, else (reason, fix or None: the
+# effect's own excitation flight).
+Check = Callable[[Sequence[FlightLog]], tuple[str, str | None] | None]
 
 
-def _force_checks(logs: Sequence[FlightLog]) -> list[NotIdentifiable]:
-    out = []
-    vel = np.vstack([log.stack("vel_n_mps", "vel_e_mps") for log in logs])
-    speed = np.hypot(vel[:, 0], vel[:, 1])
-    span = float(np.ptp(speed))
-    if span < MIN_SPEED_SPAN_MPS:
-        for name in ("rotor_drag", "body_drag", "isotropic_drag"):
-            out.append(
-                NotIdentifiable(
-                    name,
-                    f"horizontal speed spans only {span:.1f} m/s",
-                    FLIGHT_FOR[name],
-                )
+def check_identifiability(
+    logs: Sequence[FlightLog], known: Collection[str] = ()
+) -> tuple[NotIdentifiable, ...]:
+    """The causes that ``logs`` cannot identify (empty when all can be); ``known``: effects the
+    config already has (an effect that acts through drag is identifiable only if a drag is
+    known or identifiable). Requirements are checked in the order of :data:`CHECKS`; a cause
+    is listed once, with the first requirement it misses."""
+    out: dict[str, NotIdentifiable] = {}
+    for requirement, check in CHECKS.items():
+        needing = [n for n, needs in _NEEDS.items() if requirement in needs and n not in out]
+        if not needing:
+            continue
+        failed = check(logs)
+        if failed is None:
+            continue
+        reason, fix = failed
+        for name in needing:
+            out[name] = NotIdentifiable(name, reason, fix or FLIGHT_FOR[name])
+    for name, cls in EFFECT_CLASSES.items():
+        through = cls.ACTS_THROUGH
+        if (
+            cls.ROLE not in DIAGNOSED_ROLES
+            or not through
+            or name in out
+            or set(through) & set(known)
+        ):
+            continue
+        if all(t in out for t in through):
+            # without identifiable drag it would carry the drag fit under another name (issue 18)
+            out[name] = NotIdentifiable(
+                name,
+                f"{name} acts through drag, which this flight cannot identify",
+                f"{FLIGHT_FOR[cls.FIT_WITH or through[0]]}; {FLIGHT_FOR[name]}",
             )
-    moving = vel[speed > 1.0]
+    return tuple(out.values())
+
+
+def _thrust(logs: Sequence[FlightLog]) -> tuple[str, str | None] | None:
+    if all(log.has("thrust_n") for log in logs):
+        return None
+    return (
+        "no thrust_n column: the force residual cannot be formed",
+        "log total rotor thrust (from motor RPM telemetry and the thrust coefficient)",
+    )
+
+
+def _horizontal_velocity(logs: Sequence[FlightLog]) -> np.ndarray:
+    return np.vstack([log.stack("vel_n_mps", "vel_e_mps") for log in logs])
+
+
+def _speed_span(logs: Sequence[FlightLog]) -> tuple[str, str | None] | None:
+    vel = _horizontal_velocity(logs)
+    span = float(np.ptp(np.hypot(vel[:, 0], vel[:, 1])))
+    if span >= MIN_SPEED_SPAN_MPS:
+        return None
+    return f"horizontal speed spans only {span:.1f} m/s", None
+
+
+def _crossing_headings(logs: Sequence[FlightLog]) -> tuple[str, str | None] | None:
+    vel = _horizontal_velocity(logs)
+    moving = vel[np.hypot(vel[:, 0], vel[:, 1]) > 1.0]
     spread = 0.0
     if len(moving) > 10:
         dirs = moving / np.linalg.norm(moving, axis=1, keepdims=True)
         eig = np.linalg.eigvalsh(dirs.T @ dirs / len(dirs))
         spread = float(eig[0] / eig[1])
-    if spread < MIN_HEADING_SPREAD:
-        out.append(
-            NotIdentifiable(
-                "wind",
-                "flight directions do not cover two crossing headings",
-                FLIGHT_FOR["wind"],
-            )
-        )
+    if spread >= MIN_HEADING_SPREAD:
+        return None
+    return "flight directions do not cover two crossing headings", None
+
+
+def _near_ground(logs: Sequence[FlightLog]) -> tuple[str, str | None] | None:
     alt = np.concatenate([-log["pos_d_m"] for log in logs])
     low = alt[(alt > 0.01) & (alt < NEAR_GROUND_M)]
-    if len(low) < 20 or np.ptp(low) < MIN_NEAR_GROUND_SPAN_M:
-        out.append(
-            NotIdentifiable(
-                "ground_effect",
-                f"no altitude change below {NEAR_GROUND_M} m",
-                FLIGHT_FOR["ground_effect"],
-            )
-        )
+    if len(low) >= 20 and np.ptp(low) >= MIN_NEAR_GROUND_SPAN_M:
+        return None
+    return f"no altitude change below {NEAR_GROUND_M} m", None
+
+
+def _voltage_drop(logs: Sequence[FlightLog]) -> tuple[str, str | None] | None:
     volts = [log["battery_v"] for log in logs if log.has("battery_v")]
     drop = max((float(np.ptp(v)) for v in volts), default=0.0)
-    if drop < MIN_VOLTAGE_DROP_V:
-        what = "no battery_v column" if not volts else "battery voltage does not change"
-        out.append(
-            NotIdentifiable(
-                "battery_sag",
-                what,
-                FLIGHT_FOR["battery_sag"],
-            )
-        )
-    return out
+    if drop >= MIN_VOLTAGE_DROP_V:
+        return None
+    return ("no battery_v column" if not volts else "battery voltage does not change"), None
 
 
-def _setpoint_steps(log: FlightLog) -> int:
-    cmd = log.stack("cmd_vel_n_mps", "cmd_vel_e_mps", "cmd_vel_d_mps")
-    return int(np.sum(np.linalg.norm(np.diff(cmd, axis=0), axis=1) > MIN_SETPOINT_STEP_MPS))
+def _setpoint_steps(logs: Sequence[FlightLog]) -> tuple[str, str | None] | None:
+    steps = 0
+    for log in logs:
+        cmd = log.stack("cmd_vel_n_mps", "cmd_vel_e_mps", "cmd_vel_d_mps")
+        steps += int(np.sum(np.linalg.norm(np.diff(cmd, axis=0), axis=1) > MIN_SETPOINT_STEP_MPS))
+    if steps >= MIN_SETPOINT_STEPS:
+        return None
+    return f"only {steps} setpoint steps larger than {MIN_SETPOINT_STEP_MPS} m/s", None
+
+
+# One check per multirotor requirement, in the order they are tried.
+CHECKS: dict[str, Check] = {
+    "thrust": _thrust,
+    "speed_span": _speed_span,
+    "crossing_headings": _crossing_headings,
+    "near_ground": _near_ground,
+    "voltage_drop": _voltage_drop,
+    "setpoint_steps": _setpoint_steps,
+}

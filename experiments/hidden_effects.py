@@ -12,9 +12,10 @@ from diagnosis.excitation import ExcitationSchedule, load_schedule
 from diagnosis.fly_schedule import fly_schedule
 from flightlog.schema import FlightLog, read_flight_log, write_flight_log
 from vehicle_sim import load_sim_config
+from vehicle_sim.effects import EFFECT_CLASSES
+from vehicle_sim.effects.base import effect_as_mapping
 
 MISSION = Path(__file__).resolve().parents[1] / "missions" / "excite_full.toml"
-DEFAULT_ROTOR_DRAG = {"k_n_per_mps": [0.35, 0.35, 0.1]}
 
 
 def schedule() -> ExcitationSchedule:
@@ -23,33 +24,14 @@ def schedule() -> ExcitationSchedule:
 
 def draw(name: str, rng: np.random.Generator) -> tuple[dict, dict]:
     """(truth effects, effects of the config given to the diagnosis) for hidden effect ``name``,
-    parameters drawn within physical ranges."""
-    u = rng.uniform
-    if name == "rotor_drag":
-        return {name: {"k_n_per_mps": [u(0.2, 0.6), u(0.2, 0.6), u(0.05, 0.2)]}}, {}
-    if name == "body_drag":
-        return {name: {"c_n_per_mps2": [u(0.02, 0.08), u(0.02, 0.08), u(0.03, 0.1)]}}, {}
-    if name == "isotropic_drag":
-        return {name: {"k_n_per_mps2": u(0.02, 0.08)}}, {}
-    if name == "wind":
-        speed, heading = u(2.0, 6.0), u(0.0, 2.0 * np.pi)
-        wind = [speed * np.cos(heading), speed * np.sin(heading), 0.0]
-        base = {"rotor_drag": DEFAULT_ROTOR_DRAG}
-        return {**base, "wind": {"vel_ned_mps": wind}}, base
-    if name == "gusts":
-        base = {"rotor_drag": DEFAULT_ROTOR_DRAG}
-        return {**base, "gusts": {"intensity_mps": u(1.0, 2.5), "length_scale_m": 20.0}}, base
-    if name == "payload":
-        return {name: {"mass_ratio": u(1.1, 1.5)}}, {}
-    if name == "battery_sag":
-        return {name: {"full_flight_time_s": u(300.0, 900.0), "max_thrust_loss": u(0.15, 0.35)}}, {}
-    if name == "ground_effect":
-        return {name: {"max_gain": u(0.15, 0.4), "rotor_radius_m": u(0.11, 0.16)}}, {}
-    if name == "motor_lag":
-        return {name: {"tau_s": u(0.03, 0.08)}}, {}
-    if name == "command_delay":
-        return {name: {"delay_s": u(0.05, 0.3)}}, {}
-    raise ValueError(name)
+    parameters drawn from the effect's typical ranges (``Effect.draw_typical``). An effect that
+    acts only through drag comes with the drag it is fitted with (at its defaults) in both."""
+    cls = EFFECT_CLASSES[name]
+    base = {}
+    if cls.ACTS_THROUGH:
+        through = cls.FIT_WITH or cls.ACTS_THROUGH[0]
+        base = {through: effect_as_mapping(EFFECT_CLASSES[through]())}
+    return {**base, name: cls.draw_typical(rng)}, base
 
 
 def fly_hidden(truth: dict, tmp_path: Path, seed: int) -> list[FlightLog]:

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from vehicle_sim.effects import EFFECT_NAMES, Effect, make_effect
+from vehicle_sim.effects import EFFECT_CLASSES, EFFECT_NAMES, Effect, make_effect
 from vehicle_sim.effects.base import SimConfigError
 
 GRAVITY_MPS2 = 9.80665
@@ -118,14 +118,13 @@ class SimConfig:
         dup = sorted({n for n in names if names.count(n) > 1})
         if dup:
             raise SimConfigError(f"effects.{dup[0]}: given twice; keep one {dup[0]} entry")
-        if ("wind" in names or "gusts" in names) and not (
-            {"rotor_drag", "body_drag", "isotropic_drag"} & set(names)
-        ):
-            which = "wind" if "wind" in names else "gusts"
-            raise SimConfigError(
-                f"effects.{which}: acts only through drag; also enable rotor_drag, body_drag "
-                "or isotropic_drag"
-            )
+        for name, cls in EFFECT_CLASSES.items():
+            through = cls.ACTS_THROUGH
+            if name in names and through and not set(through) & set(names):
+                raise SimConfigError(
+                    f"effects.{name}: acts only through drag; also enable "
+                    f"{', '.join(through[:-1])} or {through[-1]}"
+                )
         v = self.vehicle
         if v.hover_thrust_norm > 0.8:
             raise SimConfigError(

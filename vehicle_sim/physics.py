@@ -11,7 +11,8 @@ Plant parameters ``pp`` (shape (N_PLANT,)): see the ``P_*`` indices. Rotor geome
 (shape (4, 3), FRD hub positions [m]) and ``spin`` (shape (4,), +1 ccw seen from above).
 Effect vector ``ep`` (shape (N_EFFECT,)): the ``E_*`` indices below, filled by the effect classes
 (:mod:`vehicle_sim.effects`); all numba-visible constants live in this file so that numba's
-per-file cache never goes stale.
+per-file cache never goes stale. Each effect class also holds the same physics in NumPy for the
+diagnosis; tests/diagnosis/test_effect_registry.py checks the two agree for every effect.
 Aux output ``aux`` (shape (N_AUX,)): kinematic acceleration NED at the end of the step, ground
 contact flag, nominal and true total thrust [N], and the last motor commands.
 

@@ -30,7 +30,7 @@ from experiments.rover.localisation import LocalisationErrorConfig
 from planners.rover.path import TaughtPath
 from planners.rover.speed_scheduler import TABLE_I, SpeedSchedulerConfig
 from planners.rover.unicycle_nmpc import UnicycleNmpcConfig
-from vehicle_sim.rover.effects import Slope, SurfacePatch, WheelSlip, gravel_patch, mud_patch
+from vehicle_sim.effects import Slope, SurfacePatch, WheelSlip, gravel_patch, mud_patch
 
 _TAN15 = math.tan(math.radians(15.0))
 

@@ -19,18 +19,27 @@ from typing import ClassVar
 import numpy as np
 
 from vehicle_sim.effects import layout
-from vehicle_sim.effects.base import ParamSpec, validate_effect
+from vehicle_sim.effects.base import Effect, ParamSpec, Search, validate_effect
 
 
 @dataclass(frozen=True)
-class BatterySag:
+class BatterySag(Effect):
     """``full_flight_time_s`` (hover endurance, s) and ``max_thrust_loss`` (fraction when empty)."""
 
     name: ClassVar[str] = "battery_sag"
     PARAMS: ClassVar[tuple[ParamSpec, ...]] = (
-        ParamSpec("full_flight_time_s", "s", 1, 10.0, 36000.0, "hover time from full to empty"),
-        ParamSpec("max_thrust_loss", "fraction", 1, 0.0, 0.6, "fraction of thrust lost when empty"),
-    )
+        ParamSpec(
+            "full_flight_time_s", "s", 1, 10.0, 36000.0, "hover time from full to empty",
+            typical=(300.0, 900.0),
+        ),
+        ParamSpec(
+            "max_thrust_loss", "fraction", 1, 0.0, 0.6, "fraction of thrust lost when empty",
+            Search(0.0, 0.6, start=0.1), typical=(0.15, 0.35),
+        ),
+    )  # fmt: skip
+    ROLE: ClassVar[str] = "force"
+    NEEDS: ClassVar[tuple[str, ...]] = ("thrust", "voltage_drop")
+    EXCITE: ClassVar[str] = "log battery voltage over a long flight (several minutes of hover)"
     full_flight_time_s: float = 900.0
     max_thrust_loss: float = 0.2
 
@@ -40,3 +49,6 @@ class BatterySag:
     def pack(self, ep: np.ndarray) -> None:
         ep[layout.BATTERY_TIME] = self.full_flight_time_s
         ep[layout.BATTERY_LOSS] = self.max_thrust_loss
+
+    def thrust_factor(self, alt_m: np.ndarray, discharge: np.ndarray) -> np.ndarray:
+        return 1.0 - self.max_thrust_loss * discharge

@@ -13,16 +13,30 @@ from typing import ClassVar
 import numpy as np
 
 from vehicle_sim.effects import layout
-from vehicle_sim.effects.base import ParamSpec, validate_effect
+from vehicle_sim.effects.base import Effect, ParamSpec, Search, validate_effect
 
 
 @dataclass(frozen=True)
-class CommandDelay:
+class CommandDelay(Effect):
     """Setpoint latency ``delay_s`` in s."""
 
     name: ClassVar[str] = "command_delay"
     PARAMS: ClassVar[tuple[ParamSpec, ...]] = (
-        ParamSpec("delay_s", "s", 1, 0.0, 2.0, "setpoint latency"),
+        ParamSpec(
+            "delay_s",
+            "s",
+            1,
+            0.0,
+            2.0,
+            "setpoint latency",
+            Search(0.0, 1.2, grid=13),
+            typical=(0.05, 0.3),
+        ),
+    )
+    ROLE: ClassVar[str] = "command"
+    NEEDS: ClassVar[tuple[str, ...]] = ("setpoint_steps",)
+    EXCITE: ClassVar[str] = (
+        "fly sharp velocity setpoint steps (e.g. 0 -> 3 m/s and back, several headings)"
     )
     delay_s: float = 0.1
 

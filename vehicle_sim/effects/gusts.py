@@ -20,18 +20,30 @@ from typing import ClassVar
 import numpy as np
 
 from vehicle_sim.effects import layout
-from vehicle_sim.effects.base import ParamSpec, validate_effect
+from vehicle_sim.effects.base import Effect, ParamSpec, validate_effect
 
 
 @dataclass(frozen=True)
-class Gusts:
+class Gusts(Effect):
     """Dryden turbulence: ``intensity_mps`` (std per axis), ``length_scale_m``."""
 
     name: ClassVar[str] = "gusts"
     PARAMS: ClassVar[tuple[ParamSpec, ...]] = (
-        ParamSpec("intensity_mps", "m/s", 1, 0.0, 20.0, "turbulence std per NED axis"),
+        ParamSpec(
+            "intensity_mps",
+            "m/s",
+            1,
+            0.0,
+            20.0,
+            "turbulence std per NED axis",
+            typical=(1.0, 2.5),
+        ),
         ParamSpec("length_scale_m", "m", 1, 0.5, 2000.0, "Dryden turbulence length scale"),
     )
+    ROLE: ClassVar[str] = "disturbance"
+    NEEDS: ClassVar[tuple[str, ...]] = ("thrust", "speed_span")
+    EXCITE: ClassVar[str] = "hover and fly slow legs for minutes in the disturbed air"
+    ACTS_THROUGH: ClassVar[tuple[str, ...]] = ("rotor_drag", "body_drag", "isotropic_drag")
     intensity_mps: float = 1.0
     length_scale_m: float = 20.0
 

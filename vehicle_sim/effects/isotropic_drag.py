@@ -18,17 +18,24 @@ from typing import ClassVar
 import numpy as np
 
 from vehicle_sim.effects import layout
-from vehicle_sim.effects.base import ParamSpec, validate_effect
+from vehicle_sim.effects.base import Effect, ParamSpec, Search, validate_effect
 
 
 @dataclass(frozen=True)
-class IsotropicDrag:
+class IsotropicDrag(Effect):
     """Drag along the airspeed; ``k_n_per_mps2`` in N/(m/s)^2."""
 
     name: ClassVar[str] = "isotropic_drag"
     PARAMS: ClassVar[tuple[ParamSpec, ...]] = (
-        ParamSpec("k_n_per_mps2", "N/(m/s)^2", 1, 0.0, 10.0, "drag along the airspeed"),
-    )
+        ParamSpec(
+            "k_n_per_mps2", "N/(m/s)^2", 1, 0.0, 10.0, "drag along the airspeed",
+            Search(0.0, 10.0, start=0.03, warm=True),
+            typical=(0.02, 0.08),
+        ),
+    )  # fmt: skip
+    ROLE: ClassVar[str] = "force"
+    NEEDS: ClassVar[tuple[str, ...]] = ("thrust", "speed_span")
+    EXCITE: ClassVar[str] = "fly speed sweeps from hover to 8 m/s in several headings"
     k_n_per_mps2: float = 0.03
 
     def __post_init__(self) -> None:
@@ -36,3 +43,7 @@ class IsotropicDrag:
 
     def pack(self, ep: np.ndarray) -> None:
         ep[layout.ISO_DRAG_K] = self.k_n_per_mps2
+
+    def drag_force_body(self, air_body_mps: np.ndarray) -> np.ndarray:
+        speed = np.linalg.norm(air_body_mps, axis=1, keepdims=True)
+        return -self.k_n_per_mps2 * speed * air_body_mps

@@ -13,16 +13,25 @@ from typing import ClassVar
 import numpy as np
 
 from vehicle_sim.effects import layout
-from vehicle_sim.effects.base import ParamSpec, validate_effect
+from vehicle_sim.effects.base import Effect, ParamSpec, Search, validate_effect
 
 
 @dataclass(frozen=True)
-class MotorLag:
+class MotorLag(Effect):
     """True motor time constant ``tau_s`` in s."""
 
     name: ClassVar[str] = "motor_lag"
     PARAMS: ClassVar[tuple[ParamSpec, ...]] = (
-        ParamSpec("tau_s", "s", 1, 0.005, 0.5, "first-order motor time constant"),
+        ParamSpec(
+            "tau_s", "s", 1, 0.005, 0.5, "first-order motor time constant",
+            Search(0.008, 0.5, grid=10, geometric=True),
+            typical=(0.03, 0.08),
+        ),
+    )  # fmt: skip
+    ROLE: ClassVar[str] = "command"
+    NEEDS: ClassVar[tuple[str, ...]] = ("setpoint_steps",)
+    EXCITE: ClassVar[str] = (
+        "fly sharp velocity setpoint steps (e.g. 0 -> 3 m/s and back, several headings)"
     )
     tau_s: float = 0.05
 

@@ -14,17 +14,29 @@ from typing import ClassVar
 import numpy as np
 
 from vehicle_sim.effects import layout
-from vehicle_sim.effects.base import ParamSpec, validate_effect
+from vehicle_sim.effects.base import Effect, ParamSpec, Search, validate_effect
 
 
 @dataclass(frozen=True)
-class Payload:
+class Payload(Effect):
     """True mass / nominal mass, ``mass_ratio`` (dimensionless)."""
 
     name: ClassVar[str] = "payload"
     PARAMS: ClassVar[tuple[ParamSpec, ...]] = (
-        ParamSpec("mass_ratio", "ratio", 1, 0.5, 1.8, "true mass / nominal mass"),
+        ParamSpec(
+            "mass_ratio",
+            "ratio",
+            1,
+            0.5,
+            1.8,
+            "true mass / nominal mass",
+            Search(0.5, 1.8, 1.0),
+            typical=(1.1, 1.5),
+        ),
     )
+    ROLE: ClassVar[str] = "force"
+    NEEDS: ClassVar[tuple[str, ...]] = ("thrust",)
+    EXCITE: ClassVar[str] = "hover and fly vertical steps (climb and descend at 1-2 m/s)"
     mass_ratio: float = 1.2
 
     def __post_init__(self) -> None:
@@ -32,3 +44,6 @@ class Payload:
 
     def pack(self, ep: np.ndarray) -> None:
         ep[layout.PAYLOAD_RATIO] = self.mass_ratio
+
+    def mass_ratio_of(self) -> float:
+        return self.mass_ratio

@@ -23,11 +23,11 @@ from typing import ClassVar
 import numpy as np
 
 from vehicle_sim.effects import layout
-from vehicle_sim.effects.base import ParamSpec, validate_effect
+from vehicle_sim.effects.base import Effect, ParamSpec, validate_effect
 
 
 @dataclass(frozen=True)
-class WindField:
+class WindField(Effect):
     """A jet of wind ``vel_ned_mps`` [m/s] centred on a horizontal line (see module doc)."""
 
     name: ClassVar[str] = "wind_field"
@@ -38,6 +38,10 @@ class WindField:
         ParamSpec("heading_rad", "rad", 1, -math.pi, math.pi, "centre line direction (0 north)"),
         ParamSpec("half_width_m", "m", 1, 0.1, 1e3, "1/e half-width across the line"),
     )
+    ROLE: ClassVar[str] = "disturbance"
+    NEEDS: ClassVar[tuple[str, ...]] = ("thrust", "crossing_headings")
+    EXCITE: ClassVar[str] = "fly repeated passes across the centre line at one speed"
+    ACTS_THROUGH: ClassVar[tuple[str, ...]] = ("rotor_drag", "body_drag", "isotropic_drag")
     vel_ned_mps: tuple[float, float, float] = (0.0, 4.0, 0.0)
     center_n_m: float = 10.0
     center_e_m: float = 0.0
@@ -53,3 +57,11 @@ class WindField:
         ep[layout.FIELD_CENTER_NE + 1] = self.center_e_m
         ep[layout.FIELD_HEADING] = self.heading_rad
         ep[layout.FIELD_HALF_WIDTH] = self.half_width_m
+
+    def air_velocity_ned(self, pos_ned_m: np.ndarray) -> np.ndarray:
+        h = self.heading_rad
+        d = -(pos_ned_m[:, 0] - self.center_n_m) * math.sin(h) + (
+            pos_ned_m[:, 1] - self.center_e_m
+        ) * math.cos(h)
+        weight = np.exp(-(d / self.half_width_m) * (d / self.half_width_m))
+        return weight[:, None] * np.asarray(self.vel_ned_mps)

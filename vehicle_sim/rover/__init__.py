@@ -8,7 +8,7 @@ In-process API::
     sim.step(0.1); print(sim.state)
 """
 
-from vehicle_sim.rover.effects import (
+from vehicle_sim.effects import (
     ROVER_EFFECT_NAMES,
     RoverPayload,
     Slope,

@@ -15,8 +15,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from vehicle_sim.effects import RoverPayload
+from vehicle_sim.effects.terrain import NEUTRAL, TerrainEffect
 from vehicle_sim.rover.control import RateController
-from vehicle_sim.rover.effects import NEUTRAL, RoverPayload, TerrainEffect
 from vehicle_sim.rover.presets import RoverPreset
 
 
@@ -49,7 +50,8 @@ class RoverSim:
 
     Args:
         preset: the robot.
-        effects: rover effects (vehicle_sim.rover.effects); rover_payload scales lags/limits.
+        effects: rover effects (vehicle_sim.effects with VEHICLE "rover"); rover_payload
+            scales lags and limits.
         seed: seed of the rate-measurement noise.
         physics_dt_s: integration step [s].
         rate_noise_std: std of the speed [m/s] and yaw-rate [rad/s] measurement noise.
