@@ -57,6 +57,9 @@ class ClutterSettings:
         shortest_detour: a blocked stretch of reference becomes the shortest detour around
             the known obstacles before it is pushed out (our choice); off: only pushed out,
             as the paper's replanner.
+        detour_rejoin_m: the detour rejoins the reference this far [m] ahead (or at the first
+            clear waypoint beyond): twice the sensing range, just beyond what the map can
+            know (20 m flew the same on a second forest).
         rejoin_m: a regenerated reference runs straight from the vehicle to the initial one
             this far [m] ahead of the vehicle's projection on it, then along it.
     """
@@ -72,6 +75,7 @@ class ClutterSettings:
     max_scan_age_s: float = 0.5
     rejoin_m: float = 1.0
     shortest_detour: bool = True
+    detour_rejoin_m: float = 10.0
 
 
 class ClutterNmpc:
@@ -208,7 +212,7 @@ class ClutterNmpc:
             self._map_version = self.obstacle_map.version
             return
         if s.shortest_detour:
-            self._detour(here, reach)
+            self._detour(here, int(np.ceil(s.detour_rejoin_m / s.replanner.waypoint_spacing_m)))
         self._set_waypoints(self._waypoints, window, _REFINE_ITERATIONS)
         self._s_m = self.path.project(ref_point, max(0.0, s_old - 3.0), s_old + 3.0)
 

@@ -6,7 +6,7 @@ Our choice, not [Kulathunga23]'s: the paper pushes the blocked reference sideway
 where it was, and leaves it to regeneration to escape when that fails. Planning the detour as
 a shortest path instead flies fewer metres and never chooses the side with less room. Method:
 Dijkstra on an 8-connected grid over the box spanned by the two points (plus ``margin_m``),
-a cell blocked when its centre is closer than ``clearance_m`` to a map point's surface; the
+a cell blocked when no point of it can keep ``clearance_m`` from a map point's surface; the
 cell path is then shortened by line of sight (each vertex joins the farthest later vertex it
 sees with the clearance kept along the segment), A* with post-smoothing as [Nash07]
 describes it. Unknown space counts as free (the map holds only what was
@@ -37,7 +37,8 @@ def shortest_detour(
     margin_m: float = 4.0,
 ) -> np.ndarray | None:
     """The vertices (k, 3) [m] of the shortest path from ``start_ned_m`` to ``end_ned_m`` (3,)
-    that keeps ``clearance_m`` from the map's obstacles, at the start's altitude; None when the
+    that keeps ``clearance_m`` from the map's obstacles along its segments (its corners, grid
+    cells, to within half a cell diagonal), at the start's altitude; None when the
     box holds no such path. The two end cells count as free (the caller's points may be
     inside the clearance: the vehicle flies there already, or the end is yet unseen)."""
     a = np.asarray(start_ned_m, dtype=float)
@@ -48,7 +49,10 @@ def shortest_detour(
     centres = np.column_stack(
         [lo[0] + ii.ravel() * cell_m, lo[1] + jj.ravel() * cell_m, np.full(ii.size, a[2])]
     )
-    free = obstacle_map.clearance_m(centres) >= clearance_m
+    # a cell is free when some point of it may keep the clearance (its centre within half a
+    # diagonal of it): a gap just wide enough is not lost between cell centres
+    slack = cell_m / np.sqrt(2.0)
+    free = obstacle_map.clearance_m(centres) >= clearance_m - slack
     first, last = (_cell(p, lo, cell_m, shape) for p in (a, b))
     free[[first, last]] = True
     graph = _grid_graph(free, shape, cell_m)
@@ -60,7 +64,7 @@ def shortest_detour(
         cells.append(int(pred[cells[-1]]))
     pts = centres[cells[::-1]]
     pts[0], pts[-1] = a, np.array([b[0], b[1], a[2]])
-    return _shortcut(pts, obstacle_map, clearance_m)
+    return _shortcut(pts, obstacle_map, clearance_m, slack)
 
 
 def _cell(point: np.ndarray, lo: np.ndarray, cell_m: float, shape: np.ndarray) -> int:
@@ -84,30 +88,46 @@ def _grid_graph(free: np.ndarray, shape: np.ndarray, cell_m: float) -> coo_matri
     return coo_matrix((w, (r, c)), shape=(free.size, free.size))
 
 
-def _shortcut(pts: np.ndarray, obstacle_map: ClearanceMap, clearance_m: float) -> np.ndarray:
+def _shortcut(
+    pts: np.ndarray, obstacle_map: ClearanceMap, clearance_m: float, slack_m: float
+) -> np.ndarray:
     """Line-of-sight shortening: from each kept vertex, jump to the farthest vertex whose
     segment keeps the clearance (see _visible)."""
+    last = len(pts) - 1
     kept = [0]
-    while kept[-1] < len(pts) - 1:
+    while kept[-1] < last:
         i = kept[-1]
-        j = len(pts) - 1
-        while j > i + 1 and not _visible(pts[i], pts[j], obstacle_map, clearance_m):
+        j = last
+        while j > i + 1 and not _visible(pts, i, j, obstacle_map, clearance_m, slack_m):
             j -= 1
         kept.append(j)
     return pts[kept]
 
 
-def _visible(p: np.ndarray, q: np.ndarray, obstacle_map: ClearanceMap, clearance_m: float) -> bool:
-    """The segment p-q keeps the clearance, but within ``clearance_m`` of an end that is
-    itself inside it (such an end has to be left or reached through that stretch)."""
+def _visible(
+    pts: np.ndarray,
+    i: int,
+    j: int,
+    obstacle_map: ClearanceMap,
+    clearance_m: float,
+    slack_m: float,
+) -> bool:
+    """The segment from vertex i to vertex j keeps the clearance, except within
+    ``clearance_m`` of a vertex that is itself inside it: there it may be ``slack_m`` short
+    (a corner: a grid cell), or, at the path's two ends, no shorter than the end itself (an
+    end inside the clearance has to be left or reached through it)."""
+    p, q = pts[i], pts[j]
     length = float(np.linalg.norm(q - p))
     n = max(2, int(np.ceil(length / _CHECK_STEP_M)) + 1)
     along = np.linspace(0.0, length, n)
     samples = p + (along / max(length, 1e-9))[:, None] * (q - p)
     clear = obstacle_map.clearance_m(samples)
-    exempt = np.zeros(n, dtype=bool)
-    if clear[0] < clearance_m:
-        exempt |= along < clearance_m
-    if clear[-1] < clearance_m:
-        exempt |= along > length - clearance_m
-    return bool(np.all((clear >= clearance_m) | exempt))
+    needed = np.full(n, clearance_m)
+    for inside, near, end in (
+        (clear[0] < clearance_m, along < clearance_m, i == 0),
+        (clear[-1] < clearance_m, along > length - clearance_m, j == len(pts) - 1),
+    ):
+        if inside:
+            own = clear[0] if near[0] else clear[-1]
+            needed[near] = np.minimum(own, clearance_m - slack_m) if end else clearance_m - slack_m
+    return bool(np.all(clear >= needed - 1e-9))

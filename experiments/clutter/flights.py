@@ -11,7 +11,10 @@ Planners (``kind``):
     no_regeneration  the NMPC replanner without regeneration and without GP (their ref. 9)
     rrtstar          OMPL's RRT* path in the known forest, tracked by the proposed planner's
                      NMPC (with its GP) that also keeps d_o from the known trunks: a global
-                     planner with the full map, compared path against path
+                     planner with the full map, stronger than the paper's baseline
+    rrtstar_online   the paper's RRT* row: OMPL's RRT* re-planned in the sensed map whenever
+                     the path ahead is blocked, tracked by the same NMPC (with its GP and
+                     d_o) (experiments/clutter/online_rrtstar.py)
     pd               the PD regulator on the initial (straight) reference
 """
 
@@ -32,6 +35,7 @@ from companion.mission_reference import reference_of
 from companion.nmpc_planner import CompanionNmpc, NmpcSettings
 from companion.planner_registry import CLUTTER_N_OBSTACLES, CLUTTER_SAFE_DISTANCE_M
 from companion.runner import RunnerConfig, fly_mission
+from experiments.clutter.online_rrtstar import OnlineRrtStar
 from experiments.clutter.scenario import ALTITUDE_M, shifted
 from flightlog.schema import FlightLog
 from gp.model_io import ResidualModel
@@ -42,7 +46,13 @@ from planners.pd_regulator import PdGains, PdRegulator
 from vehicle_sim import Simulator, load_sim_config
 
 PlannerKind = Literal[
-    "proposed", "nominal", "gp_no_regeneration", "no_regeneration", "rrtstar", "pd"
+    "proposed",
+    "nominal",
+    "gp_no_regeneration",
+    "no_regeneration",
+    "rrtstar_online",
+    "rrtstar",
+    "pd",
 ]
 RATE_HZ = 20.0  # [Kulathunga23] Table 3: s_t = 50 ms
 SPEED_MPS = 1.5  # [Kulathunga23]: v_max 1.5 m/s in cluttered flight
@@ -83,9 +93,14 @@ def fly_pair(
     seed: int = 0,
     residual_model: ResidualModel | None = None,
     rrt_path_ne_m: np.ndarray | None = None,
+    bounds_ne_m: tuple[float, float, float, float] | None = None,
     settle_s: float = 90.0,
 ) -> ClutterFlight:
-    """Fly ``kind`` from ``start_ne_m`` to ``goal_ne_m`` (2,) [m] in ``world``."""
+    """Fly ``kind`` from ``start_ne_m`` to ``goal_ne_m`` (2,) [m] in ``world``.
+
+    ``rrt_path_ne_m`` (k, 2) [m]: the known-forest RRT* path ``rrtstar`` tracks;
+    ``bounds_ne_m``: (north_min, north_max, east_min, east_max) [m] the online ``rrtstar_online``
+    samples in (default: the world's extent plus 2 m)."""
     start = np.asarray(start_ne_m, dtype=float)
     goal = np.asarray(goal_ne_m, dtype=float) - start
     mission = Mission(
@@ -97,10 +112,17 @@ def fly_pair(
         goal_tolerance_m=0.5,
     )
     reference = reference_of(mission)
-    planner = _planner(kind, residual_model)
+    if bounds_ne_m is None:
+        bounds_ne_m = world_bounds_ne_m(world)
+    bounds = (
+        bounds_ne_m[0] - start[0],
+        bounds_ne_m[1] - start[0],
+        bounds_ne_m[2] - start[1],
+        bounds_ne_m[3] - start[1],
+    )
+    planner = _planner(kind, residual_model, bounds)
     if kind == "rrtstar":
         planner.set_obstacles(shifted(world, start))
-    if kind == "rrtstar":
         if rrt_path_ne_m is None:
             raise ValueError("the rrtstar flight needs rrt_path_ne_m (from plan_rrtstar)")
         pts = np.column_stack([rrt_path_ne_m - start, np.full(len(rrt_path_ne_m), -ALTITUDE_M)])
@@ -151,10 +173,29 @@ class _Crashed(Exception):
     """The vehicle touched an obstacle (the simulator disarmed it)."""
 
 
-def _planner(kind: PlannerKind, residual_model: ResidualModel | None):
+def world_bounds_ne_m(world: ObstacleWorld, margin_m: float = 2.0) -> tuple[float, ...]:
+    """(north_min, north_max, east_min, east_max) [m] of the obstacles' centres plus
+    ``margin_m``."""
+    centres = np.array([_centre_ne(o) for o in world.obstacles]).reshape(-1, 2)
+    lo, hi = centres.min(axis=0) - margin_m, centres.max(axis=0) + margin_m
+    return (float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1]))
+
+
+def _centre_ne(obstacle) -> tuple[float, float]:
+    centre = getattr(obstacle, "center_ne_m", None)
+    return tuple(centre if centre is not None else obstacle.center_ned_m[:2])
+
+
+def _planner(kind: PlannerKind, residual_model: ResidualModel | None, bounds_ne_m):
     if kind == "pd":
         return PdRegulator(PdGains(max_speed_mps=SPEED_MPS))
-    clutter = kind in ("proposed", "nominal", "gp_no_regeneration", "no_regeneration")
+    clutter = kind in (
+        "proposed",
+        "nominal",
+        "gp_no_regeneration",
+        "no_regeneration",
+        "rrtstar_online",
+    )
     settings = NmpcSettings(
         speed_limit_mps=SPEED_MPS,
         period_s=1.0 / RATE_HZ,
@@ -163,9 +204,11 @@ def _planner(kind: PlannerKind, residual_model: ResidualModel | None):
         # from a trunk's surface: d_o plus a map point's radius, as the sensing planners keep
         safe_distance_m=CLUTTER_SAFE_DISTANCE_M + (0.0 if clutter else POINT_RADIUS_M),
     )
-    with_gp = kind in ("proposed", "gp_no_regeneration", "rrtstar")
+    with_gp = kind in ("proposed", "gp_no_regeneration", "rrtstar_online", "rrtstar")
     nmpc = CompanionNmpc(settings, residual_model if with_gp else None)
     if not clutter:
         return nmpc
+    if kind == "rrtstar_online":
+        return OnlineRrtStar(nmpc, bounds_ne_m, ClutterSettings(max_speed_mps=SPEED_MPS))
     regenerate = kind in ("proposed", "nominal")
     return ClutterNmpc(nmpc, ClutterSettings(regenerate=regenerate, max_speed_mps=SPEED_MPS))

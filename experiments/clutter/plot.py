@@ -19,7 +19,8 @@ _STYLE = {
     "nominal": ("tab:purple", "proposed without GP"),
     "gp_no_regeneration": ("tab:cyan", "proposed without regeneration"),
     "no_regeneration": ("tab:blue", "NMPC replanner, no regeneration"),
-    "rrtstar": ("tab:orange", "RRT* (OMPL, known forest) + NMPC+GP tracking"),
+    "rrtstar_online": ("tab:orange", "RRT* (OMPL) re-planned in the sensed map + NMPC+GP"),
+    "rrtstar": ("tab:brown", "RRT* (OMPL) in the known forest + NMPC+GP"),
     "pd": ("tab:red", "PD on the initial reference"),
 }
 

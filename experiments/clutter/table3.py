@@ -33,6 +33,7 @@ PLANNERS: tuple[PlannerKind, ...] = (
     "nominal",
     "gp_no_regeneration",
     "no_regeneration",
+    "rrtstar_online",
     "rrtstar",
     "pd",
 )
@@ -91,7 +92,14 @@ def run_table3(config: Table3Config, progress: Callable[[str], None]) -> Table3R
                     progress(f"clutter: pair {i}: RRT* found no path")
                     continue
             f = fly_pair(
-                kind, scenario.world, start, goal, seed=i, residual_model=model, rrt_path_ne_m=rrt
+                kind,
+                scenario.world,
+                start,
+                goal,
+                seed=i,
+                residual_model=model,
+                rrt_path_ne_m=rrt,
+                bounds_ne_m=bounds,
             )
             flights[kind].append(f)
             progress(

@@ -41,8 +41,9 @@ def test_the_detour_keeps_the_clearance_and_is_near_the_shortest(seed):
     vertices = shortest_detour(a, b, m, clearance)
     assert vertices is not None
     np.testing.assert_allclose(vertices[[0, -1]], [a, b])
-    # every point keeps the clearance (the checks are 5 cm apart: a few mm may be lost)
-    assert m.clearance_m(_dense(vertices)).min() >= clearance - 0.01
+    # every point keeps the clearance, the corners (grid cells) to within half a cell
+    # diagonal; the checks are 5 cm apart: a few mm may be lost between them
+    assert m.clearance_m(_dense(vertices)).min() >= clearance - 0.2 / np.sqrt(2) - 0.01
     # tangent lines to the grown circle are the shortest way round: within a grid cell of it
     grown = radius + m.point_radius_m + clearance
     bound = 2 * np.hypot(5.0, grown - abs(offset)) + 0.1
