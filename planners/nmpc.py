@@ -115,13 +115,13 @@ class NmpcPlanner:
             x_now[i] = x_ref[0, i] + np.angle(np.exp(1j * (x_now[i] - x_ref[0, i])))
         cold_start = self._warm is None
         w0, guess = self._warm_start(grid, x_now, x_ref, u_ref[:-1])
-        slots = np.tile(UNUSED_SLOT, (cfg.n_obstacles, 1))
+        slots = np.tile(UNUSED_SLOT, (cfg.horizon_steps, cfg.n_obstacles, 1))
         if self.world is not None and cfg.n_obstacles:
             if self.world.clearance_m(self._positions(x_now[None, :]))[0] < 0.0:
                 self._warm = None
                 return self._safe("start inside an obstacle", start)
-            # Obstacles nearest to where the plan is expected to go (guess) and to the reference.
-            near = self._positions(np.vstack([guess[::2], x_ref[::4]]))
+            # each node's N_o obstacles nearest to where it is expected to be (eq. 4)
+            near = self._positions(guess[1:])
             slots = self.world.slots(near, cfg.n_obstacles, cfg.safe_distance_m)
         p = f.pack_parameters(x_now, x_ref, u_ref[:-1], slots)
         budget = cfg.time_budget_s - (time.perf_counter() - start)
@@ -178,9 +178,9 @@ class NmpcPlanner:
         ):
             return "plan violates state bounds"
         pos = self._positions(later)
-        if slots.size:
-            diff = pos[:, None, :] - slots[None, :, 0:3]
-            clear = np.sqrt(np.sum(slots[None, :, 3:6] * diff**2, axis=2)) - slots[None, :, 6]
+        if slots.size:  # node i against its own slots (N, N_o, 7)
+            diff = pos[:, None, :] - slots[:, :, 0:3]
+            clear = np.sqrt(np.sum(slots[:, :, 3:6] * diff**2, axis=2)) - slots[:, :, 6]
             worst = float(np.min(clear))
             if worst < -f.config.clearance_tolerance_m:
                 return f"plan violates obstacle clearance by {-worst:.3f} m"

@@ -3,8 +3,8 @@
 Multiple shooting with RK4: decision variables w = [vec(X), vec(U)] with X of shape (nx, N+1)
 and U of shape (nu, N) (column-major, one column per node). Cost
 sum_i ||x_i - x_ref_i||_Q^2 + sum_i ||u_i - u_ref_i||_R^2; constraints x_0 = x_now,
-x_{i+1} = f_d(x_i, u_i) (eq. 3), state bounds on x_1..x_N, input bounds on u, and for the
-N_o nearest obstacles dis(x_o, x_i) >= d_o on x_1..x_N (eq. 4).
+x_{i+1} = f_d(x_i, u_i) (eq. 3), state bounds on x_1..x_N, input bounds on u, and for each
+node x_i (i = 1..N) its own N_o nearest obstacles, dis(x_o, x_i) >= d_o (eq. 4).
 
 An obstacle slot is 7 numbers: centre NED [m] (3), axis weights (3; (1, 1, 1) for a sphere,
 (1, 1, 0) for a vertical cylinder) and inflated radius r + d_o [m]. The constraint is
@@ -134,7 +134,7 @@ class NmpcFormulation:
         u_max = _vector(config.input_max, nu, np.inf, "input_max")
         self.u_min, self.u_max = -u_max, u_max
         self.n_w = nx * (n + 1) + nu * n
-        self.n_p = nx + nx * (n + 1) + nu * n + OBSTACLE_SLOT_SIZE * config.n_obstacles
+        self.n_p = nx + nx * (n + 1) + nu * n + OBSTACLE_SLOT_SIZE * config.n_obstacles * n
 
         x = ca.SX.sym("x", nx)
         u = ca.SX.sym("u", nu)
@@ -148,7 +148,8 @@ class NmpcFormulation:
 
     # -- packing ---------------------------------------------------------------------------
     def split_parameters(self, p: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX, ca.SX]:
-        """p -> (x_now (nx), X_ref (nx, N+1), U_ref (nu, N), slots (7, N_o))."""
+        """p -> (x_now (nx), X_ref (nx, N+1), U_ref (nu, N), slots (7, N_o * N)); slot column
+        j * N + i - 1 is node i's j-th obstacle (i = 1..N)."""
         nx, nu, n = self.model.nx, self.model.nu, self.config.horizon_steps
         i = 0
         x_now = p[i : i + nx]
@@ -157,15 +158,17 @@ class NmpcFormulation:
         i += nx * (n + 1)
         u_ref = ca.reshape(p[i : i + nu * n], nu, n)
         i += nu * n
-        slots = ca.reshape(p[i:], OBSTACLE_SLOT_SIZE, self.config.n_obstacles)
+        slots = ca.reshape(p[i:], OBSTACLE_SLOT_SIZE, self.config.n_obstacles * n)
         return x_now, x_ref, u_ref, slots
 
     def pack_parameters(
         self, x_now: np.ndarray, x_ref: np.ndarray, u_ref: np.ndarray, slots: np.ndarray
     ) -> np.ndarray:
-        """Parameter vector p from x_now (nx,), x_ref (N+1, nx), u_ref (N, nu), slots (N_o, 7)."""
+        """Parameter vector p from x_now (nx,), x_ref (N+1, nx), u_ref (N, nu) and slots
+        (N, N_o, 7): node i's obstacles in row i - 1."""
+        by_obstacle = np.transpose(np.asarray(slots, dtype=float), (1, 0, 2))
         return np.concatenate(
-            [np.ravel(x_now), np.ravel(x_ref), np.ravel(u_ref), np.ravel(slots)]
+            [np.ravel(x_now), np.ravel(x_ref), np.ravel(u_ref), np.ravel(by_obstacle)]
         ).astype(float)
 
     def split_w(self, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -198,9 +201,7 @@ class NmpcFormulation:
         g = [xs[:, 0] - x_now, ca.vec(x_next - xs[:, 1:])]
         n_o = self.config.n_obstacles
         if n_o:
-            pairs = self.clearance.map(n * n_o)(
-                ca.repmat(xs[:, 1:], 1, n_o), ca.kron(slots, ca.DM.ones(1, n))
-            )
+            pairs = self.clearance.map(n * n_o)(ca.repmat(xs[:, 1:], 1, n_o), slots)
             g.append(ca.vec(pairs))
         n_eq = nx * (n + 1)
         lbg = np.concatenate([np.zeros(n_eq), np.zeros(n * n_o)])

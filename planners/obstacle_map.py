@@ -1,7 +1,7 @@
 """The companion's incremental obstacle map: range-sensor hits in a KD-tree.
 
 [Kulathunga23] builds its map incrementally within about 5 m of the vehicle (u_r 4-6 m) and
-feeds the NMPC the N_o obstacles nearest to the horizon (eq. 4). Our choice of structure: the
+feeds each NMPC node the N_o obstacles nearest to it (eq. 4). Our choice of structure: the
 hit points, de-duplicated on a voxel grid, in a ``scipy.spatial.cKDTree``. Why a KD-tree and
 not an OctoMap: the sensor here is a horizontal ring (OBSTACLE_DISTANCE), so the map is a set
 of points, not occupancy in 3-D; nearest-neighbour queries over a few thousand points take
@@ -109,27 +109,19 @@ class PointObstacleMap:
         return np.asarray(dist), self.points_ned_m[np.asarray(idx)]
 
     def slots(self, points_ned_m: np.ndarray, count: int, safe_distance_m: float) -> np.ndarray:
-        """NMPC obstacle slots (count, 7): the map points nearest to each of the query points
-        (the horizon's nodes; each node's own nearest first, [Kulathunga23] eq. 4), pooled and
-        ordered by distance; a vertical cylinder of radius point_radius_m + d_o each; unused
-        slots padded."""
-        out = np.tile(UNUSED_SLOT, (count, 1))
+        """For each query point (n, 3) (an NMPC node), the ``count`` map points nearest to it
+        as NMPC slots, nearest first: (n, count, 7) ([Kulathunga23] eq. 4); a vertical
+        cylinder of radius point_radius_m + d_o each; unused slots padded."""
+        pts = np.atleast_2d(np.asarray(points_ned_m, dtype=float))
+        out = np.tile(UNUSED_SLOT, (pts.shape[0], count, 1))
         tree = self._kdtree()
         if tree is None or count == 0:
             return out
-        pts = np.atleast_2d(np.asarray(points_ned_m, dtype=float))
         k = min(count, len(self._points))
-        dist, idx = tree.query(pts[:, :2], k=k)
-        dist, idx = np.reshape(dist, (pts.shape[0], k)), np.reshape(idx, (pts.shape[0], k))
-        rank = np.broadcast_to(np.arange(k), dist.shape).ravel()
-        dist, idx = dist.ravel(), idx.ravel()
-        order = np.lexsort((dist, rank))  # every node's nearest, then every node's second...
-        _, first = np.unique(idx[order], return_index=True)
-        chosen = idx[order][np.sort(first)][:count]
-        p = self.points_ned_m[chosen]
-        n = chosen.size
-        out[:n, 0:2] = p[:, :2]
-        out[:n, 2] = 0.0
-        out[:n, 3:6] = (1.0, 1.0, 0.0)
-        out[:n, 6] = self.point_radius_m + safe_distance_m
+        _, idx = tree.query(pts[:, :2], k=k)
+        p = self.points_ned_m[np.reshape(idx, (pts.shape[0], k))]
+        out[:, :k, 0:2] = p[:, :, :2]
+        out[:, :k, 2] = 0.0
+        out[:, :k, 3:6] = (1.0, 1.0, 0.0)
+        out[:, :k, 6] = self.point_radius_m + safe_distance_m
         return out

@@ -110,17 +110,19 @@ class ObstacleWorld:
         return np.min(self.surface_distance_m(pts), axis=1)
 
     def slots(self, points_ned_m: np.ndarray, count: int, safe_distance_m: float) -> np.ndarray:
-        """The ``count`` obstacles nearest to any of the points as NMPC slots, (count, 7).
+        """For each point (n, 3) (an NMPC node), the ``count`` obstacles nearest to it as NMPC
+        slots, nearest first: (n, count, 7) ([Kulathunga23] eq. 4).
 
         The radius is inflated by ``safe_distance_m`` (d_o); missing slots are unused.
         """
-        out = np.tile(UNUSED_SLOT, (count, 1))
+        pts = np.atleast_2d(np.asarray(points_ned_m, dtype=float))
+        out = np.tile(UNUSED_SLOT, (pts.shape[0], count, 1))
         if not self.obstacles or count == 0:
             return out
-        nearest = np.min(self.surface_distance_m(points_ned_m), axis=0)
-        order = np.argsort(nearest, kind="stable")[:count]
-        out[: order.size] = self._slots[order]
-        out[: order.size, 6] += safe_distance_m
+        order = np.argsort(self.surface_distance_m(pts), axis=1, kind="stable")[:, :count]
+        k = order.shape[1]
+        out[:, :k] = self._slots[order]
+        out[:, :k, 6] += safe_distance_m
         return out
 
 

@@ -235,7 +235,7 @@ class GaussNewtonSqp:
             hjac = ca.Function("clearance_jacobian", [xk, slot], [hk, ca.jacobian(hk, xk)])
             for j in range(n_o):
                 for k in range(1, n + 1):
-                    hv, gx = hjac(xs[:, k], slots[:, j])
+                    hv, gx = hjac(xs[:, k], slots[:, j * n + k - 1])
                     grads_h.append(ca.horzcat(ca.SX(1, nx * (k - 1)), gx, ca.SX(1, nx * (n - k))))
                     lb_h.append(-hv - gx @ c_blk[k])
         u = ca.vec(us)

@@ -10,7 +10,8 @@ step, residual included, as CasADi expressions: acados generates C for them and 
 solver per formulation), linear least-squares cost with weights diag(Q, R) and references
 (x_ref_k, u_ref_k), input bounds, x_0 = x_now, and the obstacle clearances as nonlinear
 constraints h >= 0 on every stage, softened with the same exact L1 + small L2 penalty as our
-fast path. The obstacle slots are stage parameters, so one solver serves every problem.
+fast path. Each node's obstacle slots are its stage's parameters, so one solver serves every
+problem.
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from planners.nmpc_formulation import OBSTACLE_SLOT_SIZE, NmpcFormulation
+from planners.nmpc_formulation import OBSTACLE_SLOT_SIZE, UNUSED_SLOT, NmpcFormulation
 from planners.solver_output import SolverOutput
 
 COLD_START_ITERATIONS = 10
@@ -159,14 +160,18 @@ class AcadosSolver:
         states, inputs = f.split_w(np.asarray(w0, dtype=float))
         if cold_start or not self._healthy:
             s.reset()  # a failed QP leaves NaNs in acados' memory
-        p_stage = np.ravel(slots, order="F")  # slot j is column j: 7 numbers each
+        n_o = f.config.n_obstacles
+        # stage k's parameters: node k's slots (columns j * N + k - 1); stage 0 (x_0 fixed)
+        # has no obstacles
+        unused = np.tile(UNUSED_SLOT, n_o)
+        p_stage = [unused] + [np.ravel(slots[:, k - 1 :: n], order="F") for k in range(1, n + 1)]
         for k in range(n):
             s.set(k, "yref", np.concatenate([x_ref[:, k], u_ref[:, k]]))
-            s.set(k, "p", p_stage)
+            s.set(k, "p", p_stage[k])
             s.set(k, "x", states[k])
             s.set(k, "u", inputs[k])
         s.set(n, "yref", x_ref[:, n])
-        s.set(n, "p", p_stage)
+        s.set(n, "p", p_stage[n])
         s.set(n, "x", states[n])
         s.set(0, "lbx", x_now.ravel())
         s.set(0, "ubx", x_now.ravel())

@@ -33,18 +33,23 @@ def test_clearance_is_close_to_the_true_one_on_the_seen_side():
     np.testing.assert_allclose(m.clearance_m(q), world.clearance_m(q), atol=0.1)
 
 
-def test_slots_take_every_nodes_nearest_first():
+def test_each_node_gets_its_own_nearest_points():
     m = PointObstacleMap(voxel_m=0.01, point_radius_m=0.1)
     # a cluster of 5 points near node A, one point near node B far away
     m.add_points([[1.0 + 0.05 * k, 0.0, 0.0] for k in range(5)] + [[20.0, 3.0, 0.0]])
     nodes = np.array([[0.0, 0.0, 0.0], [20.0, 0.0, 0.0]])
     slots = m.slots(nodes, count=3, safe_distance_m=0.5)
-    np.testing.assert_allclose(slots[:, :2], [[1.0, 0.0], [20.0, 3.0], [1.05, 0.0]])
-    np.testing.assert_allclose(slots[:, 3:], [[1, 1, 0, 0.6]] * 3)
-    np.testing.assert_array_equal(m.slots(nodes, 8, 0.5)[6:], np.tile(UNUSED_SLOT, (2, 1)))
+    assert slots.shape == (2, 3, 7)
+    np.testing.assert_allclose(slots[0, :, :2], [[1.0, 0.0], [1.05, 0.0], [1.1, 0.0]])
+    np.testing.assert_allclose(slots[1, 0, :2], [20.0, 3.0])  # B's own, nearest first
+    np.testing.assert_allclose(slots[..., 3:], np.tile([1, 1, 0, 0.6], (2, 3, 1)))
+    padded = m.slots(nodes, 8, 0.5)
+    np.testing.assert_array_equal(padded[:, 6:], np.tile(UNUSED_SLOT, (2, 2, 1)))
 
 
 def test_an_empty_map_is_free_space():
     m = PointObstacleMap()
     assert np.isinf(m.clearance_m(np.zeros((2, 3)))).all()
-    np.testing.assert_array_equal(m.slots(np.zeros((1, 3)), 2, 0.5), np.tile(UNUSED_SLOT, (2, 1)))
+    np.testing.assert_array_equal(
+        m.slots(np.zeros((1, 3)), 2, 0.5), np.tile(UNUSED_SLOT, (1, 2, 1))
+    )

@@ -14,14 +14,17 @@ def test_distances_sphere_and_cylinder():
     np.testing.assert_allclose(world.clearance_m(pts), [2.0, 1.5, -0.5])
 
 
-def test_slots_pick_nearest_and_pad_unused():
+def test_slots_pick_each_nodes_nearest_and_pad_unused():
     obstacles = [Sphere((float(k), 0.0, 0.0), 0.1) for k in (5, 1, 3)]
     world = ObstacleWorld(obstacles)
-    slots = world.slots(np.zeros((1, 3)), count=4, safe_distance_m=0.5)
-    np.testing.assert_allclose(slots[:3, 0], [1.0, 3.0, 5.0])
-    np.testing.assert_allclose(slots[:3, 6], 0.6)
-    np.testing.assert_array_equal(slots[3], UNUSED_SLOT)
-    assert world.slots(np.zeros((1, 3)), count=2, safe_distance_m=0.5).shape == (2, 7)
+    nodes = np.array([[0.0, 0.0, 0.0], [6.0, 0.0, 0.0]])
+    slots = world.slots(nodes, count=4, safe_distance_m=0.5)
+    assert slots.shape == (2, 4, 7)
+    np.testing.assert_allclose(slots[0, :3, 0], [1.0, 3.0, 5.0])
+    np.testing.assert_allclose(slots[1, :3, 0], [5.0, 3.0, 1.0])  # its own order
+    np.testing.assert_allclose(slots[:, :3, 6], 0.6)
+    np.testing.assert_array_equal(slots[:, 3], np.tile(UNUSED_SLOT, (2, 1)))
+    assert world.slots(nodes[:1], count=2, safe_distance_m=0.5).shape == (1, 2, 7)
 
 
 def test_random_forest_keeps_path_free():
