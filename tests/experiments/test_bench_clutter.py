@@ -26,7 +26,7 @@ def test_two_pairs_in_a_small_forest(tmp_path):
         n_pairs=2,
         training_flights=2,
         rrt_iterations=2000,
-        planners=("proposed", "rrtstar", "pd"),
+        planners=("proposed", "rrtstar", "rrtstar_online", "pd"),
     )
     plot = tmp_path / "forest.png"
     figures = clutter.run(progress=lambda _m: None, config=config, plot_path=plot)
@@ -35,6 +35,7 @@ def test_two_pairs_in_a_small_forest(tmp_path):
     assert figures["clutter_success_fraction"] == 1.0
     assert figures["clutter_contacts"] == 0.0
     assert figures["clutter_gp_flown"] == 1.0
+    assert math.isfinite(figures["clutter_rrtstar_online_mean_cycle_ms"])
     # the PD regulator on the straight reference meets a trunk at least once
     assert figures["clutter_pd_contacts"] >= 1.0
     assert plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
