@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import get_args
 
 import numpy as np
 
@@ -28,15 +29,7 @@ from experiments.study.metrics import residual_rmse_mps
 from planners.forest import ForestSpec
 from planners.trajectory_generator import TrajectorySpec, generate_trajectories
 
-PLANNERS: tuple[PlannerKind, ...] = (
-    "proposed",
-    "nominal",
-    "gp_no_regeneration",
-    "no_regeneration",
-    "rrtstar_online",
-    "rrtstar",
-    "pd",
-)
+PLANNERS: tuple[PlannerKind, ...] = get_args(PlannerKind)
 
 
 @dataclass(frozen=True)
