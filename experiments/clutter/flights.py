@@ -6,7 +6,8 @@ sensor. The forest is moved so that the start is the simulator's origin.
 
 Planners (``kind``):
     proposed         NMPC + GP residual + map + replanner + regeneration ([Kulathunga23])
-    nominal          the same without the GP (what the GP adds, our ablation)
+    nominal          the same without the GP: the companion's clutter planner flown without a
+                     model file, on the velocity-lag model (what the GP adds, our ablation)
     gp_no_regeneration  the same with the GP but without regeneration (what regeneration adds)
     no_regeneration  the NMPC replanner without regeneration and without GP (their ref. 9)
     rrtstar          OMPL's RRT* path in the known forest, tracked by the proposed planner's
@@ -33,7 +34,11 @@ from companion.inprocess_link import InProcessLink
 from companion.mission import Mission
 from companion.mission_reference import reference_of
 from companion.nmpc_planner import CompanionNmpc, NmpcSettings
-from companion.planner_registry import CLUTTER_N_OBSTACLES, CLUTTER_SAFE_DISTANCE_M
+from companion.planner_registry import (
+    CLUTTER_N_OBSTACLES,
+    CLUTTER_SAFE_DISTANCE_M,
+    clutter_nominal,
+)
 from companion.runner import RunnerConfig, fly_mission
 from experiments.clutter.online_rrtstar import OnlineRrtStar
 from experiments.clutter.scenario import ALTITUDE_M, shifted
@@ -203,6 +208,8 @@ def _planner(kind: PlannerKind, residual_model: ResidualModel | None, bounds_ne_
         n_obstacles=CLUTTER_N_OBSTACLES,
         # from a trunk's surface: d_o plus a map point's radius, as the sensing planners keep
         safe_distance_m=CLUTTER_SAFE_DISTANCE_M + (0.0 if clutter else POINT_RADIUS_M),
+        # the companion's clutter planner without a GP; the paper's rows fly its kinematic model
+        **(clutter_nominal() if kind == "nominal" else {}),
     )
     with_gp = kind in ("proposed", "gp_no_regeneration", "rrtstar_online", "rrtstar")
     nmpc = CompanionNmpc(settings, residual_model if with_gp else None)
