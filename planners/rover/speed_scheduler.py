@@ -31,8 +31,9 @@ class SpeedSchedulerConfig:
             atan(drift / speed) the robot needs to hold the line, which grows as the scheduler
             slows it (eq. 31 lowers speed on e_H > lambda_H), and an Ackermann robot's turning
             authority v tan(delta_max) / L shrinks with speed (measured with a 0.2 m/s floor:
-            experiments 2 and 3 sat at 0.2 m/s over their side slopes from trial 2 on, with
-            e_H near atan(0.12 / 0.2) = 0.54 rad, and experiment 3's robot lost the path there).
+            experiments 2 and 3 sat at 0.2 m/s over their side slopes from trial 2-3 on, with
+            e_H near atan(0.12 / 0.2) = 0.54 rad, and experiment 3's robot left the path at
+            0.2-0.25 m/s in a 4 m-radius arc).
     """
 
     gamma_up_mps: float = 0.15
