@@ -24,7 +24,16 @@ class SpeedSchedulerConfig:
         lambda_omega_radps: turn-command threshold [rad/s].
         lambda_db: deadband factor (> 1).
         v_init_mps: first-trial speed everywhere [m/s].
-        v_min_mps, v_max_mps: bounds of the schedule [m/s].
+        v_min_mps, v_max_mps: bounds of the schedule [m/s]. Table I gives neither; the paper
+            reports scheduled speeds of 0.35 to 1.2 m/s over all its robots (abstract;
+            experiment 3: 0.5 to 1.2 m/s), never below the first trial's speed, so v_min is
+            v_init. Lower floors hurt: on a side slope the heading error is the crab angle
+            atan(drift / speed) the robot needs to hold the line, which grows as the scheduler
+            slows it (eq. 31 lowers speed on e_H > lambda_H), and an Ackermann robot's turning
+            authority v tan(delta_max) / L shrinks with speed (measured with a 0.2 m/s floor:
+            experiments 2 and 3 sat at 0.2 m/s over their side slopes from trial 2-3 on, with
+            e_H near atan(0.12 / 0.2) = 0.54 rad, and experiment 3's robot left the path at
+            0.2-0.25 m/s in a 4 m-radius arc).
     """
 
     gamma_up_mps: float = 0.15
@@ -35,7 +44,7 @@ class SpeedSchedulerConfig:
     lambda_omega_radps: float = 1.0
     lambda_db: float = 1.1
     v_init_mps: float = 0.35
-    v_min_mps: float = 0.2
+    v_min_mps: float = 0.35
     v_max_mps: float = 1.2
 
     def __post_init__(self) -> None:

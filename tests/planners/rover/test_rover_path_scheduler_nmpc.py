@@ -47,6 +47,15 @@ def test_scheduler_raises_lowers_and_keeps_by_eq_31() -> None:
     assert out == pytest.approx([0.65, 0.4, 0.5, 0.4])
 
 
+def test_scheduler_never_schedules_below_the_first_trials_speed() -> None:
+    # [Ostafew16] reports no scheduled speed below 0.35 m/s; errors everywhere keep v_init
+    for c in TABLE_I.values():
+        v = np.array([c.v_init_mps, c.v_init_mps + 0.05, 1.0])
+        out = next_schedule(v, np.full(3, 0.5), np.full(3, 0.5), np.full(3, 2.0),
+                            np.full(3, 1.0), c)  # fmt: skip
+        assert out == pytest.approx([c.v_init_mps, c.v_init_mps, 1.0 - c.gamma_down_mps])
+
+
 def test_nmpc_turns_towards_a_path_on_its_left_and_learned_drift_changes_the_answer() -> None:
     nmpc = UnicycleNmpc()
     K = nmpc.config.horizon
