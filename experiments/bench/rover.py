@@ -4,6 +4,8 @@ Runs rover_exp1 (30 m path, 0.4 m/s, 50 kg skid-steer, LB-NMPC with the history 
 experience bins) for 20 trials (4 with ``quick``). Figures:
     rover_exp1_max_lateral_reduction   1 - max |e_L| of the last trial / that of trial 1 [-]
     rover_exp1_max_heading_reduction   the same for |e_H| [-]
+    rover_exp1_max_lateral_reduction_localised  the same for e_L as the robot's localisation
+                                       measures it, [Ostafew16]'s own measure [-]
     rover_step_median_ms               median wall time of one local GP + NMPC step [ms]
     rover_max_local_experiences        largest local GP used in any step [count] (<= 132)
 """
@@ -24,6 +26,7 @@ def run(progress: Callable[[str], None] = print, quick: bool = False) -> dict[st
     return {
         "rover_exp1_max_lateral_reduction": s["max_lateral_reduction"],
         "rover_exp1_max_heading_reduction": s["max_heading_reduction"],
+        "rover_exp1_max_lateral_reduction_localised": s["max_lateral_reduction_localised"],
         "rover_step_median_ms": s["step_median_ms"],
         "rover_max_local_experiences": float(s["max_local_experiences"]),
     }

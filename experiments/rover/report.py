@@ -31,6 +31,10 @@ def summarise(records: list[TrialRecord]) -> dict:
         "completed": [r.completed for r in records],
         "max_lateral_reduction": 1.0 - last.max_e_lat_m / first.max_e_lat_m,
         "max_heading_reduction": 1.0 - last.max_e_head_rad / first.max_e_head_rad,
+        # as the localisation measures them, [Ostafew16]'s own measure (TrialRecord)
+        "max_e_lat_localised_m": [r.max_e_lat_est_m for r in records],
+        "max_lateral_reduction_localised": 1.0 - last.max_e_lat_est_m / first.max_e_lat_est_m,
+        "max_heading_reduction_localised": 1.0 - last.max_e_head_est_rad / first.max_e_head_est_rad,
         "max_local_experiences": int(max(int(r.n_local.max()) for r in records)),
         "step_median_ms": float(np.median(np.concatenate([r.step_time_s for r in records]))) * 1e3,
     }

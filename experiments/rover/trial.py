@@ -34,6 +34,9 @@ class TrialRecord:
     Attributes:
         s_m, e_lat_m, e_head_rad, w_cmd_radps, v_cmd_mps, features: per control step,
             errors of the TRUE pose against the path.
+        e_lat_est_m, e_head_est_rad: per control step, the errors as the robot's localisation
+            (the VT&R stand-in) measures them: what [Ostafew16] reports ("quantified by the
+            localization of the VT&R algorithm", section 5.1), having no ground truth.
         n_local: experiences in the local GP used at each step.
         step_time_s: wall time of GP + NMPC per step (for bench only).
         schedule_mps: the speeds this trial was driven with, per vertex.
@@ -57,6 +60,16 @@ class TrialRecord:
     vertex_features: np.ndarray
     travel_time_s: float
     completed: bool
+    e_lat_est_m: np.ndarray
+    e_head_est_rad: np.ndarray
+
+    @property
+    def max_e_lat_est_m(self) -> float:
+        return float(np.max(np.abs(self.e_lat_est_m)))
+
+    @property
+    def max_e_head_est_rad(self) -> float:
+        return float(np.max(np.abs(self.e_head_est_rad)))
 
     @property
     def max_e_lat_m(self) -> float:
@@ -94,7 +107,7 @@ def run_trial(
     nmpc = UnicycleNmpc(cfg)
     K, dt, N = cfg.horizon, sc.dt_s, len(path)
     curvature = path.curvature_1pm()
-    rec = {k: [] for k in ("s", "el", "eh", "w", "v", "f", "n", "t")}
+    rec = {k: [] for k in ("s", "el", "eh", "w", "v", "f", "n", "t", "el_est", "eh_est")}
     worst = {
         "el": np.full(N, np.nan), "eh": np.full(N, np.nan),
         "w": np.full(N, np.nan), "f": np.full(N, np.nan),
@@ -159,7 +172,8 @@ def run_trial(
         worst["f"][i] = np.nanmin([worst["f"][i], feats])
         for key, val in (("s", true_fix.s_m), ("el", true_fix.e_lat_m),
                          ("eh", true_fix.e_head_rad), ("w", w_cmd), ("v", v_now),
-                         ("f", feats), ("n", n_local), ("t", step_time)):  # fmt: skip
+                         ("f", feats), ("n", n_local), ("t", step_time),
+                         ("el_est", fix.e_lat_m), ("eh_est", fix.e_head_rad)):  # fmt: skip
             rec[key].append(val)
         sim.set_setpoint(v_now, w_cmd)
         sim.step(dt)
@@ -170,7 +184,7 @@ def run_trial(
     return TrialRecord(
         arr["s"], arr["el"], arr["eh"], arr["w"], arr["v"], arr["f"], arr["n"].astype(int),
         arr["t"], np.asarray(schedule_mps, dtype=float).copy(), worst["el"], worst["eh"],
-        worst["w"], worst["f"], float(sim.state.t_s), completed,
+        worst["w"], worst["f"], float(sim.state.t_s), completed, arr["el_est"], arr["eh_est"],
     )  # fmt: skip
 
 
