@@ -3,8 +3,9 @@
 Each control cycle:
 1. new range scans enter the incremental KD-tree map (:mod:`planners.obstacle_map`), hits
    within ``update_range_m`` (paper: u_r 4-6 m);
-2. when the map has grown, the stretch of reference ahead is pushed out of the known
-   obstacles again (:func:`planners.replanner.push_out`, the paper's replanner), a few
+2. when the map has grown and the stretch of reference ahead is blocked, it becomes the
+   shortest detour round the known obstacles (:mod:`planners.local_detour`, our choice) and
+   is pushed out of them (:func:`planners.replanner.push_out`, the paper's replanner), a few
    iterations per cycle;
 3. with ``regenerate`` on, a vehicle more than ~2 m from the reference point regenerates the
    reference from where it is to the goal (paper, Fig. 7);
@@ -196,9 +197,9 @@ class ClutterNmpc:
 
     def _refine(self) -> None:
         """When the map has grown and the stretch of reference ahead (the map's range, twice)
-        is no longer clear: replace it by the shortest detour around the known obstacles to
-        the first clear waypoint beyond it (:func:`planners.local_detour.shortest_detour`),
-        then push that stretch out (a few iterations per cycle; the next cycles go on while
+        is no longer clear: replace the reference from here to the first clear waypoint
+        ``detour_rejoin_m`` ahead or beyond by the shortest detour around the known obstacles
+        (:func:`planners.local_detour.shortest_detour`), then push that stretch out (a few iterations per cycle; the next cycles go on while
         it is not clear); keep the progress point."""
         s = self.settings
         ref_point = self.path.at(self._s_m)[0][0]
@@ -216,15 +217,16 @@ class ClutterNmpc:
         self._set_waypoints(self._waypoints, window, _REFINE_ITERATIONS)
         self._s_m = self.path.project(ref_point, max(0.0, s_old - 3.0), s_old + 3.0)
 
-    def _detour(self, here: int, reach: int) -> None:
-        """Waypoints ``here`` to the first clear one from ``here + reach`` on become the
-        shortest detour between them (kept as they are when none exists in reach)."""
+    def _detour(self, here: int, rejoin: int) -> None:
+        """Waypoints ``here`` to the first clear one from ``here + rejoin`` on become the
+        shortest detour between them (kept as they are when there is none)."""
         wp, clearance = self._waypoints, self.settings.replanner.clearance_m
         clear = self.obstacle_map.clearance_m(wp) >= clearance
-        beyond = np.flatnonzero(clear[min(here + reach, len(wp) - 1) :])
+        first = min(here + rejoin, len(wp) - 1)
+        beyond = np.flatnonzero(clear[first:])
         if beyond.size == 0:
             return
-        end = min(here + reach, len(wp) - 1) + int(beyond[0])
+        end = first + int(beyond[0])
         vertices = shortest_detour(wp[here], wp[end], self.obstacle_map, clearance)
         if vertices is None or end <= here:
             return
