@@ -199,8 +199,9 @@ class ClutterNmpc:
         """When the map has grown and the stretch of reference ahead (the map's range, twice)
         is no longer clear: replace the reference from here to the first clear waypoint
         ``detour_rejoin_m`` ahead or beyond by the shortest detour around the known obstacles
-        (:func:`planners.local_detour.shortest_detour`), then push that stretch out (a few iterations per cycle; the next cycles go on while
-        it is not clear); keep the progress point."""
+        (:func:`planners.local_detour.shortest_detour`), then push that stretch out (a few
+        iterations per cycle; the next cycles go on while it is not clear); keep the progress
+        point."""
         s = self.settings
         ref_point = self.path.at(self._s_m)[0][0]
         s_old = self._s_m
