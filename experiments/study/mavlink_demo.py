@@ -28,6 +28,7 @@ from experiments.study.fitting import fit_residual
 from experiments.study.metrics import residual_rmse_mps, tracking_errors_m, tracking_rmse_m
 from flightlog.reader import read_log
 from flightlog.schema import FlightLog
+from gp.errors import DatasetError
 from gp.model_io import save_model
 from gp.plots import plot_residuals
 from gp.prediction_check import refusal
@@ -82,9 +83,12 @@ def run_demo(config: DemoConfig, progress: Callable[[str], None]) -> list[Flight
     out.mkdir(parents=True, exist_ok=True)
     nominal, nominal_load = _fly(config, "nominal", None, config.seed, progress)
     progress(f"fitting the residual model ({SELECTION}, m=30) from {nominal.path}")
-    fit = fit_residual(
-        [nominal], SELECTION, 1.0 / config.rate_hz, features=FEATURES, progress=progress
-    )
+    try:
+        fit = fit_residual(
+            [nominal], SELECTION, 1.0 / config.rate_hz, features=FEATURES, progress=progress
+        )
+    except DatasetError as exc:  # nothing learned may fly unchecked
+        raise DemoError(f"{_unlearnable(nominal)}: {exc}") from None
     model_path = save_model(out / f"gp_{SELECTION}", fit.model)
     progress(f"wrote {model_path}; the augmented planner compiles its solver before take-off")
     flying = model_path
@@ -134,6 +138,18 @@ def _fly(
     if result.outcome.status != "completed" or result.log_path is None:
         raise DemoError(f"the {name} flight did not complete: {result.outcome.detail}")
     return read_log(result.log_path), os.getloadavg()[0]
+
+
+def _unlearnable(log: FlightLog) -> str:
+    """Why a flight log may be too broken up to learn from: the loop's misses and longest gap."""
+    t = log["t_s"][log["mode"] == "OFFBOARD"]
+    gap_s = float(np.max(np.diff(t))) if t.size > 1 else float("nan")
+    return (
+        f"the nominal flight cannot be learned from on this computer "
+        f"({log.metadata.get('loop_deadline_misses', '?')} deadline misses in "
+        f"{log.metadata.get('loop_ticks', '?')} ticks, longest gap {gap_s:.2f} s, load "
+        f"average {os.getloadavg()[0]:.1f})"
+    )
 
 
 def _figures(name: str, log: FlightLog, load_average: float) -> FlightFigures:
