@@ -46,6 +46,9 @@ class NmpcPlanner:
     Attributes:
         formulation: the NLP (model, config, residual).
         world: obstacles to avoid (None: free space); may be replaced between calls.
+        late_plan: when the last call came back late, the plan it found (checked like a timely
+            one, ``ok=True``, its ``solve_time_s`` the time it took), else None: a caller that
+            can judge its age may fly it instead of the safe command.
     """
 
     def __init__(
@@ -77,6 +80,7 @@ class NmpcPlanner:
             if n in model.state_names
         ]
         self._warm: tuple[float, np.ndarray, np.ndarray] | None = None
+        self.late_plan: PlanResult | None = None
 
     def reset(self) -> None:
         """Forget the warm start (e.g. after a new reference)."""
@@ -85,6 +89,7 @@ class NmpcPlanner:
     def plan(self, state: PlannerState, reference: Reference, t_s: float) -> PlanResult:
         """One NMPC step at time ``t_s`` [s] on the reference's clock; never raises."""
         start = time.perf_counter()
+        self.late_plan = None
         try:
             return self._plan(state, reference, float(t_s), start)
         except Exception as err:  # the flight loop must get a command, whatever happened
@@ -138,6 +143,7 @@ class NmpcPlanner:
         self._warm = (t_s, states, inputs)
         elapsed = time.perf_counter() - start
         if elapsed > cfg.time_budget_s:
+            self.late_plan = PlanResult(inputs[0], predicted, True, "", elapsed, inputs)
             return safe_result(
                 f.model.nu,
                 f.model.nx,

@@ -18,6 +18,12 @@ wall-clock per plan() call, everything included. Figures:
                                             the same three on this GP-augmented problem, under
                                             issue 17's names (the planner the companion flies
                                             with a learned model is this fast path)
+    nmpc_augmented_cpu_p99_ms               the fast path's own CPU time per plan() (its thread's
+                                            CPU clock), p99 [ms]: the wall-clock tail minus
+                                            the time the process waited for a core
+    nmpc_augmented_preempted_fraction       plans during which the operating system switched
+                                            the planner's thread out for another runnable
+                                            process (involuntary context switches) [-]
     nmpc_acados_median_ms, nmpc_acados_p99_ms   acados SQP_RTI + HPIPM (the peer, see
                                             experiments.bench.acados_peer) in the same planner,
                                             on the same problems; NaN when acados is missing
@@ -35,6 +41,7 @@ wall-clock per plan() call, everything included. Figures:
 from __future__ import annotations
 
 import dataclasses
+import resource
 import tempfile
 import time
 from collections.abc import Callable
@@ -92,11 +99,15 @@ def run(progress: Callable[[str], None] = print, quick: bool = False) -> dict[st
     x = reference.x_ref(0.0)
     fast.plan(PlannerState(x[:3], np.zeros(3), x[3]), reference, 0.0)  # first call: setup
     fast.reset()
-    problems, fast_res = [], []
+    problems, fast_res, cpu_ms, preempted = [], [], [], []
     for k in range(int(round(t_end / _PLAN_DT_S))):
         t = k * _PLAN_DT_S
         state = PlannerState(x[:3].copy(), np.zeros(3), float(x[3]))
+        switches = _involuntary_switches()
+        cpu_start = time.thread_time()
         res = fast.plan(state, reference, t)
+        cpu_ms.append(1e3 * (time.thread_time() - cpu_start))
+        preempted.append(_involuntary_switches() > switches)
         problems.append((state, t))
         fast_res.append(res)
         u = res.command
@@ -118,10 +129,17 @@ def run(progress: Callable[[str], None] = print, quick: bool = False) -> dict[st
     figures["nmpc_augmented_median_ms"] = figures["nmpc_fast_median_ms"]
     figures["nmpc_augmented_p99_ms"] = figures["nmpc_fast_p99_ms"]
     figures["nmpc_augmented_ipopt_median_ms"] = figures["nmpc_ipopt_median_ms"]
+    figures["nmpc_augmented_cpu_p99_ms"] = float(np.percentile(cpu_ms, 99))
+    figures["nmpc_augmented_preempted_fraction"] = float(np.mean(preempted))
     figures.update(_acados_figures(model, base, residual, world, problems, ipopt_res, progress))
     progress("nmpc: a new model file to a planner ready to fly")
     figures["nmpc_model_ready_s"] = model_ready_s()
     return figures
+
+
+def _involuntary_switches() -> int:
+    """Times this thread was switched out while runnable (Linux RUSAGE_THREAD)."""
+    return resource.getrusage(resource.RUSAGE_THREAD).ru_nivcsw
 
 
 def _cmd_diff(results_a: list, results_b: list) -> float:

@@ -11,6 +11,7 @@ ends, also on errors and Ctrl-C (the companion itself lands the vehicle first).
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -27,6 +28,7 @@ from experiments.study.fitting import fit_residual
 from experiments.study.metrics import residual_rmse_mps, tracking_errors_m, tracking_rmse_m
 from flightlog.reader import read_log
 from flightlog.schema import FlightLog
+from gp.errors import DatasetError
 from gp.model_io import save_model
 from gp.plots import plot_residuals
 from gp.prediction_check import refusal
@@ -57,7 +59,8 @@ class DemoConfig:
 
 @dataclass(frozen=True)
 class FlightFigures:
-    """One demo flight's figures (residual [m/s], tracking [m], solve times [ms])."""
+    """One demo flight's figures (residual [m/s], tracking [m], solve times [ms]) and the
+    computer's 1-minute load average when it landed (timings are read against it)."""
 
     name: str
     status: str
@@ -67,6 +70,7 @@ class FlightFigures:
     solve_p99_ms: float
     deadline_misses: int
     ticks: int
+    load_average: float
 
 
 class DemoError(RuntimeError):
@@ -77,11 +81,14 @@ def run_demo(config: DemoConfig, progress: Callable[[str], None]) -> list[Flight
     """Fly nominal, fit, fly augmented; write report.md; return both flights' figures."""
     out = config.out_dir
     out.mkdir(parents=True, exist_ok=True)
-    nominal = _fly(config, "nominal", None, config.seed, progress)
+    nominal, nominal_load = _fly(config, "nominal", None, config.seed, progress)
     progress(f"fitting the residual model ({SELECTION}, m=30) from {nominal.path}")
-    fit = fit_residual(
-        [nominal], SELECTION, 1.0 / config.rate_hz, features=FEATURES, progress=progress
-    )
+    try:
+        fit = fit_residual(
+            [nominal], SELECTION, 1.0 / config.rate_hz, features=FEATURES, progress=progress
+        )
+    except DatasetError as exc:  # nothing learned may fly unchecked
+        raise DemoError(f"{_unlearnable(nominal)}: {exc}") from None
     model_path = save_model(out / f"gp_{SELECTION}", fit.model)
     progress(f"wrote {model_path}; the augmented planner compiles its solver before take-off")
     flying = model_path
@@ -92,9 +99,10 @@ def run_demo(config: DemoConfig, progress: Callable[[str], None]) -> list[Flight
     if not fit.may_fly:
         progress(f"{refusal(fit.model)}: the second flight flies the nominal planner")
         flying = None
-    augmented = _fly(config, "augmented", flying, config.seed + 1, progress)
+    augmented, augmented_load = _fly(config, "augmented", flying, config.seed + 1, progress)
     logs = {"nominal": nominal, "augmented": augmented}
-    figures = [_figures(name, log) for name, log in logs.items()]
+    loads = {"nominal": nominal_load, "augmented": augmented_load}
+    figures = [_figures(name, log, loads[name]) for name, log in logs.items()]
     images = _plots(config, logs, fit, out)
     (out / "report.md").write_text(_report(config, figures, images, model_path, fit))
     progress(f"wrote {out / 'report.md'}")
@@ -107,7 +115,8 @@ def _fly(
     gp_model: Path | None,
     seed: int,
     progress: Callable[[str], None],
-) -> FlightLog:
+) -> tuple[FlightLog, float]:
+    """Fly one flight against a fresh endpoint: its log and the 1-minute load average after."""
     log_path = config.out_dir / f"{name}.csv"
     progress(f"== {name} flight: starting vehicle-sim ({config.vehicle}) on loopback")
     with SimEndpoint(config.vehicle, seed, config.out_dir / f"vehicle_sim_{name}.log") as sim:
@@ -128,10 +137,22 @@ def _fly(
         result: CompanionResult = run_companion(companion, progress)
     if result.outcome.status != "completed" or result.log_path is None:
         raise DemoError(f"the {name} flight did not complete: {result.outcome.detail}")
-    return read_log(result.log_path)
+    return read_log(result.log_path), os.getloadavg()[0]
 
 
-def _figures(name: str, log: FlightLog) -> FlightFigures:
+def _unlearnable(log: FlightLog) -> str:
+    """Why a flight log may be too broken up to learn from: the loop's misses and longest gap."""
+    t = log["t_s"][log["mode"] == "OFFBOARD"]
+    gap_s = float(np.max(np.diff(t))) if t.size > 1 else float("nan")
+    return (
+        f"the nominal flight cannot be learned from on this computer "
+        f"({log.metadata.get('loop_deadline_misses', '?')} deadline misses in "
+        f"{log.metadata.get('loop_ticks', '?')} ticks, longest gap {gap_s:.2f} s, load "
+        f"average {os.getloadavg()[0]:.1f})"
+    )
+
+
+def _figures(name: str, log: FlightLog, load_average: float) -> FlightFigures:
     follow = log["mode"] == "OFFBOARD"
     solve_ms = 1e3 * log["solve_time_s"][follow]
     return FlightFigures(
@@ -143,6 +164,7 @@ def _figures(name: str, log: FlightLog) -> FlightFigures:
         solve_p99_ms=float(np.percentile(solve_ms, 99)),
         deadline_misses=int(log.metadata.get("loop_deadline_misses", 0)),
         ticks=int(log.metadata.get("loop_ticks", 0)),
+        load_average=load_average,
     )
 
 
@@ -150,13 +172,14 @@ def comparison_table(figures: list[FlightFigures]) -> str:
     """The two flights side by side (Markdown)."""
     lines = [
         "| flight | residual RMSE [m/s] | tracking RMSE [m] | solve median / p99 [ms] "
-        "| deadline misses |",
-        "|---|---|---|---|---|",
+        "| deadline misses | load average |",
+        "|---|---|---|---|---|---|",
     ]
     for f in figures:
         lines.append(
             f"| {f.name} | {f.residual_rmse_mps:.4f} | {f.tracking_rmse_m:.4f} "
-            f"| {f.solve_median_ms:.2f} / {f.solve_p99_ms:.2f} | {f.deadline_misses} / {f.ticks} |"
+            f"| {f.solve_median_ms:.2f} / {f.solve_p99_ms:.2f} | {f.deadline_misses} / {f.ticks} "
+            f"| {f.load_average:.1f} |"
         )
     return "\n".join(lines)
 

@@ -1,5 +1,6 @@
 """`bench --only nmpc --quick`: issue 17's figures come out beside today's, finite where they
-must be (the acados ones are NaN only when acados is not installed)."""
+must be (the acados ones are NaN only when acados is not installed), with the planner's own
+CPU time and the share of plans the operating system preempted."""
 
 from __future__ import annotations
 
@@ -20,9 +21,11 @@ def test_quick_nmpc_part_reports_augmented_acados_and_model_ready_figures():
         "nmpc_augmented_median_ms",
         "nmpc_augmented_p99_ms",
         "nmpc_augmented_ipopt_median_ms",
+        "nmpc_augmented_cpu_p99_ms",
         "nmpc_model_ready_s",
     ):
         assert math.isfinite(figures[name]) and figures[name] > 0, name
+    assert 0.0 <= figures["nmpc_augmented_preempted_fraction"] <= 1.0
     assert figures["nmpc_cmd_diff_median_mps"] < 1e-3
     acados = [figures[n] for n in ("nmpc_acados_median_ms", "nmpc_acados_solve_median_ms")]
     if acados_unavailable():

@@ -117,15 +117,15 @@ def test_cli_refuses_a_corrupt_model_with_exit_code_2(tmp_path, capsys):
     assert code == 2 and len(err) == 1 and "version 99" in err[0]
 
 
-def test_solver_failure_in_the_air_gives_the_safe_command():
+def test_a_plan_late_on_a_busy_computer_is_flown_not_braked_on():
     sim = Simulator(load_sim_config("iris_study"), seed=0)
     state = link_state_of(sim.state)
     reference = BSplineReference(np.array([[0.0, 0.0, -3.0], [10.0, 0.0, -3.0]]), 1.5)
-    # a time budget no solver meets: every plan is "late" and must not reach the vehicle
+    # a time budget no solver meets: every plan is "late", but solved from this tick's state
+    # well within LATE_FALLBACK_S, so it is flown (braking on each would stop the flight)
     planner = CompanionNmpc(NmpcSettings(2.0, time_budget_s=1e-9))
     policy = PlannerPolicy(planner, reference, 0.0, CommandLimits(2.0))
     decision = policy.decide(state, 1.0)
-    assert not decision.ok and ("late" in decision.reason or "solver" in decision.reason)
-    assert decision.command.vel_ned_mps == (0.0, 0.0, 0.0)
-    assert decision.command.yaw_rate_radps == 0.0
-    assert decision.pred_vel_ned_mps is None
+    assert decision.ok, decision.reason
+    assert decision.command.vel_ned_mps[0] > 0.1  # north, along the reference
+    assert decision.pred_vel_ned_mps is not None

@@ -237,10 +237,10 @@ def test_residual_with_variance_output_uses_the_mean(short_reference):
     with_var = ca.Function("mean_var", [v], [mean, ca.DM.ones(3) * 7.0])
     state = PlannerState(np.array([0.0, 0.0, -2.0]), np.zeros(3), 0.3)
     plans = [
-        NmpcPlanner(MODEL, NmpcConfig(), ResidualTerm.of_velocity(fn, MODEL)).plan(
-            state, short_reference, 2.0
-        )
-        for fn in (drag_residual_fn(), with_var)
+        NmpcPlanner(
+            MODEL, NmpcConfig(time_budget_s=30.0), ResidualTerm.of_velocity(fn, MODEL)
+        ).plan(state, short_reference, 2.0)
+        for fn in (drag_residual_fn(), with_var)  # a generous budget: independent of load
     ]
     np.testing.assert_allclose(plans[0].predicted_trajectory, plans[1].predicted_trajectory)
 
