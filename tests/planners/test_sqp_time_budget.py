@@ -35,7 +35,7 @@ def _cold_start_problem(formulation: NmpcFormulation) -> tuple[np.ndarray, np.nd
     u_ref = np.zeros((n, nu))
     u_ref[:, 0] = 1.0
     x_now = np.array([0.0, 0.0, -3.0, 0.0])
-    slots = np.zeros((formulation.config.n_obstacles, OBSTACLE_SLOT_SIZE))
+    slots = np.zeros((n, formulation.config.n_obstacles, OBSTACLE_SLOT_SIZE))
     p = formulation.pack_parameters(x_now, x_ref, u_ref, slots)
     return formulation.pack_w(x_ref, u_ref), p
 
