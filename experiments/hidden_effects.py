@@ -51,8 +51,10 @@ HIDDEN_EFFECTS = (
 # 1/s altitude P loop), where the rotor plane is 0.18-0.19 m up and the curve is seen only on its
 # tail, about 0.4 N; max_gain is its extrapolation to the ground, and with 0.45 N of white noise
 # max_gain and rotor_radius_m trade off. Motor lag is found from the produced thrust's response
-# (diagnosis/thrust_response.py), not from the replayed velocity.
-NOT_YET_ON_NOISY_LOGS = ("ground_effect",)
+# (diagnosis/thrust_response.py), not from the replayed velocity. A thrust curve (gain 0.75-0.9)
+# is named by the velocity replay on exact logs only; under 0.03-0.08 m/s of velocity noise its
+# replay gain does not stand out, and the thrust-response fit is not extended to it yet.
+NOT_YET_ON_NOISY_LOGS = ("ground_effect", "thrust_curve")
 
 
 def main_parameter_errors(name: str, truth: dict, params: dict) -> dict[str, float]:
