@@ -1,6 +1,6 @@
-"""Command-path causes (command_delay, motor_lag, flight_control), chosen by replay error.
+"""Command-path causes (command_delay, motor_lag, thrust_curve, flight_control), by replay error.
 
-command_delay and motor_lag (the effects with ROLE "command") have one parameter each; its value
+command_delay, motor_lag and thrust_curve (ROLE "command") have one parameter each; its value
 is chosen on the training windows by a coarse grid (the effect's ``ParamSpec.search``) followed
 by a bounded scalar refinement around the best grid point.
 flight_control is PX4's horizontal velocity-loop gains, fitted by regression on the training

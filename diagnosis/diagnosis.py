@@ -46,6 +46,7 @@ from diagnosis.selection import (
     select_causes,
     train_test_masks,
 )
+from diagnosis.thrust_response import MOTOR_LAG, fit_motor_lag, produced_thrust
 from flightlog.schema import FlightLog
 from vehicle_sim import SimConfig
 from vehicle_sim.effects import EFFECT_CLASSES, BatterySag
@@ -217,6 +218,17 @@ def diagnose(
         replay_floor_mse,
     )
     causes += accepted
+    if MOTOR_LAG in [c.name for c in tried] and produced_thrust(thrust_sources):
+        lag_config = configured(sim_config, _added(base, effects))
+        lag, named = fit_motor_lag(lag_config, logs, search, test, vel_noise)
+        progress(f"  {MOTOR_LAG} from the thrust response: {lag.params} ({lag.evidence})")
+        tried = [c for c in tried if c.name != MOTOR_LAG]
+        if named:
+            causes.append(lag)
+            effects[MOTOR_LAG] = dict(lag.params)
+            current = replay(configured(sim_config, _added(base, effects)), logs, test)
+        else:
+            tried.append(lag)
     tried = [
         replace(c, evidence=f"{c.evidence}; not named; to tell it apart, fly: {FLIGHT_FOR[c.name]}")
         if c.name in FLIGHT_FOR

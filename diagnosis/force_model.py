@@ -86,8 +86,8 @@ def predicted_residual(effects: EffectParams, data: ForceData, battery: BatteryM
     objs = effect_objects(effects)
     rho = math.prod(e.mass_ratio_of() for e in objs)
     g = np.array([0.0, 0.0, GRAVITY_MPS2])
-    inertial = (1.0 - rho) * data.mass_kg * (data.acc_ned_mps2 - g)
-    thrust_force = data.thrust_axis_ned() * data.thrust_n[:, None]
+    inertial = (1.0 - rho) * data.mass_kg * (data.acc_regressor() - g)
+    thrust_force = data.thrust_axis_ned() * data.thrust_regressor()[:, None]
     f = thrust_factor(objs, data, battery)
     return inertial + (f - 1.0)[:, None] * thrust_force + drag_force_ned(objs, data)
 

@@ -43,17 +43,18 @@ def fly_hidden(truth: dict, tmp_path: Path, seed: int) -> list[FlightLog]:
 
 HIDDEN_EFFECTS = (
     "rotor_drag", "body_drag", "wind", "payload", "battery_sag", "ground_effect", "motor_lag",
-    "command_delay", "isotropic_drag",
+    "command_delay", "isotropic_drag", "thrust_curve",
 )  # fmt: skip
-# Known gaps (issue 18), on noisy logs only. Ground effect is now named (its least force counted
-# over the low holds, bootstrapped over 1 s blocks) but its max_gain is not within 15 %: the
-# altitude holds commanded at 4-6 cm are flown at 8-9 cm (the ground effect holds the vehicle up
-# against the 1/s altitude P loop), where the effect is about 0.4 N, and a drifting IMU bias of a
-# few 0.01 m/s^2 plus 0.45 N of white noise leave max_gain and rotor_radius_m trading off (a faster
-# approach lands a vehicle without ground effect). A short motor lag (a few 10 ms) hides under
-# 0.03-0.08 m/s velocity noise in a 20 Hz log; the logged thrust comes from the motor speeds, after
-# the lag, so the force residual cannot see it.
-NOT_YET_ON_NOISY_LOGS = ("ground_effect", "motor_lag")
+# Known gap (issue 18), on noisy logs only. Ground effect is named (its least force counted over
+# the low holds, bootstrapped over 1 s blocks) but its max_gain is not within 15 %: the altitude
+# holds commanded at 4-6 cm are flown at 8-9 cm (the ground effect holds the vehicle up against the
+# 1/s altitude P loop), where the rotor plane is 0.18-0.19 m up and the curve is seen only on its
+# tail, about 0.4 N; max_gain is its extrapolation to the ground, and with 0.45 N of white noise
+# max_gain and rotor_radius_m trade off. Motor lag is found from the produced thrust's response
+# (diagnosis/thrust_response.py), not from the replayed velocity. A thrust curve (gain 0.75-0.9)
+# is named by the velocity replay on exact logs only; under 0.03-0.08 m/s of velocity noise its
+# replay gain does not stand out, and the thrust-response fit is not extended to it yet.
+NOT_YET_ON_NOISY_LOGS = ("ground_effect", "thrust_curve")
 
 
 def main_parameter_errors(name: str, truth: dict, params: dict) -> dict[str, float]:
@@ -76,5 +77,7 @@ def main_parameter_errors(name: str, truth: dict, params: dict) -> dict[str, flo
         return {k: abs(params[k] / p[k] - 1.0) for k in ("max_thrust_loss", "full_flight_time_s")}
     if name == "ground_effect":
         return {"max_gain": abs(params["max_gain"] / p["max_gain"] - 1.0)}
+    if name == "thrust_curve":
+        return {"gain": abs(params["gain"] / p["gain"] - 1.0)}
     key = "tau_s" if name == "motor_lag" else "delay_s"
     return {key: abs(params[key] / p[key] - 1.0)}

@@ -18,7 +18,9 @@ contact flag, nominal and true total thrust [N], and the last motor commands.
 
 Rotor i gives thrust T_i = g_eff * T_max * n_i^2 along -z_body and a reaction torque
 spin_i * k_m * T_i about z_body, where n_i is its normalised speed, which follows its command
-with time constant tau. g_eff is the effects' thrust factor (battery sag, ground effect).
+with time constant tau. g_eff is the effects' thrust factor (battery sag, ground effect). With
+the thrust_curve effect (gain g) the speed follows sqrt(n_h^2 + g (n_cmd^2 - n_h^2)) instead of
+n_cmd, n_h^2 the nominal hover thrust fraction: thrust changes by g per commanded change.
 """
 
 from __future__ import annotations
@@ -57,7 +59,8 @@ FIELD_CENTER_NE = 22  # (2,) m, a point on the field's centre line (north, east)
 FIELD_HEADING = 24  # rad, direction of the centre line (0 = north)
 FIELD_HALF_WIDTH = 25  # m, 1/e half-width of the field; 0 = effect off
 ISO_DRAG_K = 26  # N/(m/s)^2, drag along the airspeed: F = -k |v_air| v_air
-N_EFFECT = 27
+THRUST_CURVE_GAIN = 27  # true / assumed thrust change per command change at hover; 0 = off
+N_EFFECT = 28
 
 GUST_MIN_SPEED_MPS = 1.0
 MOTOR_STOPPED = 1e-9  # normalised rotor speed below which a rotor counts as stopped
@@ -128,8 +131,13 @@ def derivatives(x, n_cmd, pp, rp, spin, ep, gust, thrust_factor, dx):
     dx[11] = (ty - (jx - jz) * r * p) / jy
     dx[12] = (tz - (jy - jx) * p * q) / jz
     tau = ep[MOTOR_TAU] if ep[MOTOR_TAU] > 0.0 else pp[P_TAU]
+    gain = ep[THRUST_CURVE_GAIN]
+    hover = pp[P_MASS] * pp[P_G] / (4.0 * pp[P_TMAX])  # hover n^2 of the nominal vehicle
     for i in range(4):
-        dx[MOTORS + i] = (n_cmd[i] - x[MOTORS + i]) / tau
+        target = n_cmd[i]
+        if gain > 0.0 and target > 0.0:
+            target = math.sqrt(max(hover + gain * (target * target - hover), 0.0))
+        dx[MOTORS + i] = (target - x[MOTORS + i]) / tau
     return thrust
 
 

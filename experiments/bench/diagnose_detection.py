@@ -7,10 +7,17 @@ IMU level fixed per column: 0, 0.1, 0.3, 0.5 m/s^2; at 0 no noise at all) and is
 against the plain preset. "Named" means the effect is the first cause of the verdict; the
 parameter error is the largest relative error of its main parameter(s). False positives: clean
 flights (no effect) with noise drawn per seed; any named cause counts.
+
+    python -m experiments.bench.diagnose_detection [--levels 0.3 ...] [--part hidden|clean]
+
+runs one part at chosen levels (``bench --only diagnose`` runs all of them) and prints the
+figures and the table; the two parts can run in parallel.
 """
 
 from __future__ import annotations
 
+import argparse
+import json
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
@@ -37,14 +44,17 @@ def run(
     trials: int = 2,
     clean_seeds: int = 20,
     levels: tuple[float, ...] = NOISE_LEVELS_MPS2,
+    hidden: bool = True,
+    clean: bool = True,
 ) -> dict[str, float]:
     """Figures ``diagnose_named_rate_acc<level>``, ``diagnose_max_param_err_acc<level>``,
-    ``diagnose_median_param_err_acc<level>`` and ``diagnose_false_positive_rate_acc<level>``."""
+    ``diagnose_median_param_err_acc<level>`` and ``diagnose_false_positive_rate_acc<level>``
+    (``hidden``: the hidden-effect flights, ``clean``: the false-positive flights)."""
     named = {lv: [] for lv in levels}
     errors = {lv: [] for lv in levels}
     false_pos = {lv: [] for lv in levels}
     with tempfile.TemporaryDirectory() as tmp:
-        for name in HIDDEN_EFFECTS:
+        for name in HIDDEN_EFFECTS if hidden else ():
             for trial in range(trials):
                 seed = 1000 + 17 * HIDDEN_EFFECTS.index(name) + trial
                 truth, base = draw(name, np.random.default_rng(seed))
@@ -57,19 +67,21 @@ def run(
                         errs = main_parameter_errors(name, truth, d.causes[0].params)
                         errors[lv].append(max(errs.values()))
                     progress(f"detection: {name} trial {trial} acc {lv}: {d.verdict}")
-        clean = fly_hidden({}, Path(tmp), 77)
-        for lv in levels:
+        clean_logs = fly_hidden({}, Path(tmp), 77) if clean else []
+        for lv in levels if clean else ():
             for s in range(clean_seeds if lv > 0.0 else 1):
-                d = diagnose(_noisy(clean, lv, 5000 + s), load_sim_config("iris"))
+                d = diagnose(_noisy(clean_logs, lv, 5000 + s), load_sim_config("iris"))
                 false_pos[lv].append(bool(d.verdict))
                 progress(f"detection: clean seed {s} acc {lv}: {d.verdict}")
     out: dict[str, float] = {}
     for lv in levels:
-        out[f"diagnose_named_rate_acc{lv}"] = float(np.mean(named[lv]))
-        errs = errors[lv] or [float("nan")]
-        out[f"diagnose_max_param_err_acc{lv}"] = float(np.max(errs))
-        out[f"diagnose_median_param_err_acc{lv}"] = float(np.median(errs))
-        out[f"diagnose_false_positive_rate_acc{lv}"] = float(np.mean(false_pos[lv]))
+        if hidden:
+            out[f"diagnose_named_rate_acc{lv}"] = float(np.mean(named[lv]))
+            errs = errors[lv] or [float("nan")]
+            out[f"diagnose_max_param_err_acc{lv}"] = float(np.max(errs))
+            out[f"diagnose_median_param_err_acc{lv}"] = float(np.median(errs))
+        if clean:
+            out[f"diagnose_false_positive_rate_acc{lv}"] = float(np.mean(false_pos[lv]))
     return out
 
 
@@ -89,3 +101,19 @@ def markdown_table(figures: dict[str, float], levels=NOISE_LEVELS_MPS2) -> str:
             f"{100 * f['max_param_err']:.1f} % | {100 * f['false_positive_rate']:.0f} % |"
         )
     return "\n".join(rows)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--levels", type=float, nargs="+", default=list(NOISE_LEVELS_MPS2))
+    parser.add_argument("--part", choices=("all", "hidden", "clean"), default="all")
+    args = parser.parse_args(argv)
+    levels = tuple(args.levels)
+    figures = run(levels=levels, hidden=args.part != "clean", clean=args.part != "hidden")
+    print(json.dumps(figures, indent=2))
+    print(markdown_table(figures, levels))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -12,7 +12,7 @@ from diagnosis.force_model import (
     flight_time_from_voltage,
     predicted_residual,
 )
-from diagnosis.forces import ForceData, acceleration, rotation_matrices
+from diagnosis.forces import ForceData, acceleration, neighbour_mean, rotation_matrices
 from flightlog.schema import FlightLog
 
 BATTERY = BatteryModel(full_v=16.8, empty_v=14.0)
@@ -49,6 +49,21 @@ def test_rotation_matrices_match_scipy():
     q_wxyz = np.column_stack([q_xyzw[:, 3], q_xyzw[:, :3]])
     expected = Rotation.from_quat(q_xyzw).as_matrix()
     np.testing.assert_allclose(rotation_matrices(q_wxyz), expected, atol=1e-12)
+
+
+def test_neighbour_mean_keeps_the_signal_and_drops_the_rows_own_noise():
+    rng = np.random.default_rng(4)
+    t = np.arange(4000) * 0.02
+    smooth = np.column_stack([np.sin(t), 0.3 * t**2])
+    noise = rng.normal(0.0, 0.3, smooth.shape)
+    # error (dt^2 / 2) x the second derivative: at most 1 (sine) and 0.6 (parabola)
+    np.testing.assert_allclose(
+        neighbour_mean(smooth)[1:-1], smooth[1:-1], atol=0.5 * 0.02**2 * 1.01
+    )
+    mean_noise = neighbour_mean(noise)
+    for axis in range(2):
+        assert abs(np.corrcoef(mean_noise[:, axis], noise[:, axis])[0, 1]) < 0.05
+    assert neighbour_mean(smooth[:1]).shape == (1, 2)
 
 
 def test_acceleration_is_differentiated_when_not_logged():

@@ -36,7 +36,7 @@ def test_hover_only_log_cannot_identify_drag_wind_ground_or_command_path():
     missing = {n.name: n for n in check_identifiability([log])}
     expected = {
         "rotor_drag", "body_drag", "isotropic_drag", "wind", "ground_effect", "battery_sag",
-        "command_delay", "motor_lag", "flight_control",
+        "command_delay", "motor_lag", "thrust_curve", "flight_control",
     }  # fmt: skip
     assert set(missing) == expected
     assert "speed sweeps" in missing["rotor_drag"].flight

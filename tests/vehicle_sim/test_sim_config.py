@@ -61,6 +61,7 @@ def test_effects_from_toml_from_mappings_and_from_objects(tmp_path):
         "ground_effect",
         "motor_lag",
         "command_delay",
+        "thrust_curve",
         "wind_field",
     }
 

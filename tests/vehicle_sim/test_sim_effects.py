@@ -188,6 +188,18 @@ def test_motor_lag_sets_the_motor_time_constant():
         assert p.x[ph.MOTORS] - N_HOVER == pytest.approx(step * (1 - math.exp(-1)), rel=1e-6)
 
 
+def test_thrust_curve_scales_the_thrust_change_per_command_and_keeps_hover():
+    gain = 0.8
+    for n_cmd in (N_HOVER, 0.85, 0.4):
+        p = in_air({"thrust_curve": {"gain": gain}})
+        coast(p, 20 * IRIS.motor_time_constant_s, n_cmd=n_cmd)  # settled: e^-20 of the step left
+        settled_sq = N_HOVER**2 + gain * (n_cmd**2 - N_HOVER**2)
+        assert p.x[ph.MOTORS] ** 2 == pytest.approx(settled_sq, rel=1e-6)
+    plain = in_air(None)
+    coast(plain, 20 * IRIS.motor_time_constant_s, n_cmd=0.85)
+    assert plain.x[ph.MOTORS] == pytest.approx(0.85, rel=1e-6)
+
+
 def test_command_delay_shifts_the_response_by_the_delay():
     delay = 0.1
     base = hovering(settle_s=3.0)

@@ -9,8 +9,8 @@ vector the physics reads. Parameters, units, defaults, valid and search ranges c
 classes alone; :func:`parameter_table` lists them
 (``python -c "from vehicle_sim.effects import parameter_table; print(parameter_table())"``).
 Multirotor effects: rotor_drag, body_drag, isotropic_drag, wind, gusts, payload, battery_sag,
-ground_effect, command_delay, motor_lag, wind_field. Rover (terrain) effects, see terrain.py:
-slope, wheel_slip, surface_patch, rover_payload.
+ground_effect, command_delay, motor_lag, thrust_curve, wind_field. Rover (terrain) effects, see
+terrain.py: slope, wheel_slip, surface_patch, rover_payload.
 """
 
 from __future__ import annotations
@@ -40,6 +40,7 @@ from vehicle_sim.effects.rotor_drag import RotorDrag
 from vehicle_sim.effects.rover_payload import RoverPayload
 from vehicle_sim.effects.slope import Slope
 from vehicle_sim.effects.surface_patch import SurfacePatch, gravel_patch, mud_patch
+from vehicle_sim.effects.thrust_curve import ThrustCurve
 from vehicle_sim.effects.wheel_slip import WheelSlip
 from vehicle_sim.effects.wind import Wind
 from vehicle_sim.effects.wind_field import WindField
@@ -49,7 +50,8 @@ REGISTRY: dict[str, type[Effect]] = {
     cls.name: cls
     for cls in (
         RotorDrag, BodyDrag, IsotropicDrag, Wind, Gusts, Payload, BatterySag, GroundEffect,
-        CommandDelay, MotorLag, WindField, Slope, WheelSlip, SurfacePatch, RoverPayload,
+        CommandDelay, MotorLag, ThrustCurve, WindField, Slope, WheelSlip, SurfacePatch,
+        RoverPayload,
     )
 }  # fmt: skip
 EFFECT_CLASSES: dict[str, type[Effect]] = {

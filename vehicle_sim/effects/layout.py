@@ -30,6 +30,7 @@ from vehicle_sim.physics import (
     N_EFFECT,
     PAYLOAD_RATIO,
     ROTOR_DRAG_K,
+    THRUST_CURVE_GAIN,
     WIND_NED,
 )
 
@@ -37,7 +38,8 @@ __all__ = [
     "BATTERY_LOSS", "BATTERY_TIME", "BODY_DRAG_C", "COMMAND_DELAY", "FIELD_CENTER_NE",
     "FIELD_HALF_WIDTH", "FIELD_HEADING", "FIELD_VEL_NED", "GROUND_GAIN",
     "GROUND_HEIGHT", "GROUND_RADIUS", "GUST_LENGTH", "GUST_SIGMA", "ISO_DRAG_K", "MOTOR_TAU",
-    "N_EFFECT", "PAYLOAD_RATIO", "ROTOR_DRAG_K", "WIND_NED", "neutral_effect_vector",
+    "N_EFFECT", "PAYLOAD_RATIO", "ROTOR_DRAG_K", "THRUST_CURVE_GAIN", "WIND_NED",
+    "neutral_effect_vector",
 ]  # fmt: skip
 
 
