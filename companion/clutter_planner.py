@@ -6,7 +6,8 @@ Each control cycle:
 2. when the map has grown and the stretch of reference ahead is blocked, it becomes the
    shortest detour round the known obstacles (:mod:`planners.local_detour`, our choice) and
    is pushed out of them (:func:`planners.replanner.push_out`, the paper's replanner), a few
-   iterations per cycle;
+   iterations per cycle; another path planner can take the detour's place through
+   :mod:`planners.stretch_replanner` (the paper's RRT* row does);
 3. with ``regenerate`` on, a vehicle more than ~2 m from the reference point regenerates the
    reference from where it is to the goal (paper, Fig. 7);
 4. the NMPC (N_o nearest map points per node as hard constraints with safe distance d_o,
@@ -29,12 +30,19 @@ import numpy as np
 
 from companion.link import ObstacleDistances
 from companion.nmpc_planner import CompanionNmpc
-from planners.local_detour import shortest_detour
+from planners.local_detour import ShortestDetour
 from planners.obstacle_map import PointObstacleMap
 from planners.path_reference import PathReference, PolylinePath
 from planners.plan_result import PlanResult, safe_result
 from planners.reference import PlannerState, Reference
-from planners.replanner import ReplannerConfig, needs_regeneration, push_out, resample
+from planners.replanner import (
+    ReplannerConfig,
+    needs_regeneration,
+    push_out,
+    resample,
+    spline_path,
+)
+from planners.stretch_replanner import BlockedStretch, StretchReplanner
 
 _PATH_SAMPLES_PER_S = 10.0
 _REFINE_ITERATIONS = 8  # pushes per control cycle while the stretch ahead is not clear
@@ -80,19 +88,32 @@ class ClutterSettings:
 
 
 class ClutterNmpc:
-    """See the module docstring. ``nmpc`` must have been built with n_obstacles > 0.
+    """See the module docstring. ``nmpc`` must have been built with n_obstacles > 0;
+    ``stretch_replanner`` replaces a blocked stretch of reference (default: the shortest
+    detour when ``settings.shortest_detour``, else none: push-out only).
 
     Attributes:
         obstacle_map: what the companion has sensed so far.
+        stretch_replanner: what replaces a blocked stretch (None: only pushed out).
         regenerations, replans: counts over the flight.
         path: the current reference path (None before the first plan).
     """
 
     honours_obstacles = True
 
-    def __init__(self, nmpc: CompanionNmpc, settings: ClutterSettings | None = None) -> None:
+    def __init__(
+        self,
+        nmpc: CompanionNmpc,
+        settings: ClutterSettings | None = None,
+        stretch_replanner: StretchReplanner | None = None,
+    ) -> None:
         self.settings = settings or ClutterSettings()
         s = self.settings
+        if stretch_replanner is None and s.shortest_detour:
+            r = s.replanner
+            rejoin = s.detour_rejoin_m
+            stretch_replanner = ShortestDetour(r.clearance_m, r.waypoint_spacing_m, rejoin)
+        self.stretch_replanner = stretch_replanner
         self._nmpc = nmpc
         self.obstacle_map = PointObstacleMap(s.voxel_m, s.point_radius_m, s.update_range_m)
         nmpc.set_obstacles(self.obstacle_map)
@@ -197,11 +218,9 @@ class ClutterNmpc:
 
     def _refine(self) -> None:
         """When the map has grown and the stretch of reference ahead (the map's range, twice)
-        is no longer clear: replace the reference from here to the first clear waypoint
-        ``detour_rejoin_m`` ahead or beyond by the shortest detour around the known obstacles
-        (:func:`planners.local_detour.shortest_detour`), then push that stretch out (a few
-        iterations per cycle; the next cycles go on while it is not clear); keep the progress
-        point."""
+        is no longer clear: the stretch replanner splices in new waypoints (the shortest
+        detour, by default), then the stretch is pushed out (a few iterations per cycle; the
+        next cycles go on while it is not clear); keep the progress point."""
         s = self.settings
         ref_point = self.path.at(self._s_m)[0][0]
         s_old = self._s_m
@@ -209,31 +228,31 @@ class ClutterNmpc:
         here = int(np.argmin(np.linalg.norm(wp - ref_point, axis=1)))
         reach = int(np.ceil(2.0 * s.update_range_m / s.replanner.waypoint_spacing_m))
         window = (here - 1, here + reach)
-        stretch = push_out(wp, self.obstacle_map, s.replanner, window, 0, self._anchor)
+        replanner = self.stretch_replanner
+        trigger = s.replanner
+        if replanner is not None and replanner.trigger_clearance_m is not None:
+            trigger = replace(trigger, clearance_m=replanner.trigger_clearance_m)
+        stretch = push_out(wp, self.obstacle_map, trigger, window, 0, self._anchor)
         if stretch.ok:
             self._map_version = self.obstacle_map.version
             return
-        if s.shortest_detour:
-            self._detour(here, int(np.ceil(s.detour_rejoin_m / s.replanner.waypoint_spacing_m)))
-        self._set_waypoints(self._waypoints, window, _REFINE_ITERATIONS)
+        splice = None
+        if replanner is not None:
+            blocked = BlockedStretch(wp, here, self._initial.points_ned_m[-1])
+            splice = replanner.splice(blocked, self.obstacle_map)
+        if splice is not None:
+            new, end = splice.points_ned_m, splice.end
+            self._waypoints = np.vstack([wp[: here + 1], new, wp[end:]])
+            self._anchor = np.vstack([self._anchor[: here + 1], new, self._anchor[end:]])
+        if replanner is None or replanner.push_out_after:
+            self._set_waypoints(self._waypoints, window, _REFINE_ITERATIONS)
+        else:
+            self._map_version = self.obstacle_map.version
+            if splice is None:
+                return
+            self.path = spline_path(self._waypoints)
+            self.replans += 1
         self._s_m = self.path.project(ref_point, max(0.0, s_old - 3.0), s_old + 3.0)
-
-    def _detour(self, here: int, rejoin: int) -> None:
-        """Waypoints ``here`` to the first clear one from ``here + rejoin`` on become the
-        shortest detour between them (kept as they are when there is none)."""
-        wp, clearance = self._waypoints, self.settings.replanner.clearance_m
-        clear = self.obstacle_map.clearance_m(wp) >= clearance
-        first = min(here + rejoin, len(wp) - 1)
-        beyond = np.flatnonzero(clear[first:])
-        if beyond.size == 0:
-            return
-        end = first + int(beyond[0])
-        vertices = shortest_detour(wp[here], wp[end], self.obstacle_map, clearance)
-        if vertices is None or end <= here:
-            return
-        new = resample(vertices, self.settings.replanner.waypoint_spacing_m)[1:-1]
-        self._waypoints = np.vstack([wp[: here + 1], new, wp[end:]])
-        self._anchor = np.vstack([self._anchor[: here + 1], new, self._anchor[end:]])
 
     def _regenerate(self, pos: np.ndarray) -> None:
         """A new reference from ``pos`` straight to the initial one ``rejoin_m`` ahead (our

@@ -10,22 +10,60 @@ a cell blocked when no point of it can keep ``clearance_m`` from a map point's s
 cell path is then shortened by line of sight (each vertex joins the farthest later vertex it
 sees with the clearance kept along the segment), A* with post-smoothing as [Nash07]
 describes it. Unknown space counts as free (the map holds only what was
-sensed), as in planning under the free-space assumption. Pure: no I/O.
+sensed), as in planning under the free-space assumption. :class:`ShortestDetour` asks it for
+the clutter planner (:mod:`planners.stretch_replanner`). Pure: no I/O.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
+from planners.replanner import resample
+from planners.stretch_replanner import BlockedStretch, Splice
+
 _CHECK_STEP_M = 0.05  # spacing of the clearance checks along a shortcut [m]
 
 
 class ClearanceMap(Protocol):
     def clearance_m(self, points_ned_m: np.ndarray) -> np.ndarray: ...
+
+
+@dataclass(frozen=True)
+class ShortestDetour:
+    """The companion's stretch replanner: the waypoints from the blocked stretch's start to the
+    first clear one at least ``rejoin_m`` ahead become the shortest detour between them, then
+    pushed out as the paper's replanner does.
+
+    Attributes:
+        clearance_m: kept from obstacle surfaces [m]; a waypoint is clear at this distance.
+        spacing_m: spacing of the new waypoints [m].
+        rejoin_m: how far ahead [m] the detour may rejoin the reference at the earliest.
+    """
+
+    clearance_m: float
+    spacing_m: float
+    rejoin_m: float
+    trigger_clearance_m: float | None = None
+    push_out_after: bool = True
+
+    def splice(self, stretch: BlockedStretch, obstacle_map: ClearanceMap) -> Splice | None:
+        """The detour (None when no waypoint ahead is clear or no detour exists)."""
+        wp, here = stretch.waypoints_ned_m, stretch.here
+        clear = obstacle_map.clearance_m(wp) >= self.clearance_m
+        first = min(here + int(np.ceil(self.rejoin_m / self.spacing_m)), len(wp) - 1)
+        beyond = np.flatnonzero(clear[first:])
+        if beyond.size == 0:
+            return None
+        end = first + int(beyond[0])
+        vertices = shortest_detour(wp[here], wp[end], obstacle_map, self.clearance_m)
+        if vertices is None or end <= here:
+            return None
+        return Splice(resample(vertices, self.spacing_m)[1:-1], end)
 
 
 def shortest_detour(

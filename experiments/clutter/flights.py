@@ -40,7 +40,7 @@ from companion.planner_registry import (
     clutter_nominal,
 )
 from companion.runner import RunnerConfig, fly_mission
-from experiments.clutter.online_rrtstar import OnlineRrtStar
+from experiments.clutter.online_rrtstar import online_rrtstar
 from experiments.clutter.scenario import ALTITUDE_M, shifted
 from flightlog.schema import FlightLog
 from gp.model_io import ResidualModel
@@ -216,6 +216,6 @@ def _planner(kind: PlannerKind, residual_model: ResidualModel | None, bounds_ne_
     if not clutter:
         return nmpc
     if kind == "rrtstar_online":
-        return OnlineRrtStar(nmpc, bounds_ne_m, ClutterSettings(max_speed_mps=SPEED_MPS))
+        return online_rrtstar(nmpc, bounds_ne_m, ClutterSettings(max_speed_mps=SPEED_MPS))
     regenerate = kind in ("proposed", "nominal")
     return ClutterNmpc(nmpc, ClutterSettings(regenerate=regenerate, max_speed_mps=SPEED_MPS))

@@ -6,10 +6,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from planners.local_detour import shortest_detour
+from planners.local_detour import ShortestDetour, shortest_detour
 from planners.obstacle_map import PointObstacleMap
 from planners.path_reference import PolylinePath
 from planners.replanner import ReplannerConfig, push_out, resample
+from planners.stretch_replanner import BlockedStretch
 
 ALT = -2.5
 
@@ -78,3 +79,25 @@ def test_no_detour_through_a_closed_wall():
     for e in np.arange(-8.0, 8.01, 0.3):
         _trunk(m, (5.0, e), 0.2)
     assert shortest_detour(np.array([0.0, 0.0, ALT]), np.array([10.0, 0.0, ALT]), m, 0.8) is None
+
+
+def test_the_splice_replaces_the_blocked_waypoints_up_to_the_first_clear_one_beyond_rejoin():
+    m = PointObstacleMap()
+    _trunk(m, (6.0, 0.1), 0.4)
+    waypoints = resample(np.array([[0.0, 0.0, ALT], [20.0, 0.0, ALT]]), 1.0)
+    replanner = ShortestDetour(clearance_m=0.8, spacing_m=1.0, rejoin_m=8.0)
+    splice = replanner.splice(BlockedStretch(waypoints, 2, waypoints[-1]), m)
+    assert splice is not None
+    assert splice.end == 10  # 8 m ahead of waypoint 2, and clear
+    spliced = np.vstack([waypoints[:3], splice.points_ned_m, waypoints[splice.end :]])
+    assert m.clearance_m(_dense(spliced)).min() >= 0.8 - 0.2 / np.sqrt(2) - 1e-9
+    assert np.abs(spliced[3:-10, 1]).max() > 0.5  # it goes round, not through
+
+
+def test_no_splice_when_nothing_ahead_is_clear():
+    m = PointObstacleMap()
+    for north in np.arange(2.0, 21.0, 1.0):
+        _trunk(m, (north, 0.0), 0.3)
+    waypoints = resample(np.array([[0.0, 0.0, ALT], [20.0, 0.0, ALT]]), 1.0)
+    replanner = ShortestDetour(clearance_m=0.8, spacing_m=1.0, rejoin_m=8.0)
+    assert replanner.splice(BlockedStretch(waypoints, 0, waypoints[-1]), m) is None
