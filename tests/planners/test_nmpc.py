@@ -194,7 +194,9 @@ def test_yaw_is_compared_on_the_reference_branch(short_reference):
 def test_first_order_lag_model_plans(short_reference):
     model = first_order_lag(0.3)
     lag = NmpcPlanner(
-        model, NmpcConfig(state_weights=(10, 10, 10, 1, 1, 1, 10)), compile_functions=False
+        model,
+        NmpcConfig(state_weights=(10, 10, 10, 1, 1, 1, 10), time_budget_s=30.0),
+        compile_functions=False,
     )
     res = lag.plan(PlannerState(np.array([0.0, 0.0, -2.0]), np.zeros(3), 0.3), short_reference, 1.0)
     assert res.ok
