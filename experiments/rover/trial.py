@@ -40,7 +40,11 @@ class TrialRecord:
         n_local: experiences in the local GP used at each step.
         step_time_s: wall time of GP + NMPC per step (for bench only).
         schedule_mps: the speeds this trial was driven with, per vertex.
-        vertex_e_lat_m, vertex_e_head_rad, vertex_w_cmd_radps, vertex_features: per vertex.
+        vertex_e_lat_m, vertex_e_head_rad, vertex_w_cmd_radps, vertex_features: per vertex
+            (the vertex the robot localised to), the worst |e_L|, |e_H| as the localisation
+            measures them, |omega_cmd| and the fewest matched features: what eq. 31 reads
+            ([Ostafew16] section 4.2 records e_L, e_H "when passing the ith vertex", from
+            VT&R; the robot has no other measure of them).
         travel_time_s: time to reach the end of the path.
         completed: reached the end before the time limit.
     """
@@ -128,7 +132,7 @@ def run_trial(
         if pending is not None and sc.learning:  # experience of the previous step
             vtx, v_c, a_prev, pose_k, w_c = pending
             g_obs = learner.observed_disturbance(pose_k, est, v_c, w_c, dt)
-            experiences.append((vtx, v_c, a_prev, g_obs, abs(a_prev[0] - path.s_m[vtx])))
+            experiences.append((vtx, v_c, a_prev, g_obs))
         if fix.vertex >= N - 2:
             completed = True
             break
@@ -165,9 +169,9 @@ def run_trial(
         pending = (fix.vertex, v_now, a_k, est.copy(), w_cmd)
         feats = quality.count(sc.lighting[fix.vertex], true_fix.e_lat_m, true_fix.e_head_rad,
                               st.speed_mps)  # fmt: skip
-        i = true_fix.vertex
-        worst["el"][i] = np.nanmax([worst["el"][i], abs(true_fix.e_lat_m)])
-        worst["eh"][i] = np.nanmax([worst["eh"][i], abs(true_fix.e_head_rad)])
+        i = fix.vertex  # the scheduler has what the robot has: its localised errors
+        worst["el"][i] = np.nanmax([worst["el"][i], abs(fix.e_lat_m)])
+        worst["eh"][i] = np.nanmax([worst["eh"][i], abs(fix.e_head_rad)])
         worst["w"][i] = np.nanmax([worst["w"][i], abs(w_cmd)])
         worst["f"][i] = np.nanmin([worst["f"][i], feats])
         for key, val in (("s", true_fix.s_m), ("el", true_fix.e_lat_m),
