@@ -39,6 +39,8 @@ class TrialRecord:
             localization of the VT&R algorithm", section 5.1), having no ground truth.
         n_local: experiences in the local GP used at each step.
         step_time_s: wall time of GP + NMPC per step (for bench only).
+        step_cpu_s: CPU time of this thread in the same span (for bench only): what the step
+            costs, without the time it waited for a core on a loaded machine.
         schedule_mps: the speeds this trial was driven with, per vertex.
         vertex_e_lat_m, vertex_e_head_rad, vertex_w_cmd_radps, vertex_features: per vertex
             (the vertex the robot localised to), the worst |e_L|, |e_H| as the localisation
@@ -57,6 +59,7 @@ class TrialRecord:
     features: np.ndarray
     n_local: np.ndarray
     step_time_s: np.ndarray
+    step_cpu_s: np.ndarray
     schedule_mps: np.ndarray
     vertex_e_lat_m: np.ndarray
     vertex_e_head_rad: np.ndarray
@@ -111,7 +114,7 @@ def run_trial(
     nmpc = UnicycleNmpc(cfg)
     K, dt, N = cfg.horizon, sc.dt_s, len(path)
     curvature = path.curvature_1pm()
-    rec = {k: [] for k in ("s", "el", "eh", "w", "v", "f", "n", "t", "el_est", "eh_est")}
+    rec = {k: [] for k in ("s", "el", "eh", "w", "v", "f", "n", "t", "cpu", "el_est", "eh_est")}
     worst = {
         "el": np.full(N, np.nan), "eh": np.full(N, np.nan),
         "w": np.full(N, np.nan), "f": np.full(N, np.nan),
@@ -136,7 +139,7 @@ def run_trial(
         if fix.vertex >= N - 2:
             completed = True
             break
-        t0 = time.perf_counter()
+        t0, cpu0 = time.perf_counter(), time.thread_time()
         v_now = float(schedule_mps[fix.vertex])
         s_ahead = fix.s_m + v_now * dt * np.arange(K)
         v_h = np.interp(s_ahead, path.s_m, schedule_mps)
@@ -160,7 +163,7 @@ def run_trial(
             if sc.feedforward
             else None,
         )
-        step_time = time.perf_counter() - t0
+        step_time, step_cpu = time.perf_counter() - t0, time.thread_time() - cpu0
         n_local = model.n_experiences if model is not None else 0
         w_cmd = float(w[0])
         a_k = learner.experience_query(
@@ -176,7 +179,7 @@ def run_trial(
         worst["f"][i] = np.nanmin([worst["f"][i], feats])
         for key, val in (("s", true_fix.s_m), ("el", true_fix.e_lat_m),
                          ("eh", true_fix.e_head_rad), ("w", w_cmd), ("v", v_now),
-                         ("f", feats), ("n", n_local), ("t", step_time),
+                         ("f", feats), ("n", n_local), ("t", step_time), ("cpu", step_cpu),
                          ("el_est", fix.e_lat_m), ("eh_est", fix.e_head_rad)):  # fmt: skip
             rec[key].append(val)
         sim.set_setpoint(v_now, w_cmd)
@@ -187,8 +190,9 @@ def run_trial(
     arr = {k: np.asarray(v, dtype=float) for k, v in rec.items()}
     return TrialRecord(
         arr["s"], arr["el"], arr["eh"], arr["w"], arr["v"], arr["f"], arr["n"].astype(int),
-        arr["t"], np.asarray(schedule_mps, dtype=float).copy(), worst["el"], worst["eh"],
-        worst["w"], worst["f"], float(sim.state.t_s), completed, arr["el_est"], arr["eh_est"],
+        arr["t"], arr["cpu"], np.asarray(schedule_mps, dtype=float).copy(), worst["el"],
+        worst["eh"], worst["w"], worst["f"], float(sim.state.t_s), completed, arr["el_est"],
+        arr["eh_est"],
     )  # fmt: skip
 
 
