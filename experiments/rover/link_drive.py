@@ -85,7 +85,7 @@ def drive_path(
         if pending is not None and gp is not None:
             vtx, a_prev, pose_k, w_c = pending
             g = learner.observed_disturbance(pose_k, pose, speed_mps, w_c, dt)
-            experiences.append((vtx, speed_mps, a_prev, g, abs(a_prev[0] - path.s_m[vtx])))
+            experiences.append((vtx, speed_mps, a_prev, g))
         if fix.vertex >= N - 2:
             reached = True
             break

@@ -37,6 +37,8 @@ def summarise(records: list[TrialRecord]) -> dict:
         "max_heading_reduction_localised": 1.0 - last.max_e_head_est_rad / first.max_e_head_est_rad,
         "max_local_experiences": int(max(int(r.n_local.max()) for r in records)),
         "step_median_ms": float(np.median(np.concatenate([r.step_time_s for r in records]))) * 1e3,
+        "step_median_cpu_ms": float(np.median(np.concatenate([r.step_cpu_s for r in records])))
+        * 1e3,
     }
 
 

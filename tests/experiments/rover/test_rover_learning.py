@@ -59,16 +59,19 @@ def test_local_gp_mean_and_jacobian_match_the_gp_and_finite_differences() -> Non
     assert jac == pytest.approx(num, abs=1e-7)
 
 
-def test_a_pass_fills_each_bin_with_one_experience_the_nearest_to_its_vertex() -> None:
+def test_a_pass_adds_one_experience_per_bin_the_mean_of_its_steps_there() -> None:
     gp = learner.make_history_gp()
     a, g = np.zeros(8), np.zeros(3)
     for trial in range(6):
-        experiences = [(7, 0.4, a + trial, g + d, d) for d in (0.1, 0.02, 0.05)]
+        experiences = [(7, 0.4, a + trial + d, g + d) for d in (0.1, 0.02, 0.06)]
+        experiences.append((8, 0.4, a - trial, g - 1.0))
         learner.store_pass(gp, experiences)
     X, Y = gp.local_data(7, 0.4)
-    assert len(gp) == 4  # c_bin passes, newest kept
-    assert sorted(X[:, 0]) == [2, 3, 4, 5]
-    assert Y[:, 0] == pytest.approx(np.full(4, 0.02))
+    assert len(gp) == 8  # c_bin passes in each of the two bins, newest kept
+    own = X[:, 0] > 0
+    assert sorted(X[own, 0]) == pytest.approx([2.06, 3.06, 4.06, 5.06])
+    assert Y[own, 0] == pytest.approx(np.full(4, 0.06))
+    assert Y[~own, 0] == pytest.approx(np.full(4, -1.0))
 
 
 @pytest.mark.slow
