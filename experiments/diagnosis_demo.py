@@ -40,7 +40,8 @@ CONNECT_TIMEOUT_S = 120.0  # a fresh endpoint on a busy computer may need most o
 @dataclass(frozen=True)
 class DiagnosisDemoResult:
     """What the demo prints: ``verdict`` (cause names), ``params`` (cause -> fitted
-    parameters), replay and closed-loop gains, the noise floor [m/s] and the report file."""
+    parameters), replay and closed-loop gains, the noise floor [m/s], the report file and the
+    OFFBOARD time of the onboard log [s]."""
 
     verdict: tuple[str, ...]
     params: dict[str, dict[str, float]]
