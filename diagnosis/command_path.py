@@ -3,8 +3,10 @@
 command_delay, motor_lag and thrust_curve (ROLE "command") have one parameter each; its value
 is chosen on the training windows by a coarse grid (the effect's ``ParamSpec.search``) followed
 by a bounded scalar refinement around the best grid point.
-flight_control is PX4's horizontal velocity-loop gains, fitted by regression on the training
-rows (:mod:`.controller_fit`) and refined by training replay error. Each is then judged on the
+flight_control is PX4's velocity-loop gains (horizontal and vertical P and I), fitted by
+regression on the training rows (:mod:`.controller_fit`); the P gains and the horizontal I are
+refined by training replay error, the vertical I is refitted by regression with the refined
+vertical P. Each is then judged on the
 held-out
 windows like the force causes: it is named only if it removes at least ``min_gain_fraction`` of
 the held-out replay mean squared velocity error that is left above the noise floor (the white
@@ -22,7 +24,11 @@ import numpy as np
 from scipy.optimize import minimize, minimize_scalar
 
 from diagnosis.cause import Cause
-from diagnosis.controller_fit import ControllerFitError, fit_velocity_gains
+from diagnosis.controller_fit import (
+    ControllerFitError,
+    fit_velocity_gains,
+    refit_vertical_integral,
+)
 from diagnosis.noise_floor import block_bootstrap
 from diagnosis.replay import ReplayResult, Window, replay
 from flightlog.schema import FlightLog
@@ -31,7 +37,9 @@ from vehicle_sim.effects import EFFECT_CLASSES, effects_with_role
 from vehicle_sim.params import PX4_PARAMS
 
 FLIGHT_CONTROL = "flight_control"
-REFINE_EVALUATIONS = 30
+REFINE_EVALUATIONS = 40
+# Not refined by replay (the replay hardly sees it): refitted with the refined vertical P.
+Z_INTEGRAL = "MPC_Z_VEL_I_ACC"
 COMMAND_CAUSES: tuple[str, ...] = (*effects_with_role("command"), FLIGHT_CONTROL)
 
 
@@ -95,21 +103,29 @@ def fit_command_cause(
     train: Sequence[Window],
     test: Sequence[Window],
     progress: Callable[[str], None] = lambda msg: None,
+    regression: Sequence[Window] | None = None,
 ) -> CommandFit | None:
-    """Fit ``name`` on ``train`` windows; score it on ``test`` windows (None: cannot be fitted)."""
+    """Fit ``name`` on ``train`` windows; score it on ``test`` windows (None: cannot be fitted).
+    ``regression``: the windows whose rows the flight_control regressions use (default
+    ``train``; a regression costs no replays, so it may take every training window of the log
+    where the replays take a prefix)."""
     if name == FLIGHT_CONTROL:
+        rows = train if regression is None else regression
         try:
-            fit = fit_velocity_gains(logs, config, train)
+            fit = fit_velocity_gains(logs, config, rows)
         except ControllerFitError as exc:
             progress(f"  {name}: not fitted ({exc})")
             return None
-        gains, train_rmse = _refine_gains(config, logs, train, fit.gains)
+        refined = {k: v for k, v in fit.gains.items() if k != Z_INTEGRAL}
+        gains, _ = _refine_gains(config, logs, train, refined)
+        gains[Z_INTEGRAL] = refit_vertical_integral(logs, config, rows, gains)
+        train_rmse = replay(configured(config, {name: gains}), logs, train).rmse_mps()
         held_out = replay(configured(config, {name: gains}), logs, test)
         shown = ", ".join(f"{k} = {v:.3g}" for k, v in gains.items())
         progress(f"  {name}: {shown}, held-out replay RMSE {held_out.rmse_mps():.4f} m/s")
-        at_bound = bool(fit.at_bound) or any(
-            not PX4_PARAMS[k].lo < v < PX4_PARAMS[k].hi for k, v in gains.items()
-        )
+        # Judged on the refined gains: the regression is only their start (its at_bound says
+        # where the lag model fell outside PX4's bounds, which the replay then corrects).
+        at_bound = any(not PX4_PARAMS[k].lo < v < PX4_PARAMS[k].hi for k, v in gains.items())
         return CommandFit(name, gains, train_rmse, held_out.rmse_mps(), held_out, at_bound)
     param, grid = search_grid(name)
 
@@ -140,21 +156,37 @@ def _refine_gains(
 ) -> tuple[dict[str, float], float]:
     """The regression's gains refined by training-window replay error (Nelder-Mead on the log
     of each gain, PX4's bounds kept, at most ``REFINE_EVALUATIONS`` replays): the replay is
-    far more sensitive to P than the regression's lag model is exact (10 % in P, 0.13 m/s)."""
+    far more sensitive to P than the regression's lag model is exact (10 % in P, 0.13 m/s).
+
+    The objective weighs the horizontal and the vertical replay error each against its value
+    at the start: the vertical error is a few percent of the horizontal one on an excitation
+    flight, and in their plain sum the vertical gains would not be refined at all (seen: a
+    vertical P driven to its bound). Returns the gains and their training replay RMSE [m/s]."""
     names = list(start)
     lo = np.array([max(PX4_PARAMS[n].lo, 1e-3) for n in names])
     hi = np.array([PX4_PARAMS[n].hi for n in names])
     x0 = np.log(np.clip([start[n] for n in names], lo, hi))
+    rmse_of: dict[tuple[float, ...], float] = {}
 
-    def rmse(x: np.ndarray) -> float:
+    def axis_mse(x: np.ndarray) -> np.ndarray:
         gains = dict(zip(names, np.clip(np.exp(x), lo, hi).tolist(), strict=True))
-        return replay(configured(config, {FLIGHT_CONTROL: gains}), logs, train).rmse_mps()
+        result = replay(configured(config, {FLIGHT_CONTROL: gains}), logs, train)
+        rmse_of[tuple(x)] = result.rmse_mps()
+        err = result.sim_vel_ned_mps - result.meas_vel_ned_mps
+        return np.array([np.mean(err[:, :2] ** 2), np.mean(err[:, 2] ** 2)])
+
+    scale = np.maximum(axis_mse(x0), 1e-12)
+
+    def objective(x: np.ndarray) -> float:
+        return float(np.sum(axis_mse(x) / scale))
 
     simplex = np.vstack([x0, *(x0 + 0.1 * e for e in np.eye(len(names)))])
     options = {"initial_simplex": simplex, "maxfev": REFINE_EVALUATIONS, "xatol": 0.01}
-    sol = minimize(rmse, x0, method="Nelder-Mead", options=options)
+    sol = minimize(objective, x0, method="Nelder-Mead", options=options)
     best = dict(zip(names, np.clip(np.exp(sol.x), lo, hi).tolist(), strict=True))
-    return best, float(sol.fun)
+    if tuple(sol.x) not in rmse_of:
+        axis_mse(sol.x)
+    return best, rmse_of[tuple(sol.x)]
 
 
 def _row_sq(result: ReplayResult) -> np.ndarray:
@@ -174,17 +206,20 @@ def select_command_causes(
     thresholds: ReplayThresholds,
     progress: Callable[[str], None],
     noise_mse_mps2: float = 0.0,
+    regression: Sequence[Window] | None = None,
 ) -> tuple[ReplayResult, list[Cause], list[Cause]]:
     """Forward selection of command-path causes by held-out replay error; adds the accepted
     ones to ``effects``. ``noise_mse_mps2`` is the replay's noise floor (mean squared 3-D
-    velocity noise of the log [m^2/s^2]). Returns the final held-out replay, accepted and
-    rejected causes."""
+    velocity noise of the log [m^2/s^2]); ``regression`` as in :func:`fit_command_cause`.
+    Returns the final held-out replay, accepted and rejected causes."""
     accepted: list[Cause] = []
     rejected: dict[str, Cause] = {}
     left = list(names)
     scale = max(baseline.rmse_mps() ** 2 - noise_mse_mps2, 1e-12)
     while left and search and current.rmse_mps() >= thresholds.min_gain_mps:
-        fitted = [fit_command_cause(n, config_now, logs, search, test, progress) for n in left]
+        fitted = [
+            fit_command_cause(n, config_now, logs, search, test, progress, regression) for n in left
+        ]
         fits = [f for f in fitted if f is not None]
         if not fits:
             break

@@ -40,14 +40,17 @@ def free_udp_ports(count: int) -> list[int]:
 
 
 class SimEndpoint:
-    """``vehicle-sim --vehicle VEHICLE --seed SEED`` on free loopback ports.
+    """``vehicle-sim --vehicle VEHICLE --seed SEED`` on free loopback ports; with
+    ``onboard_log``, the vehicle's own flight log is written there when it stops.
 
     Attributes:
         mavsdk_url: where the companion's MAVSDK link listens (udpin://127.0.0.1:PORT).
         log_path: the endpoint's output (announcement and errors), kept for diagnosis.
     """
 
-    def __init__(self, vehicle: str, seed: int, log_path: Path) -> None:
+    def __init__(
+        self, vehicle: str, seed: int, log_path: Path, onboard_log: Path | None = None
+    ) -> None:
         offboard, gcs, offboard_bind, gcs_bind = free_udp_ports(4)
         self.mavsdk_url = f"udpin://127.0.0.1:{offboard}"
         self.log_path = log_path
@@ -56,6 +59,8 @@ class SimEndpoint:
             "--seed", str(seed), "--offboard-port", str(offboard), "--gcs-port", str(gcs),
             "--offboard-bind-port", str(offboard_bind), "--gcs-bind-port", str(gcs_bind),
         ]  # fmt: skip
+        if onboard_log is not None:
+            self._argv += ["--log", str(onboard_log)]
         self._process: subprocess.Popen[bytes] | None = None
 
     def __enter__(self) -> SimEndpoint:

@@ -3,10 +3,12 @@
 Starts `vehicle-sim` (the study vehicle, vehicle_sim/presets/iris_study.toml) as a MAVLink
 endpoint on loopback, flies missions/demo_bspline.toml with the nominal NMPC over MAVSDK, fits
 the residual GP from that flight's log, flies the mission again with the augmented NMPC, prints
-the comparison and writes out/demo/report.md with plots. Then the diagnosis: the excitation
-mission flown on the same vehicle with realistic sensor noise, diagnosed against the plain iris
-preset (experiments/diagnosis_demo.py; report in out/demo/diagnosis). Every process it starts is
-stopped, also on errors and Ctrl-C. Exit code 0 on success, 1 if a flight failed, 130 on Ctrl-C.
+the comparison and writes out/demo/report.md with plots. Then the diagnosis: a third endpoint
+with the same vehicle, the demo's excitation mission flown over MAVLink, the vehicle's onboard
+log with realistic sensor noise diagnosed against the plain iris preset; the verdict is printed
+below the learning result (experiments/diagnosis_demo.py; report with plots in
+out/demo/diagnosis). Every process it starts is stopped, also on errors and Ctrl-C. Exit code 0
+on success, 1 if a flight failed, 130 on Ctrl-C.
 """
 
 from __future__ import annotations
@@ -43,21 +45,23 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     try:
         figures = run_demo(config, progress)
+        print(comparison_table(figures))
+        nominal, augmented = figures
+        print(
+            f"\nresidual RMSE {nominal.residual_rmse_mps / augmented.residual_rmse_mps:.2f}x "
+            f"lower, tracking RMSE {nominal.tracking_rmse_m / augmented.tracking_rmse_m:.2f}x "
+            f"lower augmented; {time.monotonic() - start:.0f} s in all"
+        )
+        print(f"report: {config.out_dir / 'report.md'}\n", flush=True)
+        diagnosis = run_diagnosis_demo(config.out_dir / "diagnosis", config.seed, progress)
     except KeyboardInterrupt:
         print("demo: interrupted; the simulator was stopped", file=sys.stderr)
         return 130
     except (CompanionInputError, DemoError, EndpointError) as exc:
         print(f"demo: error: {exc}", file=sys.stderr)
         return 1
-    print(comparison_table(figures))
-    nominal, augmented = figures
-    print(
-        f"\nresidual RMSE {nominal.residual_rmse_mps / augmented.residual_rmse_mps:.2f}x lower, "
-        f"tracking RMSE {nominal.tracking_rmse_m / augmented.tracking_rmse_m:.2f}x lower "
-        f"augmented; {time.monotonic() - start:.0f} s in all"
-    )
-    print(f"report: {config.out_dir / 'report.md'}")
-    print(run_diagnosis_demo(config.out_dir / "diagnosis", config.seed, progress).summary())
+    print(diagnosis.summary())
+    print(f"demo: {time.monotonic() - start:.0f} s in all (learning and diagnosis)")
     return 0
 
 

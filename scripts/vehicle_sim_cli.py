@@ -3,12 +3,15 @@
 Two UDP links on loopback, as PX4 SITL opens them: the offboard API link sends to 14540
 (MAVSDK: ``udpin://127.0.0.1:14540``) and the GCS link sends to 14550 (MAVProxy / QGC /
 pymavlink: ``udpin:127.0.0.1:14550``). Runs in real time or at ``--speed`` until SIGINT/SIGTERM
-(or ``--duration-s``).
+(or ``--duration-s``). With ``--log FILE.csv`` it also keeps the vehicle's own flight log, as
+PX4 does on its SD card (measured acceleration and thrust, which MAVLink does not carry), and
+writes it when it stops.
 
 Usage:
     vehicle-sim                                        # iris, real time
     vehicle-sim --vehicle m100 --speed 2 --effect rotor_drag --effect wind.vel_ned_mps=[3,0,0]
     vehicle-sim --vehicle my_quad.toml --signing-key link.key
+    vehicle-sim --vehicle iris_study --log onboard.csv   # fly it, then diagnose onboard.csv
     vehicle-sim --vehicle f450 --backend jsbsim          # JSBSim's F450 under the same control
     vehicle-sim config-from-log flight.ulg --out my_vehicle.toml   # your tuning, your hover
 """
@@ -24,6 +27,7 @@ import time
 import tomllib
 from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 from vehicle_sim import EFFECT_NAMES, SimConfigError, Simulator, load_sim_config
@@ -35,6 +39,7 @@ from vehicle_sim.mavlink import (
     load_signing_key,
     px4_sitl_links,
 )
+from vehicle_sim.onboard_log import OnboardLogger
 
 PROG = "vehicle-sim"
 
@@ -60,6 +65,8 @@ class VehicleSimCliConfig:
         duration_s: stop after this wall-clock time [s]; None runs until a signal.
         world_path: obstacle world file (planners.world_file): trunks the vehicle can hit
             (a crash disarms it) and its range sensor streams as OBSTACLE_DISTANCE; or None.
+        log_path: where to write the onboard flight log (schema v1 CSV, 50 Hz of simulated
+            time) when the endpoint stops; None keeps none.
     """
 
     vehicle: str = "iris"
@@ -75,6 +82,7 @@ class VehicleSimCliConfig:
     signing_key_path: str | None = None
     duration_s: float | None = None
     world_path: str | None = None
+    log_path: str | None = None
 
 
 class _Parser(argparse.ArgumentParser):
@@ -142,6 +150,11 @@ def parse_args(argv: Sequence[str] | None) -> VehicleSimCliConfig:
         help="obstacle world (cylinders, spheres, boxes): contact crashes the vehicle; its "
         "range sensor streams OBSTACLE_DISTANCE",
     )
+    parser.add_argument(
+        "--log",
+        metavar="FILE.csv",
+        help="write the vehicle's onboard flight log (with acceleration and thrust) here on exit",
+    )
     args = parser.parse_args(argv)
     if not (math.isfinite(args.speed) and 0.01 <= args.speed <= 100.0):
         raise UsageError(f"--speed {args.speed}: must be within [0.01, 100]")
@@ -161,6 +174,7 @@ def parse_args(argv: Sequence[str] | None) -> VehicleSimCliConfig:
         signing_key_path=args.signing_key,
         duration_s=args.duration_s,
         world_path=args.world,
+        log_path=args.log,
     )
 
 
@@ -183,7 +197,8 @@ def build_endpoint(config: VehicleSimCliConfig) -> MavlinkEndpoint:
         offboard_bind_port=config.offboard_bind_port,
         gcs_bind_port=config.gcs_bind_port,
     )
-    return MavlinkEndpoint(sim, EndpointConfig(links=links, speed=config.speed))
+    stepped = OnboardLogger(sim) if config.log_path is not None else sim
+    return MavlinkEndpoint(stepped, EndpointConfig(links=links, speed=config.speed))
 
 
 def _announce(config: VehicleSimCliConfig, endpoint: MavlinkEndpoint) -> None:
@@ -213,6 +228,19 @@ def _stop(endpoint: MavlinkEndpoint) -> str:
         endpoint.stop()
     except RuntimeError as exc:
         return str(exc)
+    return ""
+
+
+def _write_onboard_log(endpoint: MavlinkEndpoint, path: str | None) -> str:
+    """Write the onboard log if one was kept; the reason it failed ("" if written or none)."""
+    if path is None or not isinstance(endpoint.sim, OnboardLogger):
+        return ""
+    log = endpoint.sim.to_log()
+    try:
+        written = endpoint.sim.write(Path(path))
+    except OSError as exc:
+        return f"onboard log not written: {exc}"
+    print(f"{PROG}: onboard log {written} ({log.n_rows} rows)", flush=True)
     return ""
 
 
@@ -249,7 +277,7 @@ def _run(config: VehicleSimCliConfig, stop: threading.Event) -> int:
         _announce(config, endpoint)
         serve(endpoint, stop, config.duration_s)
     finally:
-        failure = _stop(endpoint)
+        failure = _stop(endpoint) or _write_onboard_log(endpoint, config.log_path)
     if failure:
         print(f"{PROG}: error: {failure}", file=sys.stderr)
         return 1

@@ -142,3 +142,35 @@ def test_another_controller_is_named_flight_control_with_its_gains(seed, tmp_pat
     (drag,) = [c for c in result.causes if c.name == "body_drag"]
     fitted = [drag.params[f"c_n_per_mps2_{a}"] for a in "xy"]
     assert fitted == pytest.approx(truth["body_drag"]["c_n_per_mps2"][:2], rel=0.15)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", [51, 52])
+def test_other_horizontal_and_vertical_gains_on_a_noisy_log(seed, tmp_path):
+    """The truth flies other horizontal and vertical velocity gains than the config (and body
+    drag), logged with realistic sensor noise (levels drawn): ``flight_control`` is named with
+    all four gains within 20 % and the drag is still found."""
+    rng = np.random.default_rng(seed)
+    factor = rng.uniform(0.72, 0.8) if rng.uniform() < 0.5 else rng.uniform(1.4, 1.9)
+    # Vertical P slower or faster than the config's 4.0, away from PX4's lower bound 2.0;
+    # vertical I below the config's 2.0.
+    z_factor = rng.uniform(0.7, 0.8) if rng.uniform() < 0.5 else rng.uniform(1.4, 2.0)
+    gains = {
+        "MPC_XY_VEL_P_ACC": 1.8 * factor,
+        "MPC_XY_VEL_I_ACC": rng.uniform(1.2, 2.8),
+        "MPC_Z_VEL_P_ACC": 4.0 * z_factor,
+        "MPC_Z_VEL_I_ACC": rng.uniform(0.6, 1.4),
+    }
+    truth, _ = draw("body_drag", rng)
+    log = fly_schedule(load_sim_config("iris", truth), schedule(), seed=seed, params=gains)
+    noise = draw_sensor_noise(np.random.default_rng(seed + 500))
+    noisy = add_sensor_noise(log, noise, seed)
+    result = diagnose([noisy], load_sim_config("iris"))
+    assert "flight_control" in result.verdict and "body_drag" in result.verdict, (
+        noise,
+        result.causes[:3],
+    )
+    (named,) = [c for c in result.causes if c.name == "flight_control"]
+    for name, value in gains.items():
+        assert named.params[name] == pytest.approx(value, rel=0.2), (name, named.params)
+    assert set(result.added_effects["flight_control"]) == set(gains)

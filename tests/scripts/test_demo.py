@@ -1,5 +1,6 @@
 """`make demo` end to end on a short mission: two real vehicle-sim endpoints, MAVSDK flights,
-a model fitted in between, the comparison and the report."""
+a model fitted in between, the comparison and the report; then the diagnosis flight over
+MAVLink on a third endpoint, its verdict and its report with plots."""
 
 from __future__ import annotations
 
@@ -62,3 +63,12 @@ def test_demo_flies_nominal_learns_and_flies_augmented_over_mavsdk(tmp_path, cap
         assert (out / name).stat().st_size > 0
         if name.endswith(".png"):
             assert f"]({name})" in report
+    # The demo vehicle hides drag and wind from the plain preset: "none" would be wrong.
+    verdict = re.search(r"^diagnosis of the plain preset .*: verdict (.+)$", stdout, re.M)
+    assert verdict is not None and verdict.group(1) != "none", stdout[-2000:]
+    diagnosis = out / "diagnosis"
+    diagnosis_report = (diagnosis / "report.md").read_text()
+    for name in ("replay_velocity.png", "closed_loop_velocity.png"):
+        assert (diagnosis / name).stat().st_size > 0
+        assert f"]({name})" in diagnosis_report
+    assert (diagnosis / "extended_config.toml").stat().st_size > 0

@@ -1,0 +1,57 @@
+"""The onboard log a simulator behind the MAVLink endpoint keeps: rows at its rate of simulated
+time, with the acceleration and thrust MAVLink does not carry, and the command as received."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from vehicle_sim import FlightMode, Simulator, VelocitySetpoint, load_sim_config
+from vehicle_sim.onboard_log import OnboardLogger
+
+
+def _offboard(logger: OnboardLogger) -> None:
+    assert logger.arm().accepted
+    assert logger.takeoff(2.0).accepted
+    while logger.state.mode is not FlightMode.HOLD:
+        logger.step(0.5)
+    logger.set_velocity_setpoint(VelocitySetpoint((0.0, 0.0, 0.0)))
+    logger.step(0.05)
+    assert logger.set_mode(FlightMode.OFFBOARD).accepted
+
+
+def test_rows_at_the_log_rate_with_measured_columns():
+    sim = Simulator(load_sim_config("iris"), seed=0)
+    logger = OnboardLogger(sim, rate_hz=25.0)
+    t0 = sim.state.t_s
+    for _ in range(400):  # 2 s in steps of 5 ms, as the endpoint steps it
+        logger.step(0.005)
+    log = logger.to_log()
+    assert log.n_rows == pytest.approx((sim.state.t_s - t0) * 25.0, abs=1)
+    assert np.allclose(np.diff(log["t_s"]), 0.04, atol=0.006)
+    for column in ("acc_d_mps2", "thrust_n", "q_w", "vel_n_mps"):
+        assert log.has(column)
+    assert logger.physics_dt_s == sim.physics_dt_s  # everything else is the simulator's
+
+
+def test_the_logged_command_is_the_received_one_not_the_delayed_one():
+    rng = np.random.default_rng(3)
+    delay_s = float(rng.uniform(0.2, 0.4))
+    speed = float(rng.uniform(1.0, 3.0))
+    sim = Simulator(load_sim_config("iris", {"command_delay": {"delay_s": delay_s}}), seed=3)
+    logger = OnboardLogger(sim, rate_hz=50.0)
+    _offboard(logger)
+    sent_at = logger.state.t_s
+    for _ in range(40):
+        logger.set_velocity_setpoint(VelocitySetpoint((speed, 0.0, 0.0)))
+        logger.step(0.05)
+    log = logger.to_log()
+    after = log["t_s"] > sent_at + 0.03
+    assert np.all(log["cmd_vel_n_mps"][after] == pytest.approx(speed))
+    moving = log["t_s"][after & (log["vel_n_mps"] > 0.05)]
+    assert moving[0] - sent_at > 0.8 * delay_s  # the vehicle still waited for it
+
+
+def test_a_bad_rate_is_refused():
+    with pytest.raises(ValueError, match="onboard log rate"):
+        OnboardLogger(Simulator(load_sim_config("iris")), rate_hz=0.0)

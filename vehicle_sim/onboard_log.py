@@ -1,0 +1,63 @@
+"""The vehicle's own flight log, as PX4 writes one to its SD card while a companion flies it.
+
+A MAVLink link carries position, velocity and attitude, but not the measured acceleration or
+the rotor thrust a diagnosis needs; PX4 logs those on board (ULog) and the user copies the log
+off afterwards. :class:`OnboardLogger` does the same for a simulator behind the MAVLink endpoint:
+it stands in for the :class:`~vehicle_sim.Simulator` (every attribute is the simulator's), and
+records one schema-v1 row (:func:`vehicle_sim.truth_log.truth_row`) per logging period of
+simulated time as the endpoint steps it. The command in a row is the last velocity setpoint
+the vehicle received (what PX4 logs as it arrives), not the one it acts on after a command
+delay. Rows fall on the endpoint's steps, so their spacing jitters by up to one step.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from flightlog.schema import FlightLog, FlightLogRecorder, write_flight_log
+from vehicle_sim.simulator import Simulator
+from vehicle_sim.vehicle_types import VehicleState, VelocitySetpoint
+
+DEFAULT_LOG_RATE_HZ = 50.0
+
+
+class OnboardLogger:
+    """``sim`` with an onboard log at ``rate_hz`` [Hz] of simulated time.
+
+    Owned by whoever steps ``sim`` (the endpoint's thread); :meth:`write` after it stopped.
+    """
+
+    def __init__(self, sim: Simulator, rate_hz: float = DEFAULT_LOG_RATE_HZ) -> None:
+        if not (math.isfinite(rate_hz) and rate_hz > 0.0):
+            raise ValueError(f"onboard log rate {rate_hz!r} Hz: must be a positive number")
+        self._sim = sim
+        self._period_s = 1.0 / rate_hz
+        self._next_s = -math.inf
+        self._received: VelocitySetpoint | None = None
+        self._recorder = FlightLogRecorder({**sim.log_metadata(), "rate_hz": rate_hz})
+
+    def __getattr__(self, name: str) -> object:
+        return getattr(self._sim, name)
+
+    def set_velocity_setpoint(self, sp: VelocitySetpoint) -> None:
+        """The simulator's; an accepted setpoint becomes the logged command."""
+        self._sim.set_velocity_setpoint(sp)
+        self._received = sp
+
+    def step(self, duration_s: float) -> VehicleState:
+        """The simulator's step; then a row if a logging period has passed."""
+        state = self._sim.step(duration_s)
+        if state.t_s >= self._next_s:
+            self._recorder.append(self._sim.log_row(self._received))
+            due_s = self._next_s + self._period_s
+            self._next_s = due_s if due_s > state.t_s else state.t_s + self._period_s
+        return state
+
+    def to_log(self) -> FlightLog:
+        """The rows so far as a flight log."""
+        return self._recorder.to_log()
+
+    def write(self, path: Path) -> Path:
+        """Write the log (CSV and metadata sidecar, atomically); returns the CSV path."""
+        return write_flight_log(path, self.to_log())
