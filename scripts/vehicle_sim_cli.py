@@ -26,6 +26,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from companion.realtime import MAX_RT_PRIORITY, raise_to_realtime
 from vehicle_sim import EFFECT_NAMES, SimConfigError, Simulator, load_sim_config
 from vehicle_sim.backends import BACKEND_NAMES
 from vehicle_sim.mavlink import (
@@ -60,6 +61,9 @@ class VehicleSimCliConfig:
         duration_s: stop after this wall-clock time [s]; None runs until a signal.
         world_path: obstacle world file (planners.world_file): trunks the vehicle can hit
             (a crash disarms it) and its range sensor streams as OBSTACLE_DISTANCE; or None.
+        realtime_priority: SCHED_FIFO priority (1-99) of the simulation loop's thread, as a
+            stand-in for a flight controller on a processor of its own (companion.realtime;
+            not permitted: said in one line, normal priority); 0 (default) leaves it normal.
     """
 
     vehicle: str = "iris"
@@ -75,6 +79,7 @@ class VehicleSimCliConfig:
     signing_key_path: str | None = None
     duration_s: float | None = None
     world_path: str | None = None
+    realtime_priority: int = 0
 
 
 class _Parser(argparse.ArgumentParser):
@@ -142,11 +147,23 @@ def parse_args(argv: Sequence[str] | None) -> VehicleSimCliConfig:
         help="obstacle world (cylinders, spheres, boxes): contact crashes the vehicle; its "
         "range sensor streams OBSTACLE_DISTANCE",
     )
+    parser.add_argument(
+        "--realtime-priority",
+        type=int,
+        default=0,
+        metavar="N",
+        help="run the simulation loop at SCHED_FIFO priority N (1-99), as a flight controller "
+        "on its own processor would not wait for other programs; 0 (default): normal priority",
+    )
     args = parser.parse_args(argv)
     if not (math.isfinite(args.speed) and 0.01 <= args.speed <= 100.0):
         raise UsageError(f"--speed {args.speed}: must be within [0.01, 100]")
     if args.duration_s is not None and not (math.isfinite(args.duration_s) and args.duration_s > 0):
         raise UsageError(f"--duration-s {args.duration_s}: must be > 0")
+    if not 0 <= args.realtime_priority <= MAX_RT_PRIORITY:
+        raise UsageError(
+            f"--realtime-priority {args.realtime_priority}: must be 0 (off) or 1..{MAX_RT_PRIORITY}"
+        )
     return VehicleSimCliConfig(
         vehicle=args.vehicle,
         effects=_effect_overrides(args.effect),
@@ -161,6 +178,7 @@ def parse_args(argv: Sequence[str] | None) -> VehicleSimCliConfig:
         signing_key_path=args.signing_key,
         duration_s=args.duration_s,
         world_path=args.world,
+        realtime_priority=args.realtime_priority,
     )
 
 
@@ -246,6 +264,9 @@ def _run(config: VehicleSimCliConfig, stop: threading.Event) -> int:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
         return 2
     try:
+        if config.realtime_priority and endpoint.loop_thread_id is not None:
+            outcome = raise_to_realtime(config.realtime_priority, endpoint.loop_thread_id)
+            print(f"{PROG}: simulation loop: {outcome}")
         _announce(config, endpoint)
         serve(endpoint, stop, config.duration_s)
     finally:
@@ -257,7 +278,8 @@ def _run(config: VehicleSimCliConfig, stop: threading.Event) -> int:
     print(
         f"{PROG}: stopped at t = {endpoint.state.t_s:.1f} s sim; received "
         f"{stats.messages_received} messages, rejected {stats.garbage_datagrams} garbage "
-        f"datagrams and {stats.setpoints_rejected} setpoints",
+        f"datagrams and {stats.setpoints_rejected} setpoints; caught up "
+        f"{stats.caught_up_ms} ms after stalls, dropped time {stats.loop_overruns} times",
         flush=True,
     )
     return 0
