@@ -8,6 +8,8 @@ import time
 class WallClock:
     """Monotonic wall time [s] since construction; ``sleep_until`` sleeps."""
 
+    real_time = True
+
     def __init__(self) -> None:
         self._origin_s = time.monotonic()
 

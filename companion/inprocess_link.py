@@ -30,6 +30,8 @@ class SimClock:
     """Simulated time; sleeping advances the simulator (lockstep). Any simulator with
     ``state.t_s``, ``physics_dt_s`` and ``step(dt_s)`` will do (the multirotor's, the rover's)."""
 
+    real_time = False
+
     def __init__(self, sim: Simulator) -> None:
         self._sim = sim
 

@@ -139,7 +139,14 @@ class CommandOutcome:
 
 
 class Clock(Protocol):
-    """Time as the control loop uses it."""
+    """Time as the control loop uses it.
+
+    Attributes:
+        real_time: True when sleeping waits for the wall clock (the loop then sleeps between
+            ticks and may run at a real-time priority, companion.realtime); False in lockstep.
+    """
+
+    real_time: bool
 
     def now_s(self) -> float:
         """Current time [s] (monotonic; origin is the clock's own)."""

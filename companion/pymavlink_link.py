@@ -61,6 +61,8 @@ def pymavlink_device(url: str) -> str:
 class _PumpClock:
     """Wall time whose sleep services the link (receive, re-send setpoint, heartbeat)."""
 
+    real_time = True
+
     def __init__(self, link: PymavlinkLink) -> None:
         self._link = link
         self._wall = WallClock()

@@ -24,6 +24,7 @@ from companion.decision import CommandLimits, HoverPolicy
 from companion.link import ZERO_VELOCITY, CommandOutcome, LandedPhase, Link, LinkError, LinkState
 from companion.mission import Mission
 from companion.planner_policy import PlannerPolicy
+from companion.realtime import MAX_RT_PRIORITY, realtime_section
 from companion.waiting import command_until_accepted, describe, wait_for
 from planners.reference import Planner, Reference
 
@@ -39,6 +40,10 @@ FlightStatus = Literal[
 
 
 _MODES_OF_THE_CLIMB = ("TAKEOFF", "HOLD")  # PX4 climbs in AUTO.TAKEOFF, then loiters
+COMPANION_RT_PRIORITY = 10
+"""The companion's default SCHED_FIFO priority: above every normal process, below the
+kernel's own real-time threads (50) and below a simulator standing in for a flight
+controller on its own processor (experiments.sim_endpoint)."""
 
 
 class _HandedOver(Exception):
@@ -68,6 +73,11 @@ class RunnerConfig:
             (it may lag a mode change by one heartbeat); once OFFBOARD was reported, any other
             mode is a takeover at once [s].
         vertical_limit_up_mps, vertical_limit_down_mps: command limits [m/s].
+        realtime_priority: SCHED_FIFO priority (1-99) the flight runs at when its link's
+            clock is the wall clock, as a companion computer runs its control loop
+            (companion.realtime; where the system does not permit it, the flight says so and
+            runs at normal priority); 0 keeps the normal priority. Lockstep flights never
+            change it (they never sleep).
     """
 
     rate_hz: float = 50.0
@@ -82,10 +92,16 @@ class RunnerConfig:
     offboard_grace_s: float = 2.5
     vertical_limit_up_mps: float = 1.5
     vertical_limit_down_mps: float = 1.0
+    realtime_priority: int = COMPANION_RT_PRIORITY
 
     def __post_init__(self) -> None:
         if not 1.0 <= self.rate_hz <= 500.0:
             raise ValueError(f"rate_hz must be within [1, 500] Hz, got {self.rate_hz}")
+        if not 0 <= self.realtime_priority <= MAX_RT_PRIORITY:
+            raise ValueError(
+                f"realtime_priority must be 0 (off) or 1..{MAX_RT_PRIORITY}, "
+                f"got {self.realtime_priority}"
+            )
 
 
 @dataclass(frozen=True)
@@ -125,6 +141,20 @@ def fly_mission(
     progress: Callable[[str], None],
 ) -> FlightOutcome:
     """Fly ``mission`` over a connected-or-not ``link``; see the module docstring."""
+    priority = config.realtime_priority if link.clock.real_time else 0
+    with realtime_section(priority, "control loop", progress):
+        return _fly(link, planner, reference, mission, config, on_tick, progress)
+
+
+def _fly(
+    link: Link,
+    planner: Planner,
+    reference: Reference,
+    mission: Mission,
+    config: RunnerConfig,
+    on_tick: Callable[[Tick], None],
+    progress: Callable[[str], None],
+) -> FlightOutcome:
     counters = LoopCounters()
     goal = np.asarray(mission.goal_ned_m, dtype=float)
     airborne = False

@@ -19,6 +19,11 @@ _STOP_TIMEOUT_S = 10.0
 _READY_TIMEOUT_S = 180.0  # a fresh checkout compiles the numba kernels first; a busy CPU slows it
 _READY_LINE = b"Ctrl-C to stop"  # what vehicle-sim prints once its endpoint is running
 _POLL_S = 0.1
+SIM_RT_PRIORITY = 20
+"""SCHED_FIFO priority of the endpoint's simulation loop: it stands in for a flight controller
+on a processor of its own, which no program on the companion computer delays; above the
+companion's control loop (companion.runner.COMPANION_RT_PRIORITY). Where the system does not
+permit it, the endpoint's log says so and it runs at normal priority."""
 
 
 class EndpointError(RuntimeError):
@@ -40,8 +45,9 @@ def free_udp_ports(count: int) -> list[int]:
 
 
 class SimEndpoint:
-    """``vehicle-sim --vehicle VEHICLE --seed SEED`` on free loopback ports; with
-    ``onboard_log``, the vehicle's own flight log is written there when it stops.
+    """``vehicle-sim --vehicle VEHICLE --seed SEED`` on free loopback ports, its simulation loop
+    at ``realtime_priority`` (SCHED_FIFO; 0: normal priority); with ``onboard_log``, the
+    vehicle's own flight log is written there when it stops.
 
     Attributes:
         mavsdk_url: where the companion's MAVSDK link listens (udpin://127.0.0.1:PORT).
@@ -49,7 +55,12 @@ class SimEndpoint:
     """
 
     def __init__(
-        self, vehicle: str, seed: int, log_path: Path, onboard_log: Path | None = None
+        self,
+        vehicle: str,
+        seed: int,
+        log_path: Path,
+        onboard_log: Path | None = None,
+        realtime_priority: int = SIM_RT_PRIORITY,
     ) -> None:
         offboard, gcs, offboard_bind, gcs_bind = free_udp_ports(4)
         self.mavsdk_url = f"udpin://127.0.0.1:{offboard}"
@@ -58,6 +69,7 @@ class SimEndpoint:
             sys.executable, "-m", "scripts.vehicle_sim_cli", "--vehicle", vehicle,
             "--seed", str(seed), "--offboard-port", str(offboard), "--gcs-port", str(gcs),
             "--offboard-bind-port", str(offboard_bind), "--gcs-bind-port", str(gcs_bind),
+            "--realtime-priority", str(realtime_priority),
         ]  # fmt: skip
         if onboard_log is not None:
             self._argv += ["--log", str(onboard_log)]

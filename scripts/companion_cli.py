@@ -29,7 +29,7 @@ from companion.app import (
     run_companion,
 )
 from companion.planner_registry import PLANNER_NAMES
-from companion.runner import RunnerConfig, Terminated
+from companion.runner import COMPANION_RT_PRIORITY, RunnerConfig, Terminated
 
 EXIT_COMPLETED = 0
 EXIT_FAILED = 1
@@ -66,9 +66,18 @@ def parse_args(argv: list[str] | None) -> CompanionConfig:
     parser.add_argument(
         "--verbose", action="store_true", help="show MAVSDK's own log lines (hidden by default)"
     )
+    parser.add_argument(
+        "--realtime-priority",
+        type=int,
+        default=COMPANION_RT_PRIORITY,
+        metavar="N",
+        help="SCHED_FIFO priority of the control loop over MAVLink, as companion computers run "
+        f"it (default {COMPANION_RT_PRIORITY}; 0: normal priority; where the system does not "
+        "permit it, the flight says so and runs at normal priority)",
+    )
     args = parser.parse_args(argv)
     try:
-        runner = RunnerConfig(rate_hz=args.rate_hz)
+        runner = RunnerConfig(rate_hz=args.rate_hz, realtime_priority=args.realtime_priority)
     except ValueError as exc:
         parser.error(str(exc))
     return CompanionConfig(

@@ -30,6 +30,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from companion.realtime import MAX_RT_PRIORITY, raise_to_realtime
 from vehicle_sim import EFFECT_NAMES, SimConfigError, Simulator, load_sim_config
 from vehicle_sim.backends import BACKEND_NAMES
 from vehicle_sim.mavlink import (
@@ -67,6 +68,9 @@ class VehicleSimCliConfig:
             (a crash disarms it) and its range sensor streams as OBSTACLE_DISTANCE; or None.
         log_path: where to write the onboard flight log (schema v1 CSV, 50 Hz of simulated
             time) when the endpoint stops; None keeps none.
+        realtime_priority: SCHED_FIFO priority (1-99) of the simulation loop's thread, as a
+            stand-in for a flight controller on a processor of its own (companion.realtime;
+            not permitted: said in one line, normal priority); 0 (default) leaves it normal.
     """
 
     vehicle: str = "iris"
@@ -83,6 +87,7 @@ class VehicleSimCliConfig:
     duration_s: float | None = None
     world_path: str | None = None
     log_path: str | None = None
+    realtime_priority: int = 0
 
 
 class _Parser(argparse.ArgumentParser):
@@ -155,11 +160,23 @@ def parse_args(argv: Sequence[str] | None) -> VehicleSimCliConfig:
         metavar="FILE.csv",
         help="write the vehicle's onboard flight log (with acceleration and thrust) here on exit",
     )
+    parser.add_argument(
+        "--realtime-priority",
+        type=int,
+        default=0,
+        metavar="N",
+        help="run the simulation loop at SCHED_FIFO priority N (1-99), as a flight controller "
+        "on its own processor would not wait for other programs; 0 (default): normal priority",
+    )
     args = parser.parse_args(argv)
     if not (math.isfinite(args.speed) and 0.01 <= args.speed <= 100.0):
         raise UsageError(f"--speed {args.speed}: must be within [0.01, 100]")
     if args.duration_s is not None and not (math.isfinite(args.duration_s) and args.duration_s > 0):
         raise UsageError(f"--duration-s {args.duration_s}: must be > 0")
+    if not 0 <= args.realtime_priority <= MAX_RT_PRIORITY:
+        raise UsageError(
+            f"--realtime-priority {args.realtime_priority}: must be 0 (off) or 1..{MAX_RT_PRIORITY}"
+        )
     return VehicleSimCliConfig(
         vehicle=args.vehicle,
         effects=_effect_overrides(args.effect),
@@ -175,6 +192,7 @@ def parse_args(argv: Sequence[str] | None) -> VehicleSimCliConfig:
         duration_s=args.duration_s,
         world_path=args.world,
         log_path=args.log,
+        realtime_priority=args.realtime_priority,
     )
 
 
@@ -274,6 +292,9 @@ def _run(config: VehicleSimCliConfig, stop: threading.Event) -> int:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
         return 2
     try:
+        if config.realtime_priority and endpoint.loop_thread_id is not None:
+            outcome = raise_to_realtime(config.realtime_priority, endpoint.loop_thread_id)
+            print(f"{PROG}: simulation loop: {outcome}")
         _announce(config, endpoint)
         serve(endpoint, stop, config.duration_s)
     finally:
@@ -285,7 +306,8 @@ def _run(config: VehicleSimCliConfig, stop: threading.Event) -> int:
     print(
         f"{PROG}: stopped at t = {endpoint.state.t_s:.1f} s sim; received "
         f"{stats.messages_received} messages, rejected {stats.garbage_datagrams} garbage "
-        f"datagrams and {stats.setpoints_rejected} setpoints",
+        f"datagrams and {stats.setpoints_rejected} setpoints; caught up "
+        f"{stats.caught_up_ms} ms after stalls, dropped time {stats.loop_overruns} times",
         flush=True,
     )
     return 0

@@ -9,7 +9,11 @@ cylinders, some standing on the path (constraints active in about a third of the
 records the (state, time) pairs; the IPOPT planner (CasADi defaults) then solves the same
 sequence, warm-started the same way. The fast path is the default configuration: one
 Gauss-Newton SQP iteration per plan (more on a cold start), CasADi virtual machine. Times are
-wall-clock per plan() call, everything included. Figures:
+wall-clock per plan() call, everything included. The fast path's closed loop runs as the
+companion runs its planner: one plan per control tick (50 Hz, sleeping in between) in a thread
+at the companion's real-time priority (companion.realtime; where the system does not permit it,
+the progress line says so and the loop runs at normal priority); IPOPT and acados solve the
+same problems back to back at normal priority. Figures:
     nmpc_fast_median_ms, nmpc_fast_p99_ms   time per plan() of the fast path [ms]
     nmpc_ipopt_median_ms                    time per plan() of IPOPT [ms]
     nmpc_fast_ok_fraction, nmpc_ipopt_ok_fraction   plans returned with ok=True [-]
@@ -24,6 +28,9 @@ wall-clock per plan() call, everything included. Figures:
     nmpc_augmented_preempted_fraction       plans during which the operating system switched
                                             the planner's thread out for another runnable
                                             process (involuntary context switches) [-]
+    nmpc_augmented_normal_priority_median_ms, nmpc_augmented_normal_priority_p99_ms
+                                            the fast path on the same problems, back to back
+                                            at normal priority (how it ran before issue 17) [ms]
     nmpc_acados_median_ms, nmpc_acados_p99_ms   acados SQP_RTI + HPIPM (the peer, see
                                             experiments.bench.acados_peer) in the same planner,
                                             on the same problems; NaN when acados is missing
@@ -51,6 +58,8 @@ import casadi as ca
 import numpy as np
 
 from companion.nmpc_planner import NmpcSettings, load_nmpc
+from companion.realtime import realtime_section
+from companion.runner import COMPANION_RT_PRIORITY
 from experiments.bench.acados_peer import AcadosSolver, acados_unavailable
 from gp.features import feature_definition
 from gp.model_io import ResidualModel, save_model
@@ -66,6 +75,7 @@ from planners.trajectory_generator import generate_trajectories
 _N_INDUCING = 30
 _RESIDUAL_DT_S = 0.05
 _PLAN_DT_S = 0.1
+_TICK_S = 0.02  # the companion's control period: one plan per tick [s]
 
 
 def gp_like_residual(seed: int = 0) -> ca.Function:
@@ -100,19 +110,25 @@ def run(progress: Callable[[str], None] = print, quick: bool = False) -> dict[st
     fast.plan(PlannerState(x[:3], np.zeros(3), x[3]), reference, 0.0)  # first call: setup
     fast.reset()
     problems, fast_res, cpu_ms, preempted = [], [], [], []
-    for k in range(int(round(t_end / _PLAN_DT_S))):
-        t = k * _PLAN_DT_S
-        state = PlannerState(x[:3].copy(), np.zeros(3), float(x[3]))
-        switches = _involuntary_switches()
-        cpu_start = time.thread_time()
-        res = fast.plan(state, reference, t)
-        cpu_ms.append(1e3 * (time.thread_time() - cpu_start))
-        preempted.append(_involuntary_switches() > switches)
-        problems.append((state, t))
-        fast_res.append(res)
-        u = res.command
-        vel = u[:3] + _RESIDUAL_DT_S * np.asarray(gp(u[:3])).ravel()
-        x = x + _PLAN_DT_S * np.append(vel, u[3])
+    with realtime_section(COMPANION_RT_PRIORITY, "nmpc: fast planner", progress):
+        tick_due_s = time.monotonic()
+        for k in range(int(round(t_end / _PLAN_DT_S))):
+            time.sleep(max(0.0, tick_due_s - time.monotonic()))
+            tick_due_s = max(tick_due_s + _TICK_S, time.monotonic())
+            t = k * _PLAN_DT_S
+            state = PlannerState(x[:3].copy(), np.zeros(3), float(x[3]))
+            switches = _involuntary_switches()
+            cpu_start = time.thread_time()
+            res = fast.plan(state, reference, t)
+            cpu_ms.append(1e3 * (time.thread_time() - cpu_start))
+            preempted.append(_involuntary_switches() > switches)
+            problems.append((state, t))
+            fast_res.append(res)
+            u = res.command
+            vel = u[:3] + _RESIDUAL_DT_S * np.asarray(gp(u[:3])).ravel()
+            x = x + _PLAN_DT_S * np.append(vel, u[3])
+    fast.reset()
+    normal_ms = 1e3 * np.array([fast.plan(s, reference, t).solve_time_s for s, t in problems])
 
     progress(f"nmpc: IPOPT on the same {len(problems)} problems")
     ipopt_res = [ipopt.plan(state, reference, t) for state, t in problems]
@@ -131,6 +147,8 @@ def run(progress: Callable[[str], None] = print, quick: bool = False) -> dict[st
     figures["nmpc_augmented_ipopt_median_ms"] = figures["nmpc_ipopt_median_ms"]
     figures["nmpc_augmented_cpu_p99_ms"] = float(np.percentile(cpu_ms, 99))
     figures["nmpc_augmented_preempted_fraction"] = float(np.mean(preempted))
+    figures["nmpc_augmented_normal_priority_median_ms"] = float(np.median(normal_ms))
+    figures["nmpc_augmented_normal_priority_p99_ms"] = float(np.percentile(normal_ms, 99))
     figures.update(_acados_figures(model, base, residual, world, problems, ipopt_res, progress))
     progress("nmpc: a new model file to a planner ready to fly")
     figures["nmpc_model_ready_s"] = model_ready_s()

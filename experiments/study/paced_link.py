@@ -18,6 +18,8 @@ from vehicle_sim import Simulator
 class WallPacedSimClock:
     """Wall time [s] offset to the simulator's start time; sleeping catches the sim up."""
 
+    real_time = True
+
     def __init__(self, sim: Simulator) -> None:
         self._sim = sim
         self._origin_wall_s = time.monotonic()

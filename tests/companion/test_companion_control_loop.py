@@ -15,6 +15,8 @@ from flightlog.schema import read_flight_log, write_flight_log
 class ManualClock:
     """Time moves only when slept or when ``work`` is spent."""
 
+    real_time = False
+
     def __init__(self) -> None:
         self.t_s = 0.0
 

@@ -22,6 +22,8 @@ def test_quick_nmpc_part_reports_augmented_acados_and_model_ready_figures():
         "nmpc_augmented_p99_ms",
         "nmpc_augmented_ipopt_median_ms",
         "nmpc_augmented_cpu_p99_ms",
+        "nmpc_augmented_normal_priority_median_ms",
+        "nmpc_augmented_normal_priority_p99_ms",
         "nmpc_model_ready_s",
     ):
         assert math.isfinite(figures[name]) and figures[name] > 0, name

@@ -29,6 +29,7 @@ REPO = Path(__file__).resolve().parents[2]
         (["--effect", "rotor_drag.k_n_per_mps=[0.3,"], "not a TOML value"),
         (["--signing-key", "missing.key"], "cannot read signing key file"),
         (["--frobnicate"], "unrecognized arguments"),
+        (["--realtime-priority", "100"], "--realtime-priority 100: must be 0 (off) or 1..99"),
     ],
 )
 def test_bad_input_is_one_line_and_exit_2(capsys, argv, message):

@@ -63,8 +63,9 @@ class EndpointConfig:
         speed: simulated seconds per wall-clock second (1.0 = real time).
         origin: geodetic position of the local NED origin / home.
         tick_s: wall-clock period of the pacing loop [s].
-        max_lag_s: wall-clock lag after which the loop stops catching up and restarts its pacing
-            (counted as an overrun) [s].
+        max_lag_s: the longest wall-clock stall of the loop whose lost simulated time is caught
+            up (the vehicle flies on through it); time lost beyond it is dropped, counted as an
+            overrun: a process stopped that long was suspended, not just starved [s].
         heartbeat_min_hz: heartbeats per wall-clock second at least, whatever the speed
             (MAVSDK drops a link after 3 s without one).
     """
@@ -73,7 +74,7 @@ class EndpointConfig:
     speed: float = 1.0
     origin: GeodeticOrigin = GeodeticOrigin()
     tick_s: float = 0.004
-    max_lag_s: float = 0.25
+    max_lag_s: float = 2.0
     heartbeat_min_hz: float = 1.0
 
     def __post_init__(self) -> None:

@@ -5,6 +5,14 @@ One background thread owns the simulator: it steps it to keep simulated time at
 next step acts on them), answers requests and streams telemetry. Nothing that arrives on a
 socket can stop the loop: undecodable input is counted in ``stats``.
 
+When the thread is starved of CPU (a busy computer), the simulated time it lost is caught up
+afterwards, up to ``max_lag_s``, in passes of MAX_SIM_PER_PASS_S that do not sleep: the
+simulator stands in for a flight controller on its own processor, whose vehicle flies on while
+a companion is slow. Stopping the clock instead would freeze the vehicle while the companion's
+wall-clock reference moves on. What arrived during the stall is acted on at the simulated time
+it arrived (the kernel stamps each datagram, UdpLink), so a setpoint stream that kept coming is
+not taken for a lost one (COM_OF_LOSS_T); without stamps (not Linux), at the time it is read.
+
 In-process use (tests, benchmarks)::
 
     links = (LinkConfig("api", remote=("127.0.0.1", client_port)),)
@@ -47,6 +55,9 @@ MAX_DATAGRAMS_PER_PASS = 256
 """Datagrams read per link per loop pass, so a flood cannot starve the simulation."""
 MAX_SIM_PER_PASS_S = 0.05
 """Simulated time stepped per loop pass at most [s of sim time at speed 1]."""
+STALL_TICKS = 3
+"""A datagram read more than this many loop ticks after its arrival was read late (the loop
+was stalled); the simulation first catches up to its arrival."""
 NOTICE_REPEAT_S = 1.0
 """A STATUSTEXT of one kind (see statustext.notice_kind) goes out at most once per this wall-clock
 time [s]."""
@@ -94,6 +105,8 @@ class MavlinkEndpoint:
         )
         self._dispatcher = Dispatcher(sim, self._telemetry, self._stats, self._on_setpoint)
         self._received_s = 0.0
+        self._wall0_s = 0.0  # pacing origin: wall-clock time (perf_counter) ...
+        self._sim0_s = 0.0  # ... and the simulated time it stands for [s]
         self._pending: list[tuple[int, float]] = []
         self._obstacles_due_s = 0.0  # next OBSTACLE_DISTANCE [s of simulated time]
         self._trace: deque[SetpointActuation] = deque(maxlen=TRACE_LENGTH)
@@ -155,6 +168,12 @@ class MavlinkEndpoint:
         return self._thread is not None and self._thread.is_alive()
 
     @property
+    def loop_thread_id(self) -> int | None:
+        """Native id of the loop's thread (``threading.get_native_id`` in it), None before
+        ``start()``: to give the loop a scheduling priority from outside."""
+        return None if self._thread is None else self._thread.native_id
+
+    @property
     def local_port(self) -> int:
         """UDP port of the first link (clients may send there: ``udpout:127.0.0.1:PORT``)."""
         return self._links[0].local_port
@@ -190,21 +209,25 @@ class MavlinkEndpoint:
         cfg = self.config
         dt_s = float(self.sim.physics_dt_s)
         max_steps = max(1, math.ceil(MAX_SIM_PER_PASS_S * cfg.speed / dt_s))
-        wall0_s = time.perf_counter()
-        sim0_s = self.sim.state.t_s
+        self._wall0_s, self._sim0_s = time.perf_counter(), self.sim.state.t_s
         flags: tuple[object, ...] | None = None
         sockets = [link.sock for link in self._links]
         while not self._stop.is_set():
             now_s = time.perf_counter()
             state = self.sim.state
-            behind_s = sim0_s + (now_s - wall0_s) * cfg.speed - state.t_s
+            behind_s = self._sim_time_at(now_s) - state.t_s
             if behind_s > cfg.max_lag_s * cfg.speed:
                 self._stats.add("loop_overruns")
-                wall0_s, sim0_s, behind_s = now_s, state.t_s, 0.0
-            n_steps = min(max_steps, math.floor(behind_s / dt_s + 1e-6))
+                self._sim0_s += behind_s - cfg.max_lag_s * cfg.speed  # drop the excess only
+                behind_s = cfg.max_lag_s * cfg.speed
+            steps_behind = math.floor(behind_s / dt_s + 1e-6)
+            catching_up = steps_behind > max_steps
+            n_steps = min(max_steps, steps_behind)
             if n_steps > 0:
                 state = self.sim.step(n_steps * dt_s)
                 self._mark_actuated(time.perf_counter())
+                if catching_up:
+                    self._stats.add("caught_up_ms", round(1e3 * n_steps * dt_s))
             self._state = state
             for severity, text in self.sim.drain_events():
                 self._notice(severity, text)
@@ -216,10 +239,29 @@ class MavlinkEndpoint:
                 self._broadcast(extended_sys_state(state, self._telemetry))
             self._stream(state, time.perf_counter())
             self._stream_obstacles(state)
-            readable, _, _ = select.select(sockets, [], [], cfg.tick_s)
+            wait_s = 0.0 if catching_up else cfg.tick_s  # no sleeping while behind
+            readable, _, _ = select.select(sockets, [], [], wait_s)
             for link in self._links:
                 if link.sock in readable:
                     self._drain(link)
+
+    def _sim_time_at(self, wall_s: float) -> float:
+        """Simulated time [s] that ``wall_s`` (``time.perf_counter()``) stands for."""
+        return self._sim0_s + (wall_s - self._wall0_s) * self.config.speed
+
+    def _catch_up_to(self, arrived_s: float) -> None:
+        """Before acting on a datagram that arrived while the loop was stalled (the simulation
+        more than STALL_TICKS ticks behind its arrival), fly the vehicle on to the simulated
+        time it arrived at, so that it acts on it then: neither early nor as if the setpoint
+        stream had stopped (COM_OF_LOSS_T)."""
+        dt_s = float(self.sim.physics_dt_s)
+        cfg = self.config
+        behind_s = min(self._sim_time_at(arrived_s) - self.sim.t_s, cfg.max_lag_s * cfg.speed)
+        if behind_s > STALL_TICKS * cfg.tick_s * cfg.speed:
+            steps = math.floor(behind_s / dt_s + 1e-6)
+            self._state = self.sim.step(steps * dt_s)
+            self._mark_actuated(time.perf_counter())
+            self._stats.add("caught_up_ms", round(1e3 * steps * dt_s))
 
     def _mission_progress(self, state: VehicleState, wall_s: float) -> None:
         """MISSION_ITEM_REACHED as items are reached; MISSION_CURRENT on a change and at 1 Hz."""
@@ -268,7 +310,8 @@ class MavlinkEndpoint:
             item = link.receive()
             if item is None:
                 return
-            data, addr = item
+            data, addr, arrived_s = item
+            self._catch_up_to(arrived_s)
             self._received_s = time.perf_counter()
             self._stats.add("datagrams_received")
             decoded = link.codec.decode(data)

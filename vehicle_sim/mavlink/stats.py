@@ -28,7 +28,10 @@ class EndpointStats:
         send_errors: sends that failed at the socket.
         notices_sent: STATUSTEXT messages queued for broadcast.
         notices_suppressed: repeated STATUSTEXTs dropped by the rate limit.
-        loop_overruns: times the sim fell behind wall time and the pacing restarted.
+        loop_overruns: times the sim fell more than ``max_lag_s`` behind wall time and the
+            excess was dropped.
+        caught_up_ms: simulated time stepped to catch up after the loop was stalled (more
+            than one pass behind wall time, or a datagram read late) [ms].
     """
 
     datagrams_received: int = 0
@@ -49,6 +52,7 @@ class EndpointStats:
     notices_sent: int = 0
     notices_suppressed: int = 0
     loop_overruns: int = 0
+    caught_up_ms: int = 0
 
 
 STAT_NAMES: tuple[str, ...] = tuple(f.name for f in fields(EndpointStats))
