@@ -215,11 +215,19 @@ class CompanionNmpc:
         yaw = float(x[names.index("yaw_rad")]) if "yaw_rad" in names else state.yaw_rad
         return PlannerState(pos, vel, yaw)
 
-    def one_step_velocity(self, vel_ned_mps: np.ndarray, cmd_vel_ned_mps: np.ndarray) -> np.ndarray:
+    def one_step_velocity(
+        self,
+        vel_ned_mps: np.ndarray,
+        cmd_vel_ned_mps: np.ndarray,
+        pos_ned_m: np.ndarray | None = None,
+    ) -> np.ndarray:
         """Velocity [m/s] (3,) this planner's model (with its residual) predicts one control
-        period after sending ``cmd_vel_ned_mps`` (3,) at velocity ``vel_ned_mps`` (3,); the
-        yaw-rate command is taken as zero (the study's references hold their yaw)."""
-        state = PlannerState(np.zeros(3), np.asarray(vel_ned_mps, dtype=float), 0.0)
+        period after sending ``cmd_vel_ned_mps`` (3,) at velocity ``vel_ned_mps`` (3,) and
+        position ``pos_ned_m`` (3,) [m] (a residual on position features is evaluated there;
+        None: the origin); the yaw-rate command is taken as zero (the study's references hold
+        their yaw)."""
+        pos = np.zeros(3) if pos_ned_m is None else np.asarray(pos_ned_m, dtype=float)
+        state = PlannerState(pos, np.asarray(vel_ned_mps, dtype=float), 0.0)
         x = state_vector(self.model, state)
         u = np.append(np.asarray(cmd_vel_ned_mps, dtype=float).reshape(3), 0.0)
         return np.asarray(self._one_step(x, u), dtype=float).reshape(3)
