@@ -64,6 +64,9 @@ class NmpcSettings:
             (link delay plus solve time). Before planning, the state is predicted forward over
             it with the planner's own model (and residual) under the last command sent, and
             the plan starts at t + latency_s, as practical NMPCs compensate dead time. 0: off.
+        feedforward: the input reference leads the reference velocity by the nominal model's
+            time constants times the reference acceleration (u = v + tau a on a first-order
+            lag; planners.model_vectors.reference_vectors); off: the reference velocity.
         n_obstacles: N_o obstacle slots per plan ([Kulathunga23] eq. 4); 0 flies without
             obstacle constraints (give the obstacles with :meth:`CompanionNmpc.set_obstacles`).
         safe_distance_m: d_o, the clearance kept from every obstacle [m].
@@ -80,6 +83,7 @@ class NmpcSettings:
     max_iterations: int | None = None
     compile_functions: bool = False
     latency_s: float = 0.0
+    feedforward: bool = False
     n_obstacles: int = 0
     safe_distance_m: float = 0.5
 
@@ -129,6 +133,7 @@ class CompanionNmpc:
             safe_distance_m=settings.safe_distance_m,
             time_budget_s=settings.time_budget_s,
             max_iterations=settings.max_iterations,
+            feedforward=settings.feedforward,
         )
         self._planner = NmpcPlanner(
             self.model, config, residual, compile_functions=settings.compile_functions
