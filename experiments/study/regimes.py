@@ -45,9 +45,10 @@ Each regime is a set of StudyConfig overrides with its physics written down.
         --trajectories 2 --repeats 3 --trials 2`: tracking 0.178 m nominal, 0.134 m the lag
         alone, 0.107 m low_speed (1.25x over the lag), 0.104 m cluster (1.28x). Most of what
         is left is the start: the takeoff in the jet leaves the vehicle 0.5-0.7 m off the
-        reference's first point, and every planner takes about 2 s to close that. Without a
-        refit round, after the first 2 s of following: 0.073 m the lag alone, 0.027 m lag +
-        GP (2.7x; 1.32x over the whole following phase).
+        reference's first point, and every planner takes about 2 s to close that. Without the
+        refit round: 0.132 m the lag alone, 0.100 m low_speed (1.32x; after the first 2 s of
+        following 0.073 -> 0.027 m, 2.7x), but cluster 0.135 m, worse than the lag alone
+        although it passed the prediction check; the round stays.
 """
 
 from __future__ import annotations
