@@ -133,8 +133,13 @@ class ClutterNmpc:
     def augmented(self) -> bool:
         return self._nmpc.augmented
 
-    def one_step_velocity(self, vel_ned_mps: np.ndarray, cmd_vel_ned_mps: np.ndarray) -> np.ndarray:
-        return self._nmpc.one_step_velocity(vel_ned_mps, cmd_vel_ned_mps)
+    def one_step_velocity(
+        self,
+        vel_ned_mps: np.ndarray,
+        cmd_vel_ned_mps: np.ndarray,
+        pos_ned_m: np.ndarray | None = None,
+    ) -> np.ndarray:
+        return self._nmpc.one_step_velocity(vel_ned_mps, cmd_vel_ned_mps, pos_ned_m)
 
     def observe_obstacles(self, scan: ObstacleDistances) -> None:
         """Take a range scan into the map (each scan once)."""

@@ -64,6 +64,9 @@ class NmpcSettings:
             (link delay plus solve time). Before planning, the state is predicted forward over
             it with the planner's own model (and residual) under the last command sent, and
             the plan starts at t + latency_s, as practical NMPCs compensate dead time. 0: off.
+        feedforward: the input reference leads the reference velocity by the nominal model's
+            time constants times the reference acceleration (u = v + tau a on a first-order
+            lag; planners.model_vectors.reference_vectors); off: the reference velocity.
         n_obstacles: N_o obstacle slots per plan ([Kulathunga23] eq. 4); 0 flies without
             obstacle constraints (give the obstacles with :meth:`CompanionNmpc.set_obstacles`).
         safe_distance_m: d_o, the clearance kept from every obstacle [m].
@@ -80,6 +83,7 @@ class NmpcSettings:
     max_iterations: int | None = None
     compile_functions: bool = False
     latency_s: float = 0.0
+    feedforward: bool = False
     n_obstacles: int = 0
     safe_distance_m: float = 0.5
 
@@ -129,6 +133,7 @@ class CompanionNmpc:
             safe_distance_m=settings.safe_distance_m,
             time_budget_s=settings.time_budget_s,
             max_iterations=settings.max_iterations,
+            feedforward=settings.feedforward,
         )
         self._planner = NmpcPlanner(
             self.model, config, residual, compile_functions=settings.compile_functions
@@ -215,11 +220,19 @@ class CompanionNmpc:
         yaw = float(x[names.index("yaw_rad")]) if "yaw_rad" in names else state.yaw_rad
         return PlannerState(pos, vel, yaw)
 
-    def one_step_velocity(self, vel_ned_mps: np.ndarray, cmd_vel_ned_mps: np.ndarray) -> np.ndarray:
+    def one_step_velocity(
+        self,
+        vel_ned_mps: np.ndarray,
+        cmd_vel_ned_mps: np.ndarray,
+        pos_ned_m: np.ndarray | None = None,
+    ) -> np.ndarray:
         """Velocity [m/s] (3,) this planner's model (with its residual) predicts one control
-        period after sending ``cmd_vel_ned_mps`` (3,) at velocity ``vel_ned_mps`` (3,); the
-        yaw-rate command is taken as zero (the study's references hold their yaw)."""
-        state = PlannerState(np.zeros(3), np.asarray(vel_ned_mps, dtype=float), 0.0)
+        period after sending ``cmd_vel_ned_mps`` (3,) at velocity ``vel_ned_mps`` (3,) and
+        position ``pos_ned_m`` (3,) [m] (a residual on position features is evaluated there;
+        None: the origin); the yaw-rate command is taken as zero (the study's references hold
+        their yaw)."""
+        pos = np.zeros(3) if pos_ned_m is None else np.asarray(pos_ned_m, dtype=float)
+        state = PlannerState(pos, np.asarray(vel_ned_mps, dtype=float), 0.0)
         x = state_vector(self.model, state)
         u = np.append(np.asarray(cmd_vel_ned_mps, dtype=float).reshape(3), 0.0)
         return np.asarray(self._one_step(x, u), dtype=float).reshape(3)

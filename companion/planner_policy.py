@@ -19,11 +19,12 @@ from planners.reference import Planner, PlannerState, Reference
 @runtime_checkable
 class OneStepVelocityModel(Protocol):
     """A planner that states the velocity [m/s] (3,) its model predicts one control period
-    after a command (3,) is sent at the current velocity (3,); logged as the prediction (e.g.
-    a nominal model augmented with a learned residual)."""
+    after a command (3,) is sent at the current velocity (3,) and position (3,) [m]; logged as
+    the prediction (e.g. a nominal model augmented with a learned residual, which may depend
+    on where the vehicle is)."""
 
     def one_step_velocity(
-        self, vel_ned_mps: np.ndarray, cmd_vel_ned_mps: np.ndarray
+        self, vel_ned_mps: np.ndarray, cmd_vel_ned_mps: np.ndarray, pos_ned_m: np.ndarray
     ) -> np.ndarray: ...
 
 
@@ -111,7 +112,7 @@ class PlannerPolicy:
             return None, None
         cmd = np.asarray(sent.vel_ned_mps, dtype=float)
         if isinstance(self._planner, OneStepVelocityModel):
-            vel = self._planner.one_step_velocity(state.vel_ned_mps, cmd)
+            vel = self._planner.one_step_velocity(state.vel_ned_mps, cmd, state.pos_ned_m)
         else:
             vel = cmd
         return row[:3].copy(), np.asarray(vel, dtype=float).copy()

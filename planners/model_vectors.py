@@ -44,11 +44,21 @@ def state_vector(model: NominalModel, state: PlannerState) -> np.ndarray:
 
 
 def reference_vectors(
-    model: NominalModel, sample: ReferenceSample
+    model: NominalModel, sample: ReferenceSample, feedforward: bool = False
 ) -> tuple[np.ndarray, np.ndarray]:
-    """(x_ref (n, nx), u_ref (n, nu)) for a reference sampled at n times."""
+    """(x_ref (n, nx), u_ref (n, nu)) for a reference sampled at n times.
+
+    With ``feedforward`` the velocity inputs lead the reference velocity by the model's
+    ``velocity_lead_s`` times the reference acceleration (u = v + tau a for a first-order
+    lag: the input that keeps the model on the reference), so the input cost does not pull
+    the plan behind the reference during accelerations; without it (or for a model with no
+    lead) the input reference is the reference velocity."""
     args = (sample.pos_ned_m, sample.vel_ned_mps, sample.yaw_rad, sample.yaw_rate_radps)
     x_ref = np.column_stack([_element(n, *args) for n in model.state_names])
+    vel = np.asarray(sample.vel_ned_mps, dtype=float)
+    if feedforward and model.velocity_lead_s:
+        vel = vel + np.asarray(model.velocity_lead_s) * np.asarray(sample.acc_ned_mps2, float)
+    args = (sample.pos_ned_m, vel, sample.yaw_rad, sample.yaw_rate_radps)
     u_ref = np.column_stack([_element(n, *args) for n in model.input_names])
     return x_ref, u_ref
 

@@ -114,7 +114,7 @@ class NmpcPlanner:
             self._warm = None
             return self._safe("non-finite state or time", start)
         grid = t_s + cfg.dt_s * np.arange(cfg.horizon_steps + 1)
-        x_ref, u_ref = reference_vectors(f.model, reference.sample(grid))
+        x_ref, u_ref = reference_vectors(f.model, reference.sample(grid), f.config.feedforward)
         x_now = state_vector(f.model, state)
         for i in self._angles:  # express angles on the reference's branch
             x_now[i] = x_ref[0, i] + np.angle(np.exp(1j * (x_now[i] - x_ref[0, i])))

@@ -49,6 +49,8 @@ class NmpcConfig:
         max_iterations: solver iterations per plan; None uses the solver's default (one SQP
             iteration for "fast": the real-time iteration scheme; 200 for IPOPT). More SQP
             iterations stop early once converged.
+        feedforward: the input reference leads the reference velocity by the model's
+            velocity lead times the reference acceleration (planners.model_vectors).
         time_budget_s: a plan taking longer is "late" and replaced by the safe command [s].
         clearance_tolerance_m: the simulated plan may come this much closer than d_o to an
             obstacle (linearisation error of an unconverged iterate) before it is rejected.
@@ -65,6 +67,7 @@ class NmpcConfig:
     safe_distance_m: float = 0.5
     solver: SolverName = "fast"
     max_iterations: int | None = None
+    feedforward: bool = False
     time_budget_s: float = 0.05
     clearance_tolerance_m: float = 0.05
 

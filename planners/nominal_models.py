@@ -40,6 +40,10 @@ class NominalModel:
         params_from_logs: the model's parameters that flight logs decide when a user does not
             give them (the residual's time base from the log rate; a velocity lag's time
             constants by identification, see gp.lag_identification).
+        velocity_lead_s: per NED axis, how far [s] the velocity input must lead the velocity
+            the model should fly: u = v + lead * a keeps a first-order lag on a reference of
+            velocity v and acceleration a (its time constants); empty for a model that flies
+            its command at once.
     """
 
     name: str
@@ -49,6 +53,7 @@ class NominalModel:
     residual_map: np.ndarray
     velocity_of: ca.Function
     params_from_logs: tuple[str, ...] = ()
+    velocity_lead_s: tuple[float, ...] = ()
 
     @property
     def nx(self) -> int:
@@ -170,6 +175,7 @@ def first_order_lag(tau_s: float = 0.3, tau_d_s: float | None = None) -> Nominal
         b,
         vel,
         params_from_logs=("tau_s", "tau_d_s"),
+        velocity_lead_s=(tau_s, tau_s, tau_d_s),
     )
 
 

@@ -12,6 +12,9 @@ Figures:
         alone divided by structure + GP (low_speed), in the agile and wind_field regimes
         (experiments.study.regimes; > 1 when the GP helps); reduced studies of
         REGIME_TRAJECTORIES x REGIME_REPEATS flights per planner
+    agile_gp_over_structure_settled, wind_gp_over_structure_settled   the same after the first
+        2 s of following (experiments.study.metrics.SETTLE_S), without the start offset the
+        takeoff left
 The figures come from a reduced study (4 trajectories, one flight each per planner, m = 30);
 ``study`` runs [Kulathunga23]'s full experiment. ``quick=True`` runs the study's smoke version and
 a short paced flight with the uncompiled planner (under a minute; its deadline figure is then
@@ -106,6 +109,6 @@ def regime_figures(
         config = with_regime(config, regime)
         progress(f"loop: {regime} regime, {config.n_trajectories} trajectories")
         headline = run_study(config, progress).headline
-    keep = ("gp_over_structure", "tracking_rmse_nominal_m", "tracking_rmse_augmented_m",
-            "tracking_rmse_identified_lag_m")  # fmt: skip
+    keep = ("gp_over_structure", "gp_over_structure_settled", "tracking_rmse_nominal_m",
+            "tracking_rmse_augmented_m", "tracking_rmse_identified_lag_m")  # fmt: skip
     return {f"{prefix}_{k}": headline[k] for k in keep if k in headline}

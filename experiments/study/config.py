@@ -49,6 +49,10 @@ class StudyConfig:
             and refits it on all flights so far, so the model covers where the augmented
             planner flies; a refit flies only if it predicts the held-out logs better than
             the model it replaces (gp.prediction_check). 0: the model from the nominal flights.
+        learn_from_structure: after the fit on the nominal flights, fly its identified
+            structure (first_order_lag) alone on the nominal flights' seeds and fit the GP on
+            those flights instead (experiments.study.paper000): the GP learns what the
+            structure leaves where a planner on it flies.
     """
 
     out_dir: Path = Path("out/study")
@@ -71,6 +75,7 @@ class StudyConfig:
     compile_augmented: bool = False
     regime: str = "paper000"
     refit_rounds: int = 0
+    learn_from_structure: bool = False
 
     def __post_init__(self) -> None:
         if self.n_trajectories < 1 or self.repeats < 1 or self.n_trials < 2:

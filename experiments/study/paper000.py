@@ -77,6 +77,8 @@ def run_paper000(
         for sel in config.selections
     }
     fits = {sel: fut.result() for sel, fut in futures.items()}
+    if config.learn_from_structure:
+        fits = _refit_on_structure(config, refs, fits, pool, progress)
     augmented_logs: dict[str, list[FlightLog]] = {sel: [] for sel in config.selections}
     for round_ in range(1, config.refit_rounds + 1):
         fits = _refit_on_augmented(config, refs, logs, augmented_logs, fits, pool, round_, progress)
@@ -179,6 +181,43 @@ def _refit_on_augmented(
         else:
             progress(f"refit {sel} round {round_}: {refusal(refit.model)}; keeping the previous")
     return out
+
+
+def _refit_on_structure(
+    config: StudyConfig,
+    refs: list[BSplineReference],
+    fits: dict[str, TrainingResult],
+    pool: Executor,
+    progress: Callable[[str], None],
+) -> dict[str, TrainingResult]:
+    """[Ostafew16]'s trial after trial with the structure as the first learned model: fly the
+    identified lag alone on the nominal flights' seeds (the comparison's seeds stay held
+    out) and fit every selection's GP on those flights only, so it learns what the structure
+    leaves where a planner on the structure flies (not where the nominal planner flew). The
+    lag is identified anew from them; the fit is checked as any other (gp.prediction_check)."""
+    lag = identified_lag_settings(config, fits[config.selections[0]])
+    if lag is None:
+        return fits
+    jobs = [
+        FlightJob(i, ref, IDENTIFIED_LAG, seed, config.vehicle, lag, compile_functions=False)
+        for i, ref in enumerate(refs)
+        for seed in range(config.repeats)
+    ]
+    logs = [s.log for s in _fly_all(jobs, pool, "structure round", progress)]
+    futures = {
+        sel: pool.submit(
+            fit_residual,
+            logs,
+            sel,
+            config.nmpc.period_s,
+            learned_model=config.learned_model,
+            features=config.features,
+            m=config.m,
+            restarts=config.gp_restarts,
+        )
+        for sel in config.selections
+    }
+    return {sel: fut.result() for sel, fut in futures.items()}
 
 
 def identified_lag_settings(config: StudyConfig, fit: TrainingResult) -> NmpcSettings | None:

@@ -107,3 +107,16 @@ def test_multirotor_regimes_stay_with_the_study_cli(tmp_path):
     assert _rover_regime(["--out", str(tmp_path), "--regime=rover_exp1"])
     config = parse_args(["--regime", "wind_field", "--trajectories", "2", "--out", str(tmp_path)])
     assert (config.regime, config.n_trajectories) == ("wind_field", 2)
+
+
+def test_agile_regime_leads_the_input_and_learns_velocity_from_the_structure():
+    """The agile regime's settings reach the planner of both arms of its ablation."""
+    from experiments.study.config import StudyConfig
+    from experiments.study.regimes import with_regime
+
+    base = StudyConfig()
+    agile = with_regime(base, "agile")
+    assert agile.nmpc.feedforward and not base.nmpc.feedforward
+    assert agile.nmpc.speed_limit_mps == 8.0
+    assert (agile.features, agile.learn_from_structure) == ("velocity", True)
+    assert not with_regime(base, "wind_field").nmpc.feedforward

@@ -70,6 +70,29 @@ def test_augmented_prediction_adds_the_learned_residual():
     np.testing.assert_allclose(predicted, cmd + 0.02 * g[0], atol=1e-9)
 
 
+def test_one_step_prediction_evaluates_a_position_residual_where_the_vehicle_is():
+    """A residual on position features (a wind field) must be evaluated at the vehicle's
+    position, not at the origin, or the logged residual of the model that flew is wrong."""
+    fd = feature_definition("position_velocity", "first_order_lag", tau_s=0.5)
+    rng_seed = 3
+    rng = np.random.default_rng(rng_seed)
+    X = rng.uniform(-20.0, 20.0, (300, fd.n_features))
+    X[:, 2:] = rng.uniform(-1.5, 1.5, (300, 3))
+    width = rng.uniform(3.0, 6.0)
+    Y = np.zeros((300, 3))
+    Y[:, 1] = np.exp(-((X[:, 0] / width) ** 2))  # an eastward push near the line n = 0
+    gp = SparseGP(inducing=InducingConfig(m=20), n_restarts=1, random_state=rng_seed).fit(X, Y)
+    model = ResidualModel.from_estimator(gp, fd)
+    planner = CompanionNmpc(NmpcSettings(2.0, compile_functions=False), model)
+    vel, cmd = np.array([0.5, 0.0, 0.0]), np.array([1.0, 0.0, 0.0])
+    for pos in (np.array([0.0, 3.0, -3.0]), np.array([15.0, -4.0, -3.0])):
+        z = np.concatenate([pos[:2], vel])
+        g, _ = model.predict(z[None, :])
+        lag_only = vel + (cmd - vel) * (1.0 - np.exp(-0.02 / 0.5))
+        predicted = planner.one_step_velocity(vel, cmd, pos)
+        np.testing.assert_allclose(predicted, lag_only + 0.02 * g[0], atol=2e-4)
+
+
 @pytest.mark.parametrize(
     ("write", "message"),
     [
