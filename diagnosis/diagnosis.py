@@ -47,7 +47,11 @@ from diagnosis.selection import (
     select_causes,
     train_test_masks,
 )
-from diagnosis.thrust_response import MOTOR_LAG, fit_motor_lag, produced_thrust
+from diagnosis.thrust_response import (
+    THRUST_RESPONSE_CAUSES,
+    produced_thrust,
+    select_thrust_response,
+)
 from flightlog.schema import FlightLog
 from vehicle_sim import SimConfig
 from vehicle_sim.effects import EFFECT_CLASSES, BatterySag
@@ -228,17 +232,20 @@ def diagnose(
         )
         causes += restored
         rejected = [c for c in rejected if c.name not in {r.name for r in restored}]
-    if MOTOR_LAG in [c.name for c in tried] and produced_thrust(thrust_sources):
-        lag_config = configured(sim_config, _added(base, effects))
-        lag, named = fit_motor_lag(lag_config, logs, search, test, vel_noise)
-        progress(f"  {MOTOR_LAG} from the thrust response: {lag.params} ({lag.evidence})")
-        tried = [c for c in tried if c.name != MOTOR_LAG]
+    by_thrust = [c.name for c in tried if c.name in THRUST_RESPONSE_CAUSES]
+    if by_thrust and produced_thrust(thrust_sources):
+        response_config = configured(sim_config, _added(base, effects))
+        named, not_named = select_thrust_response(
+            response_config, logs, search, test, vel_noise, by_thrust
+        )
+        for c in named + not_named:
+            progress(f"  {c.name} from the thrust response: {c.params} ({c.evidence})")
+        tried = [c for c in tried if c.name not in by_thrust] + not_named
+        for c in named:
+            causes.append(c)
+            effects[c.name] = dict(c.params)
         if named:
-            causes.append(lag)
-            effects[MOTOR_LAG] = dict(lag.params)
             current = replay(configured(sim_config, _added(base, effects)), logs, test)
-        else:
-            tried.append(lag)
     tried = [
         replace(c, evidence=f"{c.evidence}; not named; to tell it apart, fly: {FLIGHT_FOR[c.name]}")
         if c.name in FLIGHT_FOR

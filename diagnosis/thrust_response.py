@@ -1,9 +1,12 @@
-"""Motor lag from the produced thrust's answer to the controller's command, one row ahead.
+"""Motor lag and thrust curve from the produced thrust's answer to the command, one row ahead.
 
 On a noisy log a motor lag of a few 10 ms hardly shows in the velocity a replay predicts (about
 3 mm/s under 30-80 mm/s of velocity noise at 20 Hz), but it shows in the thrust the motors
 produce: after a setpoint step the controller's thrust command jumps by newtons within one row,
-and the logged rotor thrust (from the motor speeds, after the lag) follows it with the lag.
+and the logged rotor thrust (from the motor speeds, after the lag) follows it with the lag. A
+thrust curve off by a gain (``thrust_curve``) hides in the replayed velocity the same way (the
+velocity loop makes up for it), and shows in the same comparison: the logged thrust swings by
+``gain`` times what the controller commanded around hover.
 
 The follower of a replay (:mod:`.replay`) is put into the measured state at every row, so its
 flight control sees what the real one saw and commands what the real one commanded (force
@@ -17,7 +20,8 @@ estimator's velocity; a simulated log's noise is added after the flight), and a 
 smooths that noise away, which would bias ``tau_s`` up by 20 % or more at 0.03-0.08 m/s. The
 fit removes that bias by SIMEX [Cook94]: the squared thrust error is measured once more with
 the log's own white velocity noise (:func:`.noise_floor.white_noise_std`) added again, and
-extrapolated linearly to no noise, ``2 mse(noise) - mse(2 x noise variance)``. ``tau_s`` is
+extrapolated linearly to no noise, ``2 mse(noise) - mse(2 x noise variance)`` (the same holds
+for the thrust curve's gain, which scales that noise too). The parameter is
 fitted on the training windows' rows and judged on the held-out ones like any cause: named only
 if it removes at least ``MIN_GAIN_FRACTION`` of the held-out squared thrust error left above the
 floor (the logged thrust's own white noise plus the command noise the velocity noise makes,
@@ -46,6 +50,8 @@ from flightlog.schema import FlightLog
 from vehicle_sim import SimConfig
 
 MOTOR_LAG = "motor_lag"
+THRUST_CURVE = "thrust_curve"
+THRUST_RESPONSE_CAUSES = (MOTOR_LAG, THRUST_CURVE)  # command-path causes the thrust response fits
 PRODUCED_THRUST_SOURCES = ("thrust_n as logged", "ESC rotor speed")
 MIN_GAIN_FRACTION = 0.5
 MAX_P_VALUE = 0.01
@@ -134,21 +140,48 @@ def thrust_noise_var(logs: Sequence[FlightLog]) -> float:
     return float(white_noise_std(np.concatenate(parts), np.concatenate(seg))[0] ** 2)
 
 
-def fit_motor_lag(
+def select_thrust_response(
+    config: SimConfig,
+    logs: Sequence[FlightLog],
+    train: Sequence[Window],
+    test: Sequence[Window],
+    vel_noise_mps: np.ndarray,
+    names: Sequence[str] = THRUST_RESPONSE_CAUSES,
+) -> tuple[list[Cause], list[Cause]]:
+    """Forward selection over ``names`` (of :data:`THRUST_RESPONSE_CAUSES`) by the thrust
+    response: each is fitted on top of ``config``; the named one that removes the largest
+    fraction is kept and the others are fitted again on top of it. (named, not named)."""
+    named: list[Cause] = []
+    left = list(names)
+    while left:
+        fits = [fit_thrust_response(n, config, logs, train, test, vel_noise_mps) for n in left]
+        ok = [cause for cause, is_named in fits if is_named]
+        if not ok:
+            return named, [cause for cause, _ in fits]
+        best = max(ok, key=lambda c: c.explained_fraction)
+        named.append(best)
+        config = with_cause(config, best.name, next(iter(best.params.values())))
+        left.remove(best.name)
+    return named, []
+
+
+def fit_thrust_response(
+    name: str,
     config: SimConfig,
     logs: Sequence[FlightLog],
     train: Sequence[Window],
     test: Sequence[Window],
     vel_noise_mps: np.ndarray,
 ) -> tuple[Cause, bool]:
-    """``motor_lag`` fitted to the thrust response on ``train``, judged on ``test``:
-    (the cause with its evidence and statistic, whether it is named). ``vel_noise_mps`` (3,):
-    the log's white velocity noise, which the SIMEX correction adds once more."""
-    param, grid = search_grid(MOTOR_LAG)
+    """``name`` (one of :data:`THRUST_RESPONSE_CAUSES`) fitted to the thrust response on
+    ``train``, judged on ``test``: (the cause with its evidence and statistic, whether it is
+    named). ``vel_noise_mps`` (3,): the log's white velocity noise, which the SIMEX correction
+    adds once more."""
+    param, grid = search_grid(name)
     extra = np.asarray(vel_noise_mps, float)
 
     def corrected_mse(value: float, wins: Sequence[Window]) -> tuple[float, float]:
-        cfg = with_cause(config, MOTOR_LAG, value)
+        cfg = with_cause(config, name, value)
         once = track_thrust(cfg, logs, wins).mse()
         twice = track_thrust(cfg, logs, wins, extra).mse()
         return 2.0 * once - twice, twice - once
@@ -164,7 +197,7 @@ def fit_motor_lag(
     if sol.fun < best_score:
         best = float(sol.x)
     before = track_thrust(config, logs, test)
-    after = track_thrust(with_cause(config, MOTOR_LAG, best), logs, test)
+    after = track_thrust(with_cause(config, name, best), logs, test)
     follower_noise = max(corrected_mse(best, test)[1], 0.0)
     floor = thrust_noise_var(logs) + follower_noise
     margin = FLOOR_MARGIN_SE * NOISE_VAR_REL_SE_SQRT_N / np.sqrt(max(len(before.window), 1))
@@ -184,7 +217,7 @@ def fit_motor_lag(
         f"p {sig.p_value:.3g}){bound}"
     )
     cause = Cause(
-        MOTOR_LAG,
+        name,
         {param: best},
         float(fraction),
         float(max(0.0, removed / before.mse())),

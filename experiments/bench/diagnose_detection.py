@@ -9,9 +9,11 @@ parameter error is the largest relative error of its main parameter(s). False po
 flights (no effect) with noise drawn per seed; any named cause counts.
 
     python -m experiments.bench.diagnose_detection [--levels 0.3 ...] [--part hidden|clean]
+        [--effects rotor_drag ...] [--clean-seeds 0 10]
 
 runs one part at chosen levels (``bench --only diagnose`` runs all of them) and prints the
-figures and the table; the two parts can run in parallel.
+figures and the table; the parts (and subsets of the effects or of the clean seeds) can run in
+parallel, the same flights as one run.
 """
 
 from __future__ import annotations
@@ -42,19 +44,21 @@ def _noisy(logs, level: float, seed: int):
 def run(
     progress: Callable[[str], None] = print,
     trials: int = 2,
-    clean_seeds: int = 20,
+    clean_seeds: range = range(20),
     levels: tuple[float, ...] = NOISE_LEVELS_MPS2,
     hidden: bool = True,
     clean: bool = True,
+    effects: tuple[str, ...] = HIDDEN_EFFECTS,
 ) -> dict[str, float]:
     """Figures ``diagnose_named_rate_acc<level>``, ``diagnose_max_param_err_acc<level>``,
     ``diagnose_median_param_err_acc<level>`` and ``diagnose_false_positive_rate_acc<level>``
-    (``hidden``: the hidden-effect flights, ``clean``: the false-positive flights)."""
+    (``hidden``: the hidden-effect flights of ``effects``, ``clean``: the false-positive flights
+    with noise seeds ``clean_seeds``; at level 0 one clean flight)."""
     named = {lv: [] for lv in levels}
     errors = {lv: [] for lv in levels}
     false_pos = {lv: [] for lv in levels}
     with tempfile.TemporaryDirectory() as tmp:
-        for name in HIDDEN_EFFECTS if hidden else ():
+        for name in effects if hidden else ():
             for trial in range(trials):
                 seed = 1000 + 17 * HIDDEN_EFFECTS.index(name) + trial
                 truth, base = draw(name, np.random.default_rng(seed))
@@ -63,13 +67,15 @@ def run(
                     d = diagnose(_noisy(logs, lv, seed), load_sim_config("iris", base))
                     ok = bool(d.verdict) and d.verdict[0] == name
                     named[lv].append(ok)
+                    err = "-"
                     if ok:
                         errs = main_parameter_errors(name, truth, d.causes[0].params)
                         errors[lv].append(max(errs.values()))
-                    progress(f"detection: {name} trial {trial} acc {lv}: {d.verdict}")
+                        err = f"{100 * errors[lv][-1]:.1f} %"
+                    progress(f"detection: {name} trial {trial} acc {lv}: {d.verdict}, error {err}")
         clean_logs = fly_hidden({}, Path(tmp), 77) if clean else []
         for lv in levels if clean else ():
-            for s in range(clean_seeds if lv > 0.0 else 1):
+            for s in clean_seeds if lv > 0.0 else clean_seeds[:1]:
                 d = diagnose(_noisy(clean_logs, lv, 5000 + s), load_sim_config("iris"))
                 false_pos[lv].append(bool(d.verdict))
                 progress(f"detection: clean seed {s} acc {lv}: {d.verdict}")
@@ -107,9 +113,17 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--levels", type=float, nargs="+", default=list(NOISE_LEVELS_MPS2))
     parser.add_argument("--part", choices=("all", "hidden", "clean"), default="all")
+    parser.add_argument("--effects", nargs="+", choices=HIDDEN_EFFECTS, default=HIDDEN_EFFECTS)
+    parser.add_argument("--clean-seeds", type=int, nargs=2, default=(0, 20), metavar=("FROM", "TO"))
     args = parser.parse_args(argv)
     levels = tuple(args.levels)
-    figures = run(levels=levels, hidden=args.part != "clean", clean=args.part != "hidden")
+    figures = run(
+        levels=levels,
+        hidden=args.part != "clean",
+        clean=args.part != "hidden",
+        effects=tuple(args.effects),
+        clean_seeds=range(*args.clean_seeds),
+    )
     print(json.dumps(figures, indent=2))
     print(markdown_table(figures, levels))
     return 0
