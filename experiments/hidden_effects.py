@@ -45,18 +45,16 @@ HIDDEN_EFFECTS = (
     "rotor_drag", "body_drag", "wind", "payload", "battery_sag", "ground_effect", "motor_lag",
     "command_delay", "isotropic_drag", "thrust_curve",
 )  # fmt: skip
-# Known gaps (issue 18), on noisy logs only. Ground effect (tested on noisy logs, but its draw
-# there is one of the lucky ones): the mission's staircase of 2 s holds
-# (0.2 m down to 1.5 cm and back) shows the curve's size and range in both the training and the
-# held-out half, so max_gain is no longer a guess from one height; but it stays the curve's
-# extrapolation to the rotor plane on the ground (never flown: 0.1 m up when landed), and at IMU
-# noise 0.3 m/s^2 with 1-5 % thrust noise a least-squares fit of the low training rows alone
-# came within 15 % in 27 of 40 random draws (15 of 20 with the rotor radius known; errors of
-# both signs): noise-limited, not biased. Motor lag and a thrust curve are found from the produced
+# Known gaps (issue 18), on noisy logs only. Ground effect is named, but its max_gain is not
+# within 15 %: the holds of missions/excite_full.toml are flown at 8-9 cm whatever is commanded
+# (the ground effect holds the vehicle up against the altitude loop), so the curve is seen at one
+# height and max_gain (its extrapolation to a rotor plane on the ground) trades off with
+# rotor_radius_m. A staircase of 2 s holds fixed the detection bench's two draws but made the
+# battery_sag, command_delay and flight_control tests fail; it is not in the mission yet
+# (BENCHMARKS.md, issue 18, session 4). Motor lag and a thrust curve are found from the produced
 # thrust's response (diagnosis/thrust_response.py), not from the replayed velocity; the curve's
-# gain scatters by about 15 % there (10.1 % and 2.9 % on the detection bench's flights, 15.3 % on
-# tests/diagnosis/test_thrust_response.py's draw), so thrust_curve stays listed.
-NOT_YET_ON_NOISY_LOGS = ("thrust_curve",)
+# gain scatters by about 15 % there, so thrust_curve stays listed.
+NOT_YET_ON_NOISY_LOGS = ("ground_effect", "thrust_curve")
 
 
 def main_parameter_errors(name: str, truth: dict, params: dict) -> dict[str, float]:

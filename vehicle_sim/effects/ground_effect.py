@@ -14,7 +14,7 @@ more thrust with the rotor plane on the ground.
 What a flight constrains: the rotor plane never comes lower than ``rotor_height_m``, so
 ``max_gain`` is the curve extrapolated from the heights flown, and ``max_gain`` and
 ``rotor_radius_m`` trade off unless several heights between about R and 2R are held
-(``missions/excite_full.toml`` flies a staircase of 2 s holds down to 1.5 cm and back).
+(``missions/excite_full.toml`` does not yet: its holds are flown at 8-9 cm).
 """
 
 from __future__ import annotations
