@@ -63,20 +63,7 @@ def run_paper000(
     flights = {NOMINAL: _fly_all(jobs, pool, "nominal", progress)}
     logs = [f.log for f in flights[NOMINAL]]
     progress(f"fitting {len(config.selections)} residual models on {len(logs)} nominal flights")
-    futures = {
-        sel: pool.submit(
-            fit_residual,
-            logs,
-            sel,
-            config.nmpc.period_s,
-            learned_model=config.learned_model,
-            features=config.features,
-            m=config.m,
-            restarts=config.gp_restarts,
-        )
-        for sel in config.selections
-    }
-    fits = {sel: fut.result() for sel, fut in futures.items()}
+    fits = _fit_selections(logs, config, pool)
     if config.learn_from_structure:
         fits = _refit_on_structure(config, refs, fits, pool, progress)
     augmented_logs: dict[str, list[FlightLog]] = {sel: [] for sel in config.selections}
@@ -204,6 +191,14 @@ def _refit_on_structure(
         for seed in range(config.repeats)
     ]
     logs = [s.log for s in _fly_all(jobs, pool, "structure round", progress)]
+    return _fit_selections(logs, config, pool)
+
+
+def _fit_selections(
+    logs: list[FlightLog], config: StudyConfig, pool: Executor
+) -> dict[str, TrainingResult]:
+    """One residual model per inducing-point selection of ``config``, fitted on ``logs`` in
+    ``pool``: selection -> fit."""
     futures = {
         sel: pool.submit(
             fit_residual,
