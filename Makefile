@@ -39,10 +39,10 @@ study: setup
 	$(VENV)/bin/study --out out/study
 
 test: setup lint
-	$(PY) -m pytest -n 2 -q
+	$(PY) -m pytest -n 2 --dist worksteal -q
 
 test-fast: setup
-	$(PY) -m pytest -n 2 -q -m "not slow"
+	$(PY) -m pytest -n 2 --dist worksteal -q -m "not slow"
 
 lint: setup
 	$(VENV)/bin/ruff check .
