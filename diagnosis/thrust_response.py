@@ -104,10 +104,9 @@ def track_thrust(
                 row_window[w.anchor : w.stop - 1] = k
         if not np.any(row_window >= 0):
             continue
-        a = LogArrays(log)
+        a = LogArrays.of(log)
         if extra_vel_noise_mps is not None:
-            rng = np.random.default_rng(SIMEX_SEED + i)
-            a.state[:, 3:6] += rng.normal(size=(log.n_rows, 3)) * extra_vel_noise_mps
+            a = a.with_velocity_noise(extra_vel_noise_mps, SIMEX_SEED + i)
         for run_start, run_stop in airborne_runs(log):
             if not np.any(row_window[run_start:run_stop] >= 0):
                 continue
@@ -154,7 +153,10 @@ def select_thrust_response(
     named: list[Cause] = []
     left = list(names)
     while left:
-        fits = [fit_thrust_response(n, config, logs, train, test, vel_noise_mps) for n in left]
+        before = track_thrust(config, logs, test)
+        fits = [
+            fit_thrust_response(n, config, logs, train, test, vel_noise_mps, before) for n in left
+        ]
         ok = [cause for cause, is_named in fits if is_named]
         if not ok:
             return named, [cause for cause, _ in fits]
@@ -172,22 +174,20 @@ def fit_thrust_response(
     train: Sequence[Window],
     test: Sequence[Window],
     vel_noise_mps: np.ndarray,
+    before: ThrustTracking | None = None,
 ) -> tuple[Cause, bool]:
     """``name`` (one of :data:`THRUST_RESPONSE_CAUSES`) fitted to the thrust response on
     ``train``, judged on ``test``: (the cause with its evidence and statistic, whether it is
     named). ``vel_noise_mps`` (3,): the log's white velocity noise, which the SIMEX correction
-    adds once more."""
+    adds once more. ``before``: ``track_thrust(config, logs, test)`` if already at hand."""
     param, grid = search_grid(name)
     extra = np.asarray(vel_noise_mps, float)
 
-    def corrected_mse(value: float, wins: Sequence[Window]) -> tuple[float, float]:
-        cfg = with_cause(config, name, value)
-        once = track_thrust(cfg, logs, wins).mse()
-        twice = track_thrust(cfg, logs, wins, extra).mse()
-        return 2.0 * once - twice, twice - once
-
     def train_mse(value: float) -> float:
-        return corrected_mse(value, train)[0]
+        cfg = with_cause(config, name, value)
+        once = track_thrust(cfg, logs, train).mse()
+        twice = track_thrust(cfg, logs, train, extra).mse()
+        return 2.0 * once - twice
 
     scores = [train_mse(v) for v in grid]
     k = int(np.argmin(scores))
@@ -196,9 +196,11 @@ def fit_thrust_response(
     sol = minimize_scalar(train_mse, bounds=(lo, hi), method="bounded", options={"maxiter": 8})
     if sol.fun < best_score:
         best = float(sol.x)
-    before = track_thrust(config, logs, test)
+    if before is None:
+        before = track_thrust(config, logs, test)
     after = track_thrust(with_cause(config, name, best), logs, test)
-    follower_noise = max(corrected_mse(best, test)[1], 0.0)
+    twice = track_thrust(with_cause(config, name, best), logs, test, extra)
+    follower_noise = max(twice.mse() - after.mse(), 0.0)
     floor = thrust_noise_var(logs) + follower_noise
     margin = FLOOR_MARGIN_SE * NOISE_VAR_REL_SE_SQRT_N / np.sqrt(max(len(before.window), 1))
     explainable = before.mse() - floor * (1.0 + margin)
