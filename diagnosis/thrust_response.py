@@ -25,9 +25,21 @@ for the thrust curve's gain, which scales that noise too). The parameter is
 fitted on the training windows' rows and judged on the held-out ones like any cause: named only
 if it removes at least ``MIN_GAIN_FRACTION`` of the held-out squared thrust error left above the
 floor (the logged thrust's own white noise plus the command noise the velocity noise makes,
-both estimated from the log, plus ``FLOOR_MARGIN_SE`` standard errors of that estimate) and
+both estimated from the log, plus ``FLOOR_MARGIN_SE`` standard errors of that estimate), if
 the removal is significant by a block bootstrap over the held-out windows (p <=
-``MAX_P_VALUE``).
+``MAX_P_VALUE``), and if it removes at least the least thrust ``MIN_THRUST_FRACTION`` of the
+weight in RMS over the rows it acts on (the force causes' least force,
+``SelectionConfig.min_force_fraction``).
+
+The least thrust is a floor on the *removed* mean squared error, not on the explainable part:
+with sensor noise independent of the cause, ``mse(before) - mse(after)`` estimates the mean
+square of the thrust the cause accounts for whatever the noise (the noise cancels in the
+difference), so the rule means the same on exact and on noisy logs. The explainable part has no
+such floor on an exact log (the noise floor is zero), where the follower's own small mismatch
+(it steps once per row; seen: 0.016 N of one-row-ahead thrust RMSE on a 5-minute log) was half
+removed by a 21 ms motor lag that was not there: sqrt(0.016^2 - 0.011^2) = 0.012 N removed,
+against 0.044 N of least thrust for a 1.5 kg Iris. A true lag removes far more (seen: 0.522
+-> 0.447 N at IMU noise 0.3 m/s^2, 0.27 N removed, for tau_s 0.041 s).
 
 Needs the produced thrust (``thrust_n`` as logged, or from ESC rotor speeds); PX4's normalised
 thrust setpoint is the command itself and shows no lag.
@@ -44,8 +56,10 @@ from scipy.optimize import minimize_scalar
 from diagnosis import sim_anchor
 from diagnosis.cause import Cause
 from diagnosis.command_path import search_grid, with_cause
+from diagnosis.forces import GRAVITY_MPS2
 from diagnosis.noise_floor import NOISE_VAR_REL_SE_SQRT_N, block_bootstrap, white_noise_std
 from diagnosis.replay import LEAD_IN_S, LogArrays, Window, airborne_runs
+from diagnosis.selection import SelectionConfig
 from flightlog.schema import FlightLog
 from vehicle_sim import SimConfig
 
@@ -56,6 +70,7 @@ PRODUCED_THRUST_SOURCES = ("thrust_n as logged", "ESC rotor speed")
 MIN_GAIN_FRACTION = 0.5
 MAX_P_VALUE = 0.01
 FLOOR_MARGIN_SE = 2.0  # the floor is an estimate: its standard errors added, as for forces
+MIN_THRUST_FRACTION = SelectionConfig().min_force_fraction  # least RMS thrust removed [of weight]
 SIMEX_SEED = 0
 
 
@@ -198,8 +213,9 @@ def fit_thrust_response(
         best = float(sol.x)
     if before is None:
         before = track_thrust(config, logs, test)
-    after = track_thrust(with_cause(config, name, best), logs, test)
-    twice = track_thrust(with_cause(config, name, best), logs, test, extra)
+    best_config = with_cause(config, name, best)
+    after = track_thrust(best_config, logs, test)
+    twice = track_thrust(best_config, logs, test, extra)
     follower_noise = max(twice.mse() - after.mse(), 0.0)
     floor = thrust_noise_var(logs) + follower_noise
     margin = FLOOR_MARGIN_SE * NOISE_VAR_REL_SE_SQRT_N / np.sqrt(max(len(before.window), 1))
@@ -208,15 +224,21 @@ def fit_thrust_response(
     fraction = removed / explainable if explainable > 0.0 else 0.0
     sig = block_bootstrap(before.sq_error(), after.sq_error(), before.window)
     at_bound = bool(best >= grid[-1] * (1.0 - 1e-3) or best <= grid[0] * (1.0 + 1e-3))
-    named = fraction >= MIN_GAIN_FRACTION and sig.p_value <= MAX_P_VALUE
+    least_n = MIN_THRUST_FRACTION * config.mass_kg * GRAVITY_MPS2
+    change = np.abs(after.sim_thrust_n - before.sim_thrust_n)
+    acting = int(np.count_nonzero(change > 1e-9 * max(float(change.max(initial=0.0)), 1e-300)))
+    enough = len(before.window) * removed >= acting * least_n**2
+    named = fraction >= MIN_GAIN_FRACTION and sig.p_value <= MAX_P_VALUE and enough
     named = named and not at_bound
-    bound = " at the bound (search wider / the cause may be another)" if at_bound else ""
+    notes = " at the bound (search wider / the cause may be another)" if at_bound else ""
+    if not enough:
+        notes += f"; removes less than the least thrust ({least_n:.3f} N RMS)"
     evidence = (
         f"held-out one-row-ahead thrust RMSE {np.sqrt(before.mse()):.3f} -> "
         f"{np.sqrt(after.mse()):.3f} N (floor {np.sqrt(floor):.3f} N: thrust noise "
         f"{np.sqrt(floor - follower_noise):.3f} N and the command noise the velocity noise "
         f"makes; {100 * fraction:.0f} % of the explainable removed, "
-        f"p {sig.p_value:.3g}){bound}"
+        f"p {sig.p_value:.3g}){notes}"
     )
     cause = Cause(
         name,
