@@ -138,7 +138,7 @@ def replay(
                         sim_out.append(state.vel_ned_mps)
                         meas_out.append(a.state[r + 1, 3:6])
                         win_out.append(k)
-                follower.step(a.t[j + 1] - a.t[j])
+                follower.advance(a.t[j + 1] - a.t[j])
     if not t_out:
         return ReplayResult(np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0, int))
     return ReplayResult(np.array(t_out), np.array(sim_out), np.array(meas_out), np.array(win_out))
