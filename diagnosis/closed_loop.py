@@ -138,7 +138,7 @@ def _fly(
     template = sim_anchor.hovering_template(config)
     out, cut = [], []
     for log, mask in zip(logs, masks, strict=True):
-        a = LogArrays(log)
+        a = LogArrays.of(log)
         alt = -log["pos_d_m"]
         for start, stop, _ in segments(log):
             sim = sim_anchor.fresh_copy(template)

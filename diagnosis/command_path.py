@@ -252,7 +252,7 @@ def select_command_causes(
         accepted.append(rejected.pop(best.name))
         effects[best.name] = dict(best.params)
         config_now = configured(config_now, {best.name: best.params})
-        current = replay(config_now, logs, test)
+        current = best.test if best.test is not None else replay(config_now, logs, test)
         left.remove(best.name)
         progress(f"accepted {best.name}")
     return current, accepted, list(rejected.values())

@@ -273,32 +273,33 @@ def _best_lag_fit(blocks, axes, lags, d_gain, p_fixed=None):
     20-35 % for the vertical gains at 0.03-0.08 m/s of noise). That expected noise energy is
     taken off the normal equations' P-P term (corrected least squares, [Fuller87] ch. 1.2);
     the noise of int(e) is a random walk of size noise_std * sqrt(dt * t), left alone.
-    With ``p_fixed`` P is held there and only I is fitted (y - P L[e] = I L[int(e)] + c)."""
+    With ``p_fixed`` P is held there and only I is fitted (y - P L[e] = I L[int(e)] + c).
+
+    The constants c (one per block and axis) are taken out by centring each block's rows per
+    axis (the Frisch-Waugh-Lovell theorem): the same [P, I] and residual as with a column per
+    constant, solved as 2 x 2 normal equations instead of one column per block (hundreds on a
+    5-minute log). The noise correction, on the P-P term, is the same on both."""
     best = (np.inf, None, (0.0,))
-    n_const = len(blocks) * len(axes)
     for taus in lags:
         blocks_x, blocks_y = [], []
-        noise_energy = 0.0
-        col = 0
+        noise_energy = raw_pp = 0.0
         for block in blocks:
             dt, use = float(np.median(block["dt"][1:])), block["use"]
             filt = {k: _lag(block[k][:, list(axes)], dt, taus) for k in ("err", "int", "acc")}
             gain = _noise_gain(dt, taus)
             for j in range(len(axes)):
-                const = np.zeros((len(use), n_const))
-                const[:, col] = 1.0
-                col += 1
-                x = np.column_stack([filt["err"][:, j], filt["int"][:, j], const])
-                y = block["acc_sp"][:, axes[j]] + d_gain * filt["acc"][:, j]
+                x = np.column_stack([filt["err"][:, j], filt["int"][:, j]])[use]
+                y = (block["acc_sp"][:, axes[j]] + d_gain * filt["acc"][:, j])[use]
                 if p_fixed is not None:
                     y = y - p_fixed * x[:, 0]
                     x[:, 0] = 0.0
-                blocks_x.append(x[use])
-                blocks_y.append(y[use])
+                raw_pp += float(x[:, 0] @ x[:, 0])
+                blocks_x.append(x - x.mean(axis=0))
+                blocks_y.append(y - y.mean())
                 noise_energy += float(use.sum()) * gain * block["vel_noise"][axes[j]] ** 2
         x_all, y_all = np.vstack(blocks_x), np.concatenate(blocks_y)
         normal = x_all.T @ x_all
-        normal[0, 0] -= min(noise_energy, 0.9 * normal[0, 0])
+        normal[0, 0] -= min(noise_energy, 0.9 * raw_pp)
         coef = np.linalg.lstsq(normal, x_all.T @ y_all, rcond=None)[0]
         if p_fixed is not None:
             coef[0] = p_fixed

@@ -12,6 +12,8 @@ velocity.
 
 from __future__ import annotations
 
+import copy
+import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -111,7 +113,7 @@ def replay(
     template = sim_anchor.hovering_template(sim_config)
     t_out, sim_out, meas_out, win_out = [], [], [], []
     for i, log in enumerate(logs):
-        a = LogArrays(log)
+        a = LogArrays.of(log)
         mine = {w.anchor: (k, w) for k, w in enumerate(wins) if w.log_index == i}
         for run_start, run_stop in airborne_runs(log):
             if not any(run_start <= anchor < run_stop for anchor in mine):
@@ -136,14 +138,21 @@ def replay(
                         sim_out.append(state.vel_ned_mps)
                         meas_out.append(a.state[r + 1, 3:6])
                         win_out.append(k)
-                follower.step(a.t[j + 1] - a.t[j])
+                follower.advance(a.t[j + 1] - a.t[j])
     if not t_out:
         return ReplayResult(np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0, int))
     return ReplayResult(np.array(t_out), np.array(sim_out), np.array(meas_out), np.array(win_out))
 
 
 class LogArrays:
-    """The columns a replay reads, as plain arrays (n rows)."""
+    """The columns a replay reads, as plain arrays (n rows), and the anchor states of its rows.
+
+    Every replay, thrust tracking and closed-loop run of a diagnosis reads the same logs: get
+    them with :meth:`of`, which builds them once per log (logs are never changed in place), and
+    the :class:`AnchorState` of each row once (it is immutable).
+    """
+
+    _by_log: dict[int, LogArrays] = {}
 
     def __init__(self, log: FlightLog) -> None:
         n = log.n_rows
@@ -158,16 +167,44 @@ class LogArrays:
         ]
         self.thrust = log["thrust_n"] if log.has("thrust_n") else np.zeros(n)
         self.acc = log.stack(*ACC_COLUMNS) if log.has(*ACC_COLUMNS) else np.zeros((n, 3))
+        self._anchors: dict[tuple[int, bool], AnchorState] = {}
+        self._noisy: dict[tuple[float, ...], LogArrays] = {}
+
+    @classmethod
+    def of(cls, log: FlightLog) -> LogArrays:
+        """The arrays of ``log``, built at its first use and kept while ``log`` lives."""
+        arrays = cls._by_log.get(id(log))
+        if arrays is None:
+            arrays = cls._by_log[id(log)] = cls(log)
+            weakref.finalize(log, cls._by_log.pop, id(log), None)
+        return arrays
+
+    def with_velocity_noise(self, std_mps: np.ndarray, seed: int) -> LogArrays:
+        """A copy whose measured velocity has white Gaussian noise of std ``std_mps`` (3,)
+        [m/s] added, drawn with ``seed`` (the same draw for the same seed; kept for reuse)."""
+        key = (seed, *(float(v) for v in std_mps))
+        noisy = self._noisy.get(key)
+        if noisy is None:
+            noisy = self._noisy[key] = copy.copy(self)
+            rng = np.random.default_rng(seed)
+            noisy.state = self.state.copy()
+            noisy.state[:, 3:6] += rng.normal(size=(len(self.t), 3)) * np.asarray(std_mps)
+            noisy._anchors, noisy._noisy = {}, {}
+        return noisy
 
     def anchor(self, j: int, lead: bool) -> AnchorState:
         """The measured state of row ``j``; during the lead-in with its thrust and acceleration
         (thrust 0 = not logged: rotor speeds are kept)."""
-        s = self.state[j]
-        return AnchorState(
-            pos_ned_m=s[0:3],
-            vel_ned_mps=s[3:6],
-            q_wxyz=s[6:10],
-            rates_frd_radps=s[10:13],
-            thrust_n=float(self.thrust[j]) if lead else None,
-            acc_ned_mps2=self.acc[j] if lead else None,
-        )
+        key = (j, lead)
+        state = self._anchors.get(key)
+        if state is None:
+            s = self.state[j]
+            state = self._anchors[key] = AnchorState(
+                pos_ned_m=s[0:3],
+                vel_ned_mps=s[3:6],
+                q_wxyz=s[6:10],
+                rates_frd_radps=s[10:13],
+                thrust_n=float(self.thrust[j]) if lead else None,
+                acc_ned_mps2=self.acc[j] if lead else None,
+            )
+        return state

@@ -9,18 +9,22 @@ controller warms up, the velocity-loop integral that reproduces the measured thr
 from __future__ import annotations
 
 import copy
+from functools import lru_cache
 
 from vehicle_sim import FlightMode, SimConfig, Simulator, VelocitySetpoint
 
 TEMPLATE_ALT_M = 5.0
+TEMPLATES_KEPT = 16  # configs whose template is kept (a diagnosis replays a few again and again)
 
 
 class AnchorError(RuntimeError):
     """The template vehicle could not be brought into OFFBOARD flight."""
 
 
+@lru_cache(maxsize=TEMPLATES_KEPT)
 def hovering_template(config: SimConfig) -> Simulator:
-    """A vehicle of ``config`` hovering in OFFBOARD, to be copied for each replay window."""
+    """A vehicle of ``config`` hovering in OFFBOARD, to be copied for each replay window (the
+    same for the same config, so it is built once and kept: never step it, copy it)."""
     sim = Simulator(config, seed=0)
     sim.arm()
     sim.takeoff(TEMPLATE_ALT_M)
