@@ -1,9 +1,10 @@
-"""Rover physics and PX4-like control: straight line, yaw-rate limit, slip on a patch."""
+"""Rover physics and PX4-like control: straight line, yaw-rate limit, slip on a patch, skid."""
 
 import math
 
 import pytest
 
+from vehicle_sim.effects import WheelSlip
 from vehicle_sim.effects.base import SimConfigError
 from vehicle_sim.rover import RoverSim, Slope, SurfacePatch, make_rover_effect, rover_preset
 
@@ -69,6 +70,22 @@ def test_a_side_slope_slips_the_robot_at_an_angle_not_a_rate(speed_mps: float) -
     assert sim.state.lat_speed_mps == pytest.approx(-0.1 * sim.state.speed_mps, rel=1e-3)
     sim.step(20.0 / speed_mps)
     assert sim.state.y_m == pytest.approx(-0.4, abs=0.02)
+
+
+def test_skid_steer_turn_loses_yaw_rate_the_gyro_loop_makes_up() -> None:
+    # ROC6 at 1 m/s, 0.5 rad/s (curvature 0.5 1/m): yaw efficiency 1 - (0.2 * 1 + 0.3 * 0.5)
+    # = 0.65, outward slide 0.2 s * 1 m/s * 0.5 rad/s = 0.1 m/s. The yaw-rate loop closes on
+    # the measured (ground) yaw rate, so its integrator makes the shortfall up (time constant
+    # (1 + 0.65 * 0.3) / (0.65 * 0.1) = 18 s; 150 s is 8 of them).
+    slip = WheelSlip(yaw_loss_per_mps=0.2, yaw_loss_per_curv_m=0.3, lat_slip_s=0.2)
+    sim = RoverSim(rover_preset("roc6_150kg"), effects=(slip,))
+    sim.arm()
+    sim.set_setpoint(1.0, 0.5)
+    st = sim.step(150.0)
+    assert st.speed_mps == pytest.approx(1.0, abs=0.01)
+    assert st.yaw_rate_radps == pytest.approx(0.5, abs=0.005)
+    assert sim.terrain_at(st).yaw_scale == pytest.approx(0.65, abs=0.005)
+    assert st.lat_speed_mps == pytest.approx(-0.1, abs=0.002)
 
 
 def test_traction_loss_on_mud_is_made_up_by_the_speed_loop() -> None:
