@@ -33,7 +33,8 @@ class TrialRecord:
 
     Attributes:
         s_m, e_lat_m, e_head_rad, w_cmd_radps, v_cmd_mps, features: per control step,
-            errors of the TRUE pose against the path.
+            errors of the TRUE pose against the path pose at its projection (what [Ostafew16]
+            section 4.2 records when passing a vertex; planners.rover.path).
         e_lat_est_m, e_head_est_rad: per control step, the errors as the robot's localisation
             (the VT&R stand-in) measures them: what [Ostafew16] reports ("quantified by the
             localization of the VT&R algorithm", section 5.1), having no ground truth.
@@ -129,8 +130,11 @@ def run_trial(
         est = truth + loc_error.draw()
         if pose_prev is None:
             pose_prev = est.copy()
-        fix = path.localise(*est, hint=hint)
-        true_fix = path.localise(*truth, hint=hint)
+        fix = path.localise(*est, hint=hint)  # the controller's frame: the nearest vertex
+        # what is recorded and scheduled on: errors against the path pose at the projection,
+        # [Ostafew16] section 4.2's "when passing the ith vertex" (planners.rover.path)
+        est_fix = path.localise_on_path(*est, hint=hint)
+        true_fix = path.localise_on_path(*truth, hint=hint)
         hint = fix.vertex
         if pending is not None and sc.learning:  # experience of the previous step
             vtx, v_c, a_prev, pose_k, w_c = pending
@@ -173,14 +177,14 @@ def run_trial(
         feats = quality.count(sc.lighting[fix.vertex], true_fix.e_lat_m, true_fix.e_head_rad,
                               st.speed_mps)  # fmt: skip
         i = fix.vertex  # the scheduler has what the robot has: its localised errors
-        worst["el"][i] = np.nanmax([worst["el"][i], abs(fix.e_lat_m)])
-        worst["eh"][i] = np.nanmax([worst["eh"][i], abs(fix.e_head_rad)])
+        worst["el"][i] = np.nanmax([worst["el"][i], abs(est_fix.e_lat_m)])
+        worst["eh"][i] = np.nanmax([worst["eh"][i], abs(est_fix.e_head_rad)])
         worst["w"][i] = np.nanmax([worst["w"][i], abs(w_cmd)])
         worst["f"][i] = np.nanmin([worst["f"][i], feats])
         for key, val in (("s", true_fix.s_m), ("el", true_fix.e_lat_m),
                          ("eh", true_fix.e_head_rad), ("w", w_cmd), ("v", v_now),
                          ("f", feats), ("n", n_local), ("t", step_time), ("cpu", step_cpu),
-                         ("el_est", fix.e_lat_m), ("eh_est", fix.e_head_rad)):  # fmt: skip
+                         ("el_est", est_fix.e_lat_m), ("eh_est", est_fix.e_head_rad)):  # fmt: skip
             rec[key].append(val)
         sim.set_setpoint(v_now, w_cmd)
         sim.step(dt)

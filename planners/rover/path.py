@@ -6,6 +6,11 @@ keeps them. It is built from a recorded drive (:meth:`TaughtPath.from_drive`), f
 rows (:meth:`TaughtPath.from_csv_text`). Errors follow [Ostafew16] section 4.2: with x_d the
 nearest vertex pose, (e_L, e_H) = [[0,1,0],[0,0,1]] (x_d - x) in the vertex frame, i.e. e_L is
 minus the robot's left offset and e_H the heading of the path minus the robot's.
+[Ostafew16] records them "when passing the ith vertex" (section 4.2; Figs. 9, 10), where the
+robot's projection on the path is the vertex itself; :meth:`TaughtPath.localise_on_path` gives
+that measure at every step, against the path pose interpolated at the projection. Against the
+nearest vertex alone, e_H carries up to curvature * spacing / 2 of the vertex spacing (0.125 rad
+on a 1 1/m turn with 0.25 m vertices) that is no tracking error.
 """
 
 from __future__ import annotations
@@ -130,6 +135,24 @@ class TaughtPath:
         along = -(c * dx + s * dy)
         e_lat = -s * dx + c * dy
         return PathFix(i, float(self.s_m[i] + along), e_lat, float(wrap_angle(thd - heading_rad)))
+
+    def localise_on_path(
+        self, x_m: float, y_m: float, heading_rad: float, hint: int = 0
+    ) -> PathFix:
+        """Errors against the path pose at the robot's projection (module docstring).
+
+        ``vertex`` is still the nearest vertex; ``s_m`` is the projection's arc length, refined
+        once along the interpolated tangent.
+        """
+        fix = self.localise(x_m, y_m, heading_rad, hint)
+        s_m = fix.s_m
+        for _ in range(2):
+            xr, yr, thr = self.ref_at(np.array([s_m]))[0]
+            c, s = math.cos(thr), math.sin(thr)
+            dx, dy = xr - x_m, yr - y_m
+            s_m = float(np.clip(s_m - (c * dx + s * dy), 0.0, self.length_m))
+        e_lat = -s * dx + c * dy
+        return PathFix(fix.vertex, s_m, float(e_lat), float(wrap_angle(thr - heading_rad)))
 
     def ref_at(self, s_m: np.ndarray) -> np.ndarray:
         """Reference poses (n, 3) at arc lengths s_m (n,), clamped to the path."""

@@ -27,13 +27,11 @@ class SpeedSchedulerConfig:
         v_min_mps, v_max_mps: bounds of the schedule [m/s]. Table I gives neither; the paper
             reports scheduled speeds of 0.35 to 1.2 m/s over all its robots (abstract;
             experiment 3: 0.5 to 1.2 m/s), never below the first trial's speed, so v_min is
-            v_init. Lower floors hurt: on a side slope the heading error is the crab angle
-            atan(drift / speed) the robot needs to hold the line, which grows as the scheduler
-            slows it (eq. 31 lowers speed on e_H > lambda_H), and an Ackermann robot's turning
-            authority v tan(delta_max) / L shrinks with speed (measured with a 0.2 m/s floor:
-            experiments 2 and 3 sat at 0.2 m/s over their side slopes from trial 2-3 on, with
-            e_H near atan(0.12 / 0.2) = 0.54 rad, and experiment 3's robot left the path at
-            0.2-0.25 m/s in a 4 m-radius arc).
+            v_init. Lower floors hurt: an Ackermann robot's turning authority
+            v tan(delta_max) / L shrinks with speed (measured with a 0.2 m/s floor: experiment
+            3's robot left the path at 0.2-0.25 m/s in a 4 m-radius arc; when side slopes
+            slipped at a fixed rate rather than an angle, experiments 2 and 3 also sat at
+            0.2 m/s over them, their crab atan(0.12 / 0.2) = 0.54 rad holding e_H > lambda_H).
     """
 
     gamma_up_mps: float = 0.15
@@ -58,7 +56,11 @@ class SpeedSchedulerConfig:
 
 TABLE_I: dict[str, SpeedSchedulerConfig] = {
     "experiment_2": SpeedSchedulerConfig(),
-    "experiment_3": SpeedSchedulerConfig(gamma_up_mps=0.2, gamma_down_mps=0.15),
+    # [Ostafew16] section 5.5 and Fig. 17: the DMRV drove "at speeds ranging from 0.5 to 1.2
+    # m/s", so its first trial (and floor) is 0.5 m/s; the 0.35 m/s start is experiment 2's.
+    "experiment_3": SpeedSchedulerConfig(
+        gamma_up_mps=0.2, gamma_down_mps=0.15, v_init_mps=0.5, v_min_mps=0.5
+    ),
 }
 
 

@@ -1,4 +1,17 @@
-"""slope: a tilted disc of ground a rover climbs or crosses ([Ostafew16] section 5)."""
+"""slope: a tilted disc of ground a rover climbs or crosses ([Ostafew16] section 5).
+
+Side slip is an angle, not a rate: a wheel's lateral force depends on its slip angle
+beta = atan(v_lat / v_x) [Ishigami09] (terramechanics), and at the quasi-static speeds of
+[Ostafew16] (0.35-1.2 m/s) the downhill pull m g sin(phi) is balanced at a beta set by the
+slope and the soil, not by the speed. So the robot slides downhill at v tan(beta), with
+tan(beta) = side_slip_per_grade * (side grade): the distance it loses per metre driven does not
+depend on how fast it drives, and the crab that holds the line (beta) neither. With a linear
+lateral stiffness C = c_n m g (c_n per rad), tan(beta) ~ tan(phi) / c_n, so side_slip_per_grade
+is 1 / c_n: 0.3-0.6 is loose soil (c_n 1.7-3 per rad); firm ground is several times stiffer.
+
+[Ishigami09]: G. Ishigami, K. Nagatani, K. Yoshida, "Slope traversal controls for planetary
+exploration rover on sandy terrain", J. Field Robotics 26(3), 2009 (cited by [Ostafew16]).
+"""
 
 from __future__ import annotations
 
@@ -16,7 +29,8 @@ class Slope(Effect):
 
     With heading unit vector h and left unit vector l, the grade along the path is
     p = grade . h and across it r = grade . l; speed scales by 1 - uphill_loss_per_grade * max(p,0)
-    and the robot drifts sideways (downhill, towards -r) at side_drift_mps_per_grade * r.
+    and the robot slides sideways (downhill, towards -r) at |v| * side_slip_per_grade * r, a
+    side slip angle atan(side_slip_per_grade * r) whatever the speed (module docstring).
     """
 
     name: ClassVar[str] = "slope"
@@ -26,7 +40,7 @@ class Slope(Effect):
         ParamSpec("grade", "1", 2, -0.6, 0.6, "ground gradient (dz/dx, dz/dy)"),
         ParamSpec("uphill_loss_per_grade", "1", 1, 0.0, 2.0, "speed lost per unit uphill grade"),
         ParamSpec(
-            "side_drift_mps_per_grade", "m/s", 1, 0.0, 3.0, "downhill drift per unit side grade"
+            "side_slip_per_grade", "1", 1, 0.0, 3.0, "tan(side slip angle) per unit side grade"
         ),
     )
     VEHICLE: ClassVar[str] = "rover"
@@ -37,7 +51,7 @@ class Slope(Effect):
     radius_m: float = 3.0
     grade: tuple[float, float] = (0.2, 0.2)
     uphill_loss_per_grade: float = 0.5
-    side_drift_mps_per_grade: float = 0.6
+    side_slip_per_grade: float = 0.6
 
     def __post_init__(self) -> None:
         validate_effect(self)
@@ -52,5 +66,5 @@ class Slope(Effect):
         across = -self.grade[0] * s + self.grade[1] * c
         return TerrainEffect(
             speed_scale=max(0.1, 1.0 - self.uphill_loss_per_grade * max(along, 0.0)),
-            lat_drift_mps=-self.side_drift_mps_per_grade * across * min(1.0, abs(speed_mps) * 4),
+            lat_drift_mps=-self.side_slip_per_grade * across * abs(speed_mps),
         )

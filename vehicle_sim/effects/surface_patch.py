@@ -1,6 +1,9 @@
 """surface_patch: a disc of loose ground (mud, gravel, sand) in the rover's world.
 
 Named stand-ins for [Ostafew16]'s surfaces: :func:`mud_patch` and :func:`gravel_patch`.
+The ruts' sideways push is a slip angle, like a slope's (vehicle_sim.effects.slope): the ground
+deflects the wheels by a distance per metre driven, so the sideways speed scales with the
+robot's speed and the crab that holds the line does not depend on it.
 """
 
 from __future__ import annotations
@@ -18,9 +21,9 @@ class SurfacePatch(Effect):
     """A disc of loose ground (mud, gravel, sand) placed in the world.
 
     Inside it the ground speed is ``traction`` times the wheel speed, the yaw rate
-    ``yaw_efficiency`` times the differential yaw rate, and ruts push sideways at
-    ``lat_drift_mps`` (world-fixed direction: to the robot's left while it drives at heading 0,
-    i.e. along +y in the world).
+    ``yaw_efficiency`` times the differential yaw rate, and ruts push sideways by ``lat_slip``
+    metres per metre driven (world-fixed direction: to the robot's left while it drives at
+    heading 0, i.e. along +y in the world): a sideways speed of |v| lat_slip cos(heading).
     """
 
     name: ClassVar[str] = "surface_patch"
@@ -29,7 +32,7 @@ class SurfacePatch(Effect):
         ParamSpec("radius_m", "m", 1, 0.1, 1000.0, "patch radius"),
         ParamSpec("traction", "1", 1, 0.2, 1.0, "ground speed / wheel speed on the patch"),
         ParamSpec("yaw_efficiency", "1", 1, 0.2, 1.0, "yaw rate / commanded wheel yaw rate"),
-        ParamSpec("lat_drift_mps", "m/s", 1, -0.5, 0.5, "sideways drift along world +y"),
+        ParamSpec("lat_slip", "1", 1, -0.5, 0.5, "sideways slip along world +y per m driven"),
     )
     VEHICLE: ClassVar[str] = "rover"
     ROLE: ClassVar[str] = "terrain"
@@ -39,7 +42,7 @@ class SurfacePatch(Effect):
     radius_m: float = 2.0
     traction: float = 0.7
     yaw_efficiency: float = 0.6
-    lat_drift_mps: float = 0.0
+    lat_slip: float = 0.0
 
     def __post_init__(self) -> None:
         validate_effect(self)
@@ -49,20 +52,19 @@ class SurfacePatch(Effect):
     ) -> TerrainEffect:
         if not inside(self.centre_m, self.radius_m, x_m, y_m):
             return NEUTRAL
-        # world +y drift expressed in the body frame's left axis
-        moving = min(1.0, abs(speed_mps) * 4)
+        # world +y slip expressed in the body frame's left axis
         return TerrainEffect(
             speed_scale=self.traction,
             yaw_scale=self.yaw_efficiency,
-            lat_drift_mps=self.lat_drift_mps * math.cos(heading_rad) * moving,
+            lat_drift_mps=self.lat_slip * math.cos(heading_rad) * abs(speed_mps),
         )
 
 
 def mud_patch(centre_m: tuple[float, float], radius_m: float = 2.0) -> SurfacePatch:
     """Mud: much less traction and turning authority, slight rut drift."""
-    return SurfacePatch(centre_m, radius_m, traction=0.6, yaw_efficiency=0.5, lat_drift_mps=0.05)
+    return SurfacePatch(centre_m, radius_m, traction=0.6, yaw_efficiency=0.5, lat_slip=0.05)
 
 
 def gravel_patch(centre_m: tuple[float, float], radius_m: float = 2.0) -> SurfacePatch:
     """Loose gravel: a little less traction, noticeably less turning authority."""
-    return SurfacePatch(centre_m, radius_m, traction=0.9, yaw_efficiency=0.7, lat_drift_mps=0.0)
+    return SurfacePatch(centre_m, radius_m, traction=0.9, yaw_efficiency=0.7, lat_slip=0.0)

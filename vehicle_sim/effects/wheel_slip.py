@@ -1,4 +1,19 @@
-"""wheel_slip: a skid-steer rover's turning slip and centrifugal side slip."""
+"""wheel_slip: a skid-steer rover's turning slip and centrifugal side slip.
+
+A skid-steered robot turns about instantaneous centres of rotation (ICRs) of its two wheel
+sides that lie outside the wheels, so it yaws at the differential wheel rate divided by an
+expansion factor chi >= 1 ([Mandow07]); the ICRs move with the path's curvature and the
+robot's speed ([Wang15], on a Pioneer P3-AT) and longitudinally with the centripetal
+acceleration, which slides the robot outwards of the turn. Here 1 / chi is ``yaw_scale``,
+linear in |v| and |curvature|, and the ICRs' longitudinal shift is ``lat_slip_s`` * v
+(sideways speed lat_slip_s * v * omega). The coefficients are not fitted to any robot.
+
+[Mandow07]: A. Mandow, J. L. Martinez, J. Morales, J. L. Blanco, A. Garcia-Cerezo,
+J. Gonzalez, "Experimental kinematics for wheeled skid-steer mobile robots", IROS 2007.
+[Wang15]: T. Wang, Y. Wu, J. Liang, C. Han, J. Chen, Q. Zhao, "Analysis and experimental
+kinematics of a skid-steering wheeled robot based on a laser scanner sensor", Sensors 15(5),
+9681-9702, 2015.
+"""
 
 from __future__ import annotations
 

@@ -24,6 +24,25 @@ def test_errors_against_the_nearest_vertex_follow_the_paper_sign_convention() ->
     assert fix.e_head_rad == pytest.approx(-0.1)
 
 
+def test_errors_on_the_path_carry_no_vertex_spacing_on_a_turn() -> None:
+    # A robot exactly on a 1 1/m arc, facing along it, midway between two 0.25 m vertices: the
+    # nearest vertex's heading differs from the robot's by curvature * 0.125 m; the path pose
+    # at its projection ([Ostafew16] "when passing the vertex") does not.
+    path = TaughtPath.from_segments([(1.0, 0.0), (math.pi / 2, 1.0), (1.0, 0.0)])
+    i = int(np.searchsorted(path.s_m, 1.5))
+    s = 0.5 * (path.s_m[i] + path.s_m[i + 1])  # on the arc, midway between two vertices
+    x, y = 1.0 + math.sin(s - 1.0), 1.0 - math.cos(s - 1.0)
+    fix, on_path = path.localise(x, y, s - 1.0), path.localise_on_path(x, y, s - 1.0)
+    assert abs(fix.e_head_rad) == pytest.approx(path.spacing_m / 2, abs=0.01)
+    assert on_path.e_head_rad == pytest.approx(0.0, abs=0.01)
+    sagitta = path.spacing_m**2 / 8  # the chord between the vertices lies this far inside
+    assert on_path.e_lat_m == pytest.approx(sagitta, abs=0.002)
+    assert on_path.s_m == pytest.approx(s, abs=0.01)
+    left = path.localise_on_path(x - 0.1 * math.sin(s - 1.0), y + 0.1 * math.cos(s - 1.0), s - 1.0)
+    # the paper's sign, as localise's: left of the path is negative
+    assert left.e_lat_m == pytest.approx(sagitta - 0.1, abs=0.002)
+
+
 def test_path_from_csv_text_and_bad_rows() -> None:
     path = TaughtPath.from_csv_text("x_m,y_m\n0,0\n1,0\n2,0\n", spacing_m=0.5)
     assert len(path) == 5 and path.length_m == pytest.approx(2.0)

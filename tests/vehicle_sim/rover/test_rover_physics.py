@@ -1,11 +1,12 @@
-"""Rover physics and PX4-like control: straight line, yaw-rate limit, slip on a patch."""
+"""Rover physics and PX4-like control: straight line, yaw-rate limit, slip on a patch, skid."""
 
 import math
 
 import pytest
 
+from vehicle_sim.effects import WheelSlip
 from vehicle_sim.effects.base import SimConfigError
-from vehicle_sim.rover import RoverSim, SurfacePatch, make_rover_effect, rover_preset
+from vehicle_sim.rover import RoverSim, Slope, SurfacePatch, make_rover_effect, rover_preset
 
 
 def test_straight_line_reaches_commanded_speed_and_stays_on_the_x_axis() -> None:
@@ -40,17 +41,51 @@ def test_ackermann_turn_rate_follows_the_bicycle_model() -> None:
     )
 
 
-def test_sideways_drift_on_a_patch_matches_the_hand_calculation() -> None:
-    # Straight through a 2 m wide patch at steady 0.5 m/s with full traction: the robot spends
-    # 2 m / 0.5 m/s = 4 s on it drifting at 0.1 m/s, so it leaves 0.4 m to the left.
+@pytest.mark.parametrize("speed_mps", [0.3, 0.6])
+def test_sideways_slip_on_a_patch_matches_the_hand_calculation(speed_mps: float) -> None:
+    # Straight through a 2 m wide patch with full traction: ruts that slip the robot 0.2 m per
+    # metre driven leave it 2 m * 0.2 = 0.4 m to the left, however fast it drives.
     patch = SurfacePatch(centre_m=(10.0, 0.0), radius_m=1.0, traction=1.0, yaw_efficiency=1.0,
-                         lat_drift_mps=0.1)  # fmt: skip
+                         lat_slip=0.2)  # fmt: skip
     sim = RoverSim(rover_preset("husky_50kg"), effects=(patch,))
     sim.arm()
-    sim.set_setpoint(0.5, 0.0)
-    sim.step(40.0)
+    sim.set_setpoint(speed_mps, 0.0)
+    sim.step(16.0 / speed_mps)
     assert sim.state.x_m > 15.0
     assert sim.state.y_m == pytest.approx(0.4, abs=0.02)
+
+
+@pytest.mark.parametrize("speed_mps", [0.35, 1.2])
+def test_a_side_slope_slips_the_robot_at_an_angle_not_a_rate(speed_mps: float) -> None:
+    # Across a side grade of 0.25 (14 deg) with side_slip_per_grade 0.4, tan(beta) = 0.1: the
+    # robot slides downhill (-y) at 0.1 m per metre driven at any speed, so crossing the 4 m
+    # wide disc on its diameter costs 0.4 m, and the sideways speed is a tenth of the forward.
+    slope = Slope(centre_m=(10.0, 0.0), radius_m=2.0, grade=(0.0, 0.25),
+                  uphill_loss_per_grade=0.0, side_slip_per_grade=0.4)  # fmt: skip
+    sim = RoverSim(rover_preset("roc6_150kg"), effects=(slope,))
+    sim.arm()
+    sim.set_setpoint(speed_mps, 0.0)
+    while sim.state.x_m < 10.0:
+        sim.step(0.1)
+    assert sim.state.lat_speed_mps == pytest.approx(-0.1 * sim.state.speed_mps, rel=1e-3)
+    sim.step(20.0 / speed_mps)
+    assert sim.state.y_m == pytest.approx(-0.4, abs=0.02)
+
+
+def test_skid_steer_turn_loses_yaw_rate_the_gyro_loop_makes_up() -> None:
+    # ROC6 at 1 m/s, 0.5 rad/s (curvature 0.5 1/m): yaw efficiency 1 - (0.2 * 1 + 0.3 * 0.5)
+    # = 0.65, outward slide 0.2 s * 1 m/s * 0.5 rad/s = 0.1 m/s. The yaw-rate loop closes on
+    # the measured (ground) yaw rate, so its integrator makes the shortfall up (time constant
+    # (1 + 0.65 * 0.3) / (0.65 * 0.1) = 18 s; 150 s is 8 of them).
+    slip = WheelSlip(yaw_loss_per_mps=0.2, yaw_loss_per_curv_m=0.3, lat_slip_s=0.2)
+    sim = RoverSim(rover_preset("roc6_150kg"), effects=(slip,))
+    sim.arm()
+    sim.set_setpoint(1.0, 0.5)
+    st = sim.step(150.0)
+    assert st.speed_mps == pytest.approx(1.0, abs=0.01)
+    assert st.yaw_rate_radps == pytest.approx(0.5, abs=0.005)
+    assert sim.terrain_at(st).yaw_scale == pytest.approx(0.65, abs=0.005)
+    assert st.lat_speed_mps == pytest.approx(-0.1, abs=0.002)
 
 
 def test_traction_loss_on_mud_is_made_up_by_the_speed_loop() -> None:
