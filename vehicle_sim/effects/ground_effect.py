@@ -14,7 +14,8 @@ more thrust with the rotor plane on the ground.
 What a flight constrains: the rotor plane never comes lower than ``rotor_height_m``, so
 ``max_gain`` is the curve extrapolated from the heights flown, and ``max_gain`` and
 ``rotor_radius_m`` trade off unless several heights between about R and 2R are held
-(``missions/excite_full.toml`` does not yet: its holds are flown at 8-9 cm).
+(``missions/excite_full.toml`` ends with a staircase of 2 s holds for that: its longer holds
+before are flown at 8-9 cm whatever is commanded).
 """
 
 from __future__ import annotations
@@ -47,7 +48,7 @@ class GroundEffect(Effect):
     ROLE: ClassVar[str] = "force"
     NEEDS: ClassVar[tuple[str, ...]] = ("thrust", "near_ground")
     EXCITE: ClassVar[str] = (
-        "fly a staircase of 2 s altitude holds from 0.2 m down to 2 cm and back up over flat"
+        "fly a staircase of 2 s altitude holds from 0.2 m down to 3 cm and back up over flat"
         " ground (several heights within two rotor radii, each seen more than once)"
     )
     max_gain: float = 0.25
