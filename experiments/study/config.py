@@ -46,13 +46,14 @@ class StudyConfig:
         refit_rounds: [Ostafew16]'s trial-after-trial learning inside [Kulathunga23]'s
             experiment: after the fit on the nominal flights, each round flies every selection's
             model on the nominal flights' seeds (never the held-out seeds the comparison flies)
-            and refits it on all flights so far, so the model covers where the augmented
-            planner flies; a refit flies only if it predicts the held-out logs better than
-            the model it replaces (gp.prediction_check). 0: the model from the nominal flights.
+            and refits its GP on all flights so far (on the structure identified from the
+            nominal flights), so the model covers where the augmented planner flies; a refit
+            flies only if it predicts the held-out logs better than the model it replaces
+            (gp.prediction_check). 0: the model from the nominal flights.
         learn_from_structure: after the fit on the nominal flights, fly its identified
             structure (first_order_lag) alone on the nominal flights' seeds and fit the GP on
-            those flights instead (experiments.study.paper000): the GP learns what the
-            structure leaves where a planner on it flies.
+            those flights instead, on that same structure (experiments.study.paper000): the
+            GP learns what the structure leaves where a planner on it flies.
     """
 
     out_dir: Path = Path("out/study")

@@ -30,6 +30,7 @@ def fit_residual(
     incumbent: Predictor | None = None,
     check_horizon_s: float | None = CHECK_HORIZON_S,
     planner_dt_s: float | None = PLANNER_DT_S,
+    structure_params: tuple[tuple[str, float], ...] = (),
 ) -> TrainingResult:
     """A residual model from the following phase (OFFBOARD rows) of ``logs``, flown with a
     control period of ``period_s`` [s], with ``m`` inducing points chosen by ``inducing``
@@ -38,12 +39,15 @@ def fit_residual(
     ``learned_model`` is the nominal model under the residual: "first_order_lag" has its
     time constants identified from the logs first (the model file records them);
     "kinematic_4dof" is [Kulathunga23]'s (its residual time base is one control period).
+    ``structure_params`` fixes the learned model's parameters (e.g. the time constants an
+    earlier fit identified) instead of identifying them from ``logs``.
 
     With ``check_horizon_s`` a quarter of the logs (or of each log) is held out and the model's
     position prediction over that horizon is checked against ``incumbent`` (default: the
     nominal kinematic model); ``result.may_fly`` is the verdict (gp.prediction_check).
     """
     params = {"residual_dt_s": period_s} if learned_model == "kinematic_4dof" else {}
+    params.update(dict(structure_params))
     regular = [regular_rows(log, period_s) for log in logs]
     steps = 1
     if planner_dt_s is not None and make_model(learned_model).carries_velocity:

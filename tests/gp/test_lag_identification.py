@@ -103,3 +103,23 @@ def test_given_time_constant_is_kept():
     assert dict(result.model.features.nominal_params) == {"tau_s": 0.3}
     assert "identified_lag" not in result.model.training
     assert max(result.metrics["nominal_rmse_mps"]) > 0.01
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_study_fit_keeps_the_structure_it_is_given(seed):
+    """The study's later rounds fit the GP on the structure identified from the nominal
+    flights: the time constants passed in are the model's, not those of the new logs."""
+    from experiments.study.fitting import fit_residual
+
+    rng = np.random.default_rng(seed)
+    logged, given = rng.uniform(0.3, 1.0, 2), rng.uniform(0.3, 1.0, 2)
+    logs = [lag_log(*logged, seed=seed + i, n_rows=600) for i in range(2)]
+    structure = (("tau_d_s", float(given[1])), ("tau_s", float(given[0])))
+    fit = fit_residual(
+        logs, "random", 0.02, m=10, restarts=1, check_horizon_s=None, structure_params=structure
+    )
+    assert fit.model.features.nominal_params == structure
+    identified = fit_residual(logs, "random", 0.02, m=10, restarts=1, check_horizon_s=None)
+    assert dict(identified.model.features.nominal_params)["tau_s"] == pytest.approx(
+        logged[0], rel=0.05
+    )
