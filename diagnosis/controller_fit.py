@@ -421,4 +421,4 @@ def _integral_fit(blocks, p_gain, d_gain, axis=2, lags=INNER_LAGS_S) -> Integral
             meat += 2.0 * (1.0 - k / (max_lag + 1)) * float(score[k:] @ score[:-k])
     n_rows = int(sum(len(x) for x in xs))
     std_error = float(np.sqrt(max(meat, 0.0)) / max(sxx, 1e-12))
-    return IntegralFit(value, std_error, tau, n_rows)
+    return IntegralFit(float(value), std_error, float(tau), n_rows)
