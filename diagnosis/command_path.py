@@ -136,7 +136,8 @@ def fit_command_cause(
         # Judged on the refined gains: the regression is only their start (its at_bound says
         # where the lag model fell outside PX4's bounds, which the replay then corrects). A gain
         # the log does not pin is reported with its interval instead: on its bound it says
-        # nothing about the others (seen: a vertical I of 0.79 fitted below 0.2 +- 0.6).
+        # nothing about the others (seen: a true vertical I of 0.79 fitted on PX4's bound 0.2,
+        # its 95 % interval 0.2-1.33, kept flight_control from being named).
         at_bound = any(
             not PX4_PARAMS[k].lo < v < PX4_PARAMS[k].hi
             for k, v in gains.items()
