@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -12,7 +12,10 @@ class Cause:
     """One ranked cause, as in report.json (params flattened to floats).
 
     ``statistic`` is the significance test of its held-out improvement (diagnosis/2);
-    ``at_bound`` marks a fit on its search bound, which is never named.
+    ``at_bound`` marks a fit on its search bound, which is never named. ``unpinned``: parameters
+    the log does not pin (name -> 95 % interval [low, high]): their value is the best estimate,
+    kept in the extended config, but not a claim (e.g. ``flight_control``'s vertical I on a log
+    with noisy thrust telemetry).
     """
 
     name: str
@@ -22,6 +25,7 @@ class Cause:
     evidence: str
     statistic: dict[str, object] | None = None
     at_bound: bool = False
+    unpinned: dict[str, tuple[float, float]] = field(default_factory=dict)
 
 
 def flatten_params(params: dict[str, object]) -> dict[str, float]:

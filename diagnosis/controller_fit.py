@@ -54,6 +54,9 @@ Z_GAINS = ("MPC_Z_VEL_P_ACC", "MPC_Z_VEL_I_ACC")
 INNER_LAGS_S = (0.0, 0.02, 0.04, 0.07)
 SATURATION_MARGIN = 0.8  # rows beyond this fraction of a tilt or thrust limit are left out
 SETTLE_S = 0.6
+# Bartlett window of the vertical I's standard error [s]: about the longest residual
+# correlation the lag model leaves (a second of the vertical loop's response).
+HAC_LAG_S = 1.0
 MIN_ROWS = 50
 
 
@@ -109,14 +112,59 @@ def fit_velocity_gains(
     return GainFit(gains, tuple(at_bound), (*lags_s, *z_lag_s), n_rows)
 
 
+@dataclass(frozen=True)
+class IntegralFit:
+    """MPC_Z_VEL_I_ACC fitted with the vertical P held.
+
+    Attributes:
+        least_squares: the least-squares value [1/s^2], unclipped.
+        std_error: its standard error [1/s^2], robust to the residuals' correlation in time.
+        lag_s: the inner lag of the best fit [s].
+        n_rows: rows used.
+    """
+
+    least_squares: float
+    std_error: float
+    lag_s: float
+    n_rows: int
+
+    @property
+    def value(self) -> float:
+        """The fit clipped to PX4's bounds [1/s^2]."""
+        spec = PX4_PARAMS["MPC_Z_VEL_I_ACC"]
+        return float(np.clip(self.least_squares, spec.lo, spec.hi))
+
+    def pinned(self, rel_half_width: float, z: float = 1.96) -> bool:
+        """Whether the confidence interval (95 % for the default ``z``) lies within
+        ``rel_half_width`` of the clipped value either side."""
+        return z * self.std_error <= rel_half_width * self.value
+
+    def interval(self, z: float = 1.96) -> tuple[float, float]:
+        """(low, high) confidence interval, 95 % for the default ``z``, clipped to PX4's
+        bounds."""
+        spec = PX4_PARAMS["MPC_Z_VEL_I_ACC"]
+        lo, hi = sorted(
+            np.clip(self.least_squares + np.array([-z, z]) * self.std_error, spec.lo, spec.hi)
+        )
+        return float(lo), float(hi)
+
+
 def refit_vertical_integral(
     logs: Sequence[FlightLog], config: SimConfig, train: Sequence[Window], gains: dict[str, float]
-) -> float:
-    """MPC_Z_VEL_I_ACC by least squares with the vertical P held at ``gains``' value (clipped to
-    PX4's bounds). The replay of an excitation flight hardly sees the vertical I (its vertical
+) -> IntegralFit:
+    """MPC_Z_VEL_I_ACC by least squares with the vertical P held at ``gains``' value, with its
+    standard error. The replay of an excitation flight hardly sees the vertical I (its vertical
     error sits at the noise floor over 2 s windows; seen: the RMSE 0.0601 m/s at the true I,
     0.0583 at 1.8 times it), and jointly with P the regression's lag model biases it 10-30 %
-    low; with a P the replay has fixed it comes out within about 12 %.
+    low.
+
+    The regressor is the integral of the error as the integrator saw it
+    (:func:`_held_integral`: the flown part from the logged position, the commands held for the
+    step after them); the integrated noisy velocity biased I 20-60 % low on noisy logs
+    (errors in variables) and the commands summed a step early 5-15 % low on exact ones. What is
+    left is variance: the thrust telemetry's noise (1-5 %, up to 0.5 m/s^2 in the commanded
+    acceleration) against an integral that swings by a few centimetres; the standard error says
+    how far the log pins I (:func:`_integral_fit`).
 
     Raises:
         ControllerFitError: as :func:`fit_velocity_gains`.
@@ -126,11 +174,7 @@ def refit_vertical_integral(
     blocks = [b for run in runs for b in _unsaturated_blocks(run, full, params, hover)]
     if int(sum(b["use"].sum() for b in blocks)) < MIN_ROWS:
         raise ControllerFitError("too few unsaturated airborne training rows")
-    z_lags = tuple((inner,) for inner in INNER_LAGS_S)
-    p_z = full["MPC_Z_VEL_P_ACC"]
-    (_, i_z), _ = _best_lag_fit(blocks, (2,), z_lags, params["MPC_Z_VEL_D_ACC"], p_fixed=p_z)
-    spec = PX4_PARAMS["MPC_Z_VEL_I_ACC"]
-    return float(np.clip(i_z, spec.lo, spec.hi))
+    return _integral_fit(blocks, full["MPC_Z_VEL_P_ACC"], params["MPC_Z_VEL_D_ACC"])
 
 
 def _prepare(logs, config, train):
@@ -172,6 +216,9 @@ def _run_regressors(
     in_train = np.zeros(log.n_rows, dtype=bool)
     for w in mine:
         in_train[w.anchor : w.stop] = True
+    pos_cols = ("pos_n_m", "pos_e_m", "pos_d_m")
+    pos = log.stack(*pos_cols) if log.has(*pos_cols) else np.full_like(vel, np.nan)
+    pos_noise = white_noise_std(pos) if np.isfinite(pos).all() else np.zeros(3)
     out = []
     for start, stop in airborne_runs(log):
         rows = slice(start, stop)
@@ -179,12 +226,16 @@ def _run_regressors(
             out.append(
                 {
                     "dt": np.diff(t[rows], prepend=t[start]),
+                    "cmd": cmd[rows],
+                    "vel": vel[rows],
+                    "pos": pos[rows],
                     "err": cmd[rows] - vel[rows],
                     "acc": acc[rows],
                     "acc_sp": acc_sp[rows],
                     "thrust_norm": thrust[rows],
                     "train": in_train[rows],
                     "vel_noise": vel_noise,
+                    "pos_noise": pos_noise,
                 }
             )
     return out
@@ -223,13 +274,34 @@ def _unsaturated_blocks(run, gains, params, hover):
                     "dt": dt,
                     "err": e,
                     "int": np.cumsum(e * dt[:, None], axis=0),
+                    "int_held": _held_integral(
+                        run["cmd"][a:b], run["vel"][a:b], run["pos"][a:b], dt
+                    ),
                     "acc": acc[a:b],
                     "acc_sp": run["acc_sp"][a:b],
                     "use": use,
                     "vel_noise": run["vel_noise"],
+                    "pos_noise": run["pos_noise"],
                 }
             )
     return blocks
+
+
+def _held_integral(cmd: np.ndarray, vel: np.ndarray, pos: np.ndarray, dt: np.ndarray) -> np.ndarray:
+    """(n, 3) integral of the velocity error from the first row [m], as the controller's
+    integrator sees it: each logged command holds until the next row (it is what was sent and
+    stays in force for one step), so it is summed with the step after it, not before; the flown
+    part is the position difference when the log has positions (a white position noise stays
+    white, where the integrated velocity noise is a random walk that grows with the block:
+    0.1 m over a 36 s hover at 0.08 m/s of noise, three times the integrator's own swing), else
+    the velocity by the trapezoidal rule. ``dt`` (n,) [s] with dt[0] = 0."""
+    commanded = np.vstack([np.zeros((1, 3)), np.cumsum(cmd[:-1] * dt[1:, None], axis=0)])
+    if np.isfinite(pos).all():
+        flown = pos - pos[0]
+    else:
+        steps = 0.5 * (vel[1:] + vel[:-1]) * dt[1:, None]
+        flown = np.vstack([np.zeros((1, 3)), np.cumsum(steps, axis=0)])
+    return commanded - flown
 
 
 def _body_z_ned(q_wxyz: np.ndarray) -> np.ndarray:
@@ -263,7 +335,7 @@ def _noise_gain(dt: float, taus_s: tuple[float, ...], n: int = 400) -> float:
     return float(np.sum(out * out))
 
 
-def _best_lag_fit(blocks, axes, lags, d_gain, p_fixed=None):
+def _best_lag_fit(blocks, axes, lags, d_gain):
     """Least-squares [P, I] over ``axes`` for the lag cascade with the smallest residual, with
     the D gain held at ``d_gain``: y = L[P e + I int(e) - D a + c] gives y + D L[a] = P L[e] +
     I L[int(e)] + c. Returns ([P, I], the lag cascade [s]).
@@ -273,7 +345,6 @@ def _best_lag_fit(blocks, axes, lags, d_gain, p_fixed=None):
     20-35 % for the vertical gains at 0.03-0.08 m/s of noise). That expected noise energy is
     taken off the normal equations' P-P term (corrected least squares, [Fuller87] ch. 1.2);
     the noise of int(e) is a random walk of size noise_std * sqrt(dt * t), left alone.
-    With ``p_fixed`` P is held there and only I is fitted (y - P L[e] = I L[int(e)] + c).
 
     The constants c (one per block and axis) are taken out by centring each block's rows per
     axis (the Frisch-Waugh-Lovell theorem): the same [P, I] and residual as with a column per
@@ -290,9 +361,6 @@ def _best_lag_fit(blocks, axes, lags, d_gain, p_fixed=None):
             for j in range(len(axes)):
                 x = np.column_stack([filt["err"][:, j], filt["int"][:, j]])[use]
                 y = (block["acc_sp"][:, axes[j]] + d_gain * filt["acc"][:, j])[use]
-                if p_fixed is not None:
-                    y = y - p_fixed * x[:, 0]
-                    x[:, 0] = 0.0
                 raw_pp += float(x[:, 0] @ x[:, 0])
                 blocks_x.append(x - x.mean(axis=0))
                 blocks_y.append(y - y.mean())
@@ -301,9 +369,56 @@ def _best_lag_fit(blocks, axes, lags, d_gain, p_fixed=None):
         normal = x_all.T @ x_all
         normal[0, 0] -= min(noise_energy, 0.9 * raw_pp)
         coef = np.linalg.lstsq(normal, x_all.T @ y_all, rcond=None)[0]
-        if p_fixed is not None:
-            coef[0] = p_fixed
         sse = float(np.sum((x_all @ coef - y_all) ** 2))
         if sse < best[0]:
             best = (sse, coef[:2], taus)
     return best[1], best[2]
+
+
+def _integral_fit(blocks, p_gain, d_gain, axis=2, lags=INNER_LAGS_S) -> IntegralFit:
+    """Least-squares I on ``axis`` with P held at ``p_gain`` and D at ``d_gain``, for the inner
+    lag with the smallest residual: y - P L[e] + D L[a] = I L[int(e)] + c, a constant c per
+    block (taken out by centring, as in :func:`_best_lag_fit`), the integral of
+    :func:`_held_integral`.
+
+    Its standard error is the heteroskedasticity and autocorrelation consistent one of
+    [NeweyWest87] (Bartlett weights over ``HAC_LAG_S``, within blocks): the residuals are
+    coloured by the lag filter and by what the lag model misses, and the ordinary standard error
+    was about 1.4 times too small on simulated noisy logs.
+
+    A white noise on the logged position stays in the integral (its first row's part is a
+    constant the centring takes out); its expected energy after the lag is taken off the
+    normal equation as for P in :func:`_best_lag_fit` (corrected least squares, [Fuller87]),
+    at most 90 % of it (it is nil on the simulator's exact positions)."""
+    best = None
+    for tau in lags:
+        xs, ys, noise_energy = [], [], 0.0
+        for block in blocks:
+            dt, use = float(np.median(block["dt"][1:])), block["use"]
+            cols = np.column_stack(
+                [block["err"][:, axis], block["int_held"][:, axis], block["acc"][:, axis]]
+            )
+            filt = _lag(cols, dt, (tau,))
+            y = block["acc_sp"][:, axis] - p_gain * filt[:, 0] + d_gain * filt[:, 2]
+            x, y = filt[use, 1], y[use]
+            xs.append(x - x.mean())
+            ys.append(y - y.mean())
+            noise_energy += (len(x) - 1) * _noise_gain(dt, (tau,)) * block["pos_noise"][axis] ** 2
+        raw = float(sum(x @ x for x in xs))
+        sxx = raw - min(noise_energy, 0.9 * raw)
+        value = float(sum(x @ y for x, y in zip(xs, ys, strict=True))) / max(sxx, 1e-12)
+        residuals = [y - value * x for x, y in zip(xs, ys, strict=True)]
+        sse = float(sum(r @ r for r in residuals))
+        if best is None or sse < best[0]:
+            best = (sse, value, tau, xs, residuals, dt, sxx)
+    _, value, tau, xs, residuals, dt, sxx = best
+    max_lag = max(1, round(HAC_LAG_S / dt))
+    meat = 0.0
+    for x, r in zip(xs, residuals, strict=True):
+        score = x * r
+        meat += float(score @ score)
+        for k in range(1, min(max_lag, len(score) - 1) + 1):
+            meat += 2.0 * (1.0 - k / (max_lag + 1)) * float(score[k:] @ score[:-k])
+    n_rows = int(sum(len(x) for x in xs))
+    std_error = float(np.sqrt(max(meat, 0.0)) / max(sxx, 1e-12))
+    return IntegralFit(float(value), std_error, float(tau), n_rows)

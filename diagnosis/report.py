@@ -3,7 +3,8 @@
 The JSON keeps every key of diagnosis/1 (docs/design.md section 8) and adds: ``closed_loop``
 (held-out closed-loop tracking velocity RMSE of the config and of the extended config, and their
 ratio), ``noise_floor`` (the log's own noise), ``explained_of_explainable``, ``not_examined``,
-``at_bound``, ``warnings`` and per cause ``statistic`` (its significance test) and ``at_bound``.
+``at_bound``, ``warnings`` and per cause ``statistic`` (its significance test), ``at_bound`` and
+``unpinned`` (parameters the log does not pin, with their 95 % interval).
 Causes that the data cannot identify appear in the ranking with confidence 0 and say in their
 evidence what flight would make them so.
 """
@@ -38,6 +39,7 @@ def report_document(diagnosis: Diagnosis) -> dict[str, Any]:
                 "evidence": c.evidence,
                 "statistic": c.statistic,
                 "at_bound": c.at_bound,
+                "unpinned": {k: [_num(lo), _num(hi)] for k, (lo, hi) in c.unpinned.items()},
             }
             for c in diagnosis.causes
         ],

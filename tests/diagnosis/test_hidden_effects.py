@@ -20,6 +20,7 @@ from experiments.hidden_effects import (
 )
 from flightlog.schema import FlightLog, read_flight_log, write_flight_log
 from vehicle_sim import load_sim_config
+from vehicle_sim.params import PX4_PARAMS
 from vehicle_sim.sensor_noise import add_sensor_noise, draw_sensor_noise
 
 CLOSED_LOOP_FLOOR_MPS = 0.02  # closed-loop errors below this leave no gain worth a figure
@@ -145,11 +146,15 @@ def test_another_controller_is_named_flight_control_with_its_gains(seed, tmp_pat
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("seed", [51, 52])
+@pytest.mark.parametrize("seed", [51, 52, 53, 54, 55, 56])
 def test_other_horizontal_and_vertical_gains_on_a_noisy_log(seed, tmp_path):
     """The truth flies other horizontal and vertical velocity gains than the config (and body
     drag), logged with realistic sensor noise (levels drawn): ``flight_control`` is named with
-    all four gains within 20 % and the drag is still found."""
+    the horizontal gains and the vertical P within 20 % and the drag is still found. The
+    vertical I is within 20 % where the cause claims it; where the log does not pin it (noisy
+    thrust telemetry against the integrator's few centimetres of swing, BENCHMARKS.md, issue 18,
+    session 6) the cause says so, with a 95 % interval that holds the truth and is wider than
+    +-20 %."""
     rng = np.random.default_rng(seed)
     factor = rng.uniform(0.72, 0.8) if rng.uniform() < 0.5 else rng.uniform(1.4, 1.9)
     # Vertical P slower or faster than the config's 4.0, away from PX4's lower bound 2.0;
@@ -162,12 +167,7 @@ def test_other_horizontal_and_vertical_gains_on_a_noisy_log(seed, tmp_path):
         "MPC_Z_VEL_I_ACC": rng.uniform(0.6, 1.4),
     }
     truth, _ = draw("body_drag", rng)
-    # Without the mission's closing ground staircase (for ground effect, which this truth does
-    # not have): the vertical I fitted from a noisy log scatters by about +-50 % between noise
-    # draws, and the staircase's near-hover rows pull it lower (BENCHMARKS.md, issue 18,
-    # session 5); both draws here then came out 28-38 % low.
-    mission = schedule(ground_staircase=False)
-    log = fly_schedule(load_sim_config("iris", truth), mission, seed=seed, params=gains)
+    log = fly_schedule(load_sim_config("iris", truth), schedule(), seed=seed, params=gains)
     noise = draw_sensor_noise(np.random.default_rng(seed + 500))
     noisy = add_sensor_noise(log, noise, seed)
     result = diagnose([noisy], load_sim_config("iris"))
@@ -176,6 +176,18 @@ def test_other_horizontal_and_vertical_gains_on_a_noisy_log(seed, tmp_path):
         result.causes[:3],
     )
     (named,) = [c for c in result.causes if c.name == "flight_control"]
-    for name, value in gains.items():
-        assert named.params[name] == pytest.approx(value, rel=0.2), (name, named.params)
     assert set(result.added_effects["flight_control"]) == set(gains)
+    z_i = "MPC_Z_VEL_I_ACC"
+    for name, value in gains.items():
+        if name != z_i:
+            assert named.params[name] == pytest.approx(value, rel=0.2), (name, named.params)
+    assert set(named.unpinned) <= {z_i}, named.unpinned
+    if z_i in named.unpinned:
+        low, high = named.unpinned[z_i]
+        assert low <= gains[z_i] <= high, (named.unpinned, gains[z_i])
+        spec = PX4_PARAMS[z_i]
+        wide = high - low > 2 * 0.2 * named.params[z_i] or low <= spec.lo or high >= spec.hi
+        assert wide, named.unpinned
+        assert "not pinned" in named.evidence
+    else:
+        assert named.params[z_i] == pytest.approx(gains[z_i], rel=0.2), named.params
