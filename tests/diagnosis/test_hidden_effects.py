@@ -146,7 +146,9 @@ def test_another_controller_is_named_flight_control_with_its_gains(seed, tmp_pat
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("seed", [51, 52, 53, 54, 55, 56])
+# Four of the six draws measured (BENCHMARKS.md, issue 18, session 6), for the suite's time:
+# an I pinned within 20 % (55), unpinned with the truth in its interval (51, 52), on the bound (56).
+@pytest.mark.parametrize("seed", [51, 52, 55, 56])
 def test_other_horizontal_and_vertical_gains_on_a_noisy_log(seed, tmp_path):
     """The truth flies other horizontal and vertical velocity gains than the config (and body
     drag), logged with realistic sensor noise (levels drawn): ``flight_control`` is named with
