@@ -2,7 +2,11 @@
 
 command_delay, motor_lag and thrust_curve (ROLE "command") have one parameter each; its value
 is chosen on the training windows by a coarse grid (the effect's ``ParamSpec.search``) followed
-by a bounded scalar refinement around the best grid point.
+by a bounded scalar refinement around the best grid point. The refinement minimises the mean
+squared error, not its root: near the true value of a delay the replay RMSE is a V (on an exact
+log it goes to zero linearly in the delay's error), which Brent's parabolic steps approach slowly
+(seen: 0.224 s for a true 0.229 s within the refinement's 6 steps); its square is a parabola
+there (0.2296 s), and the best value is the same.
 flight_control is PX4's velocity-loop gains (horizontal and vertical P and I), fitted by
 regression on the training rows (:mod:`.controller_fit`); the P gains and the horizontal I are
 refined by training replay error, the vertical I is refitted by regression with the refined
@@ -157,9 +161,11 @@ def fit_command_cause(
     best_value, best_score = float(grid[k]), scores[k]
     if hi > lo:
         options = {"xatol": 1e-3 * hi, "maxiter": 6}
-        sol = minimize_scalar(train_rmse, bounds=(lo, hi), method="bounded", options=options)
-        if sol.fun < best_score:
-            best_value, best_score = float(sol.x), float(sol.fun)
+        sol = minimize_scalar(
+            lambda v: train_rmse(v) ** 2, bounds=(lo, hi), method="bounded", options=options
+        )
+        if np.sqrt(sol.fun) < best_score:
+            best_value, best_score = float(sol.x), float(np.sqrt(sol.fun))
     held_out = replay(with_cause(config, name, best_value), logs, test)
     test_rmse = held_out.rmse_mps()
     at_bound = bool(best_value >= grid[-1] * (1.0 - 1e-3))

@@ -4,8 +4,9 @@ A simulated vehicle of the config (a copy of a hovering template) follows each l
 row it is put into the measured state (``Simulator.anchor``) while its flight control runs on the
 logged setpoint, so its controller state (velocity integral, delayed setpoints in flight, rotor
 speeds, yaw setpoint) builds up as the measured vehicle's did; during the first ``LEAD_IN_S`` of
-each airborne run the integral is restored from the measured thrust at every row
-(``integral="match_thrust"``), and windows start after that. At each window's anchor row a copy
+each airborne run the integral is restored from the measured thrust at every row, averaged over
+those rows (:func:`.sim_anchor.anchor_matching_thrust`: one noisy row's integral would stay in
+every window of the run), and windows start after that. At each window's anchor row a copy
 of it flies free for ``window_s`` on the logged setpoints; the error is simulated minus measured
 velocity.
 """
@@ -122,11 +123,15 @@ def replay(
             follower.anchor(a.anchor(run_start, lead=False), integral="reset")
             lead_end = a.t[run_start] + LEAD_IN_S
             last = max(w.stop for w in wins if w.log_index == i and w.anchor < run_stop)
+            matched = 0
             for j in range(run_start, last):
                 lead = a.t[j] < lead_end
                 follower.set_velocity_setpoint(a.setpoint[j])
-                match = lead and a.thrust[j] > 0.0
-                follower.anchor(a.anchor(j, lead), integral="match_thrust" if match else "keep")
+                if lead and a.thrust[j] > 0.0:
+                    matched += 1
+                    sim_anchor.anchor_matching_thrust(follower, a.anchor(j, lead), matched)
+                else:
+                    follower.anchor(a.anchor(j, lead), integral="keep")
                 if j in mine:
                     k, w = mine[j]
                     free = sim_anchor.fresh_copy(follower)

@@ -339,6 +339,18 @@ class Simulator:
         """(3,) the velocity loop's integral term, NED [m/s^2] (a copy)."""
         return self._cs[fc.CS_VEL_INT : fc.CS_VEL_INT + 3].copy()
 
+    def set_velocity_integral(self, value_mps2: np.ndarray) -> None:
+        """Set the velocity loop's integral term (3,) NED [m/s^2], e.g. to an average of the
+        values ``anchor(..., integral="match_thrust")`` found at several rows.
+
+        Raises:
+            ValueError: not 3 finite numbers; nothing changes then.
+        """
+        value = np.asarray(value_mps2, dtype=float)
+        if value.shape != (3,) or not np.all(np.isfinite(value)):
+            raise ValueError(f"velocity integral {value_mps2!r} must be 3 finite numbers [m/s^2]")
+        self._cs[fc.CS_VEL_INT : fc.CS_VEL_INT + 3] = value
+
     # --- state and logging ----------------------------------------------------------------------
     @property
     def state(self) -> VehicleState:

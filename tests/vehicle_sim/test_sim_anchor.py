@@ -127,3 +127,13 @@ def test_the_jsbsim_backend_refuses_to_be_anchored():
     s = AnchorState((0.0, 0.0, -1.0), (0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0))
     with pytest.raises(NotImplementedError, match="needs the builtin backend"):
         sim.anchor(s)
+
+
+def test_the_velocity_integral_can_be_set_and_bad_values_are_rejected():
+    sim = hovering(settle_s=1.0)
+    sim.set_velocity_integral(np.array([0.1, -0.2, -0.3]))
+    np.testing.assert_array_equal(sim.velocity_integral_mps2, [0.1, -0.2, -0.3])
+    for bad in ((0.0, 0.0), (0.0, math.inf, 0.0)):
+        with pytest.raises(ValueError, match="must be 3 finite numbers"):
+            sim.set_velocity_integral(np.array(bad))
+    np.testing.assert_array_equal(sim.velocity_integral_mps2, [0.1, -0.2, -0.3])
