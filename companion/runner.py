@@ -118,6 +118,16 @@ class RunnerConfig:
     def __post_init__(self) -> None:
         if not 1.0 <= self.rate_hz <= 500.0:
             raise ValueError(f"rate_hz must be within [1, 500] Hz, got {self.rate_hz}")
+        if not (self.start_position_tolerance_m > 0 and self.start_speed_tolerance_mps > 0):
+            raise ValueError(
+                "start_position_tolerance_m and start_speed_tolerance_mps must be > 0, got "
+                f"{self.start_position_tolerance_m}, {self.start_speed_tolerance_mps}"
+            )
+        if not self.start_settle_timeout_s >= 0:
+            raise ValueError(
+                f"start_settle_timeout_s must be >= 0 (0: no start hold), "
+                f"got {self.start_settle_timeout_s}"
+            )
         if not 0 <= self.realtime_priority <= MAX_RT_PRIORITY:
             raise ValueError(
                 f"realtime_priority must be 0 (off) or 1..{MAX_RT_PRIORITY}, "

@@ -6,6 +6,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
+import pytest
 
 from companion.flight_recorder import FlightRecorder
 from companion.inprocess_link import InProcessLink
@@ -75,3 +76,10 @@ def test_calm_takeoff_waits_no_longer_than_the_stream() -> None:
     held, _ = _fly(calm, 3, RunnerConfig())
     unheld, _ = _fly(calm, 3, RunnerConfig(start_settle_timeout_s=0.0))
     np.testing.assert_array_equal(held, unheld)
+
+
+def test_bad_start_hold_settings_are_refused_in_one_line() -> None:
+    with pytest.raises(ValueError, match="start_position_tolerance_m"):
+        RunnerConfig(start_position_tolerance_m=0.0)
+    with pytest.raises(ValueError, match="start_settle_timeout_s"):
+        RunnerConfig(start_settle_timeout_s=-1.0)
