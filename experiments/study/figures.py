@@ -69,8 +69,8 @@ def headline_figures(result: Paper000Result) -> dict[str, float]:
     ablation also its residual and tracking RMSE (what the GP adds is the difference) and
     gp_over_structure, the tracking RMSE of the structure alone divided by structure + GP
     (low_speed): > 1 when the GP helps; the same after the first SETTLE_S s of following
-    (tracking_settled_<planner>_m, gp_over_structure_settled: without the start offset the
-    takeoff left, the same for every planner)."""
+    (tracking_settled_<planner>_m, gp_over_structure_settled: without the first transient
+    from the start hover, the same for every planner)."""
     figs = all_planner_figures(result)
     selections = list(result.fits)
     out = {"residual_rmse_nominal": figs[NOMINAL].residual_rmse_mps}

@@ -9,8 +9,11 @@ where pred_vel is the velocity the planner's own model predicted one control per
 command it sent (the command itself for the nominal kinematic model). Its RMSE is
 sqrt(mean_k |r_k|^2) over all three axes, in m/s. Tracking error is the distance between the
 vehicle and the reference position at each following row [m]; the settled tracking error
-leaves out the first SETTLE_S seconds of following, where the vehicle closes the offset it
-started the reference with.
+leaves out the first SETTLE_S seconds of following, where the vehicle takes up the reference
+from the hover it started in. (The runner starts the reference only once the vehicle has
+settled within 0.1 m of its start, companion.runner's start hold; before that hold, the
+takeoff in the wind_field regime's jet left it 0.5-0.7 m off, and those 2 s held most of the
+error.)
 """
 
 from __future__ import annotations
@@ -59,9 +62,8 @@ def tracking_rmse_m(log: FlightLog) -> float:
 
 def settled_tracking_rmse_m(log: FlightLog, settle_s: float = SETTLE_S) -> float:
     """Position tracking RMSE [m] over the following rows after the first ``settle_s`` [s]
-    of following (NaN if none is left): without the offset the vehicle starts the reference
-    with, which the takeoff and hold left (in the wind_field regime the jet blows the vehicle
-    0.5-0.7 m off the start during the climb, and every planner closes that in about 2 s)."""
+    of following (NaN if none is left): without the first transient from the hover, the
+    same for every planner (see the module docstring)."""
     follow = following_rows(log)
     t = log["t_s"][follow]
     if t.size == 0:

@@ -37,3 +37,46 @@ def test_trajectories_are_distinct(twenty):
 def test_bad_spec_raises():
     with pytest.raises(ValueError, match="length_range_m"):
         TrajectorySpec(length_range_m=(60.0, 40.0))
+
+
+def test_bad_floor_raises():
+    with pytest.raises(ValueError, match="min_altitude_m"):
+        TrajectorySpec(start_ned_m=(0.0, 0.0, -2.0), min_altitude_m=2.5)
+
+
+def test_default_floor_is_px4_takeoff_altitude():
+    assert TrajectorySpec().min_altitude_m == 2.5  # MIS_TAKEOFF_ALT's PX4 default [m]
+
+
+def test_no_reference_flies_below_the_floor_over_many_seeds():
+    """Random specs (lengths, climbs, start and floor drawn, seeded) over many generator
+    seeds: every sampled reference point is at or above the floor, lengths stay in range."""
+    rng = np.random.default_rng(17)
+    lowest_margin = np.inf
+    lifted = 0
+    for seed in range(120):
+        lo = rng.uniform(20.0, 80.0)
+        start_alt = rng.uniform(1.5, 4.0)
+        spec = TrajectorySpec(
+            length_range_m=(lo, lo + rng.uniform(0.0, 40.0)),
+            max_speed_mps=rng.uniform(1.0, 6.0),
+            max_acc_mps2=rng.uniform(1.0, 4.0),
+            start_ned_m=(0.0, 0.0, -start_alt),
+            max_climb_m=rng.uniform(0.3, 1.5),
+            min_altitude_m=start_alt - rng.uniform(0.0, 1.0),
+        )
+        free = TrajectorySpec(**{**spec.__dict__, "min_altitude_m": -np.inf})
+        for ref, unbounded in zip(
+            generate_trajectories(2, seed, spec), generate_trajectories(2, seed, free), strict=True
+        ):
+            pos = ref.sample(np.linspace(0.0, ref.duration_s, 4001)).pos_ned_m
+            lowest_margin = min(lowest_margin, float(-pos[:, 2].max()) - spec.min_altitude_m)
+            assert spec.length_range_m[0] - 1e-6 <= ref.length_m() <= spec.length_range_m[1] + 1e-6
+            np.testing.assert_allclose(ref.waypoints_ned_m[0], spec.start_ned_m)
+            free_pos = unbounded.sample(np.linspace(0.0, unbounded.duration_s, 4001)).pos_ned_m
+            if -free_pos[:, 2].max() >= spec.min_altitude_m:  # never came down: untouched
+                np.testing.assert_array_equal(ref.waypoints_ned_m, unbounded.waypoints_ned_m)
+            else:
+                lifted += 1
+    assert lowest_margin >= -1e-9
+    assert lifted > 20  # the floor was met often enough to test it
