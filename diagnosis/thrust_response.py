@@ -103,7 +103,7 @@ MAX_P_VALUE = 0.01
 FLOOR_MARGIN_SE = 2.0  # the floor is an estimate: its standard errors added, as for forces
 MIN_THRUST_FRACTION = SelectionConfig().min_force_fraction  # least RMS thrust removed [of weight]
 SIMEX_SEED = 0
-FLOOR_REPLICATES = 4  # draws of the extra velocity noise the floor's command noise averages
+FLOOR_REPLICATES = 4  # draws of the extra velocity noise the held-out SIMEX errors average
 
 
 @dataclass(frozen=True)
