@@ -53,10 +53,6 @@ HIDDEN_EFFECTS = (
     "rotor_drag", "body_drag", "wind", "payload", "battery_sag", "ground_effect", "motor_lag",
     "command_delay", "isotropic_drag", "thrust_curve",
 )  # fmt: skip
-# Known gap (issue 18), on noisy logs only: a thrust curve is found from the produced thrust's
-# response (diagnosis/thrust_response.py), not from the replayed velocity, and its gain scatters
-# by about 15 % there. Motor lag is found the same way.
-NOT_YET_ON_NOISY_LOGS = ("thrust_curve",)
 
 
 def main_parameter_errors(name: str, truth: dict, params: dict) -> dict[str, float]:

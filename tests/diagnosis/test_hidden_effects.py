@@ -12,7 +12,6 @@ from diagnosis.diagnosis import diagnose
 from diagnosis.fly_schedule import fly_schedule
 from experiments.hidden_effects import (
     HIDDEN_EFFECTS,
-    NOT_YET_ON_NOISY_LOGS,
     draw,
     fly_hidden,
     main_parameter_errors,
@@ -47,8 +46,6 @@ def test_hidden_effect_is_named_fitted_and_gains(name, tmp_path):
         assert more_whole or cl.ground_hold_gain() >= 3.0, info
     elif cl.baseline_rmse_mps() > CLOSED_LOOP_FLOOR_MPS:  # slow effects the integrator hides
         assert cl.scored.any() and cl.gain() >= 3.0, info
-    if name in NOT_YET_ON_NOISY_LOGS:
-        return
     noise = draw_sensor_noise(np.random.default_rng(200 + seed))
     noisy = diagnose(
         [add_sensor_noise(log, noise, seed) for log in logs], load_sim_config("iris", base)
