@@ -66,8 +66,10 @@ such floor on an exact log (the noise floor is zero), where the follower's own s
 removed by a 21 ms motor lag that was not there: sqrt(0.016^2 - 0.011^2) = 0.012 N removed,
 against 0.044 N of least thrust for a 1.5 kg Iris. A true lag removes far more (seen: 0.522
 -> 0.447 N at IMU noise 0.3 m/s^2, 0.27 N removed, for tau_s 0.041 s). What it cannot tell
-apart is a lag from the few milliseconds by which a named command delay was fitted short (seen
-on an exact log: a 24 ms lag removed 0.048 N beside a delay fitted 5 ms short, and was named).
+apart is a lag from the few milliseconds by which a named command delay may be fitted short
+(seen on an exact log, before the delay's refinement minimised the squared error
+(:mod:`.command_path`): a 24 ms lag removed 0.048 N beside a delay fitted 5 ms short, and was
+named; that delay now comes out 0.1 % off).
 
 Needs the produced thrust (``thrust_n`` as logged, or from ESC rotor speeds); PX4's normalised
 thrust setpoint is the command itself and shows no lag.
