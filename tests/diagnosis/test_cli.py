@@ -17,7 +17,7 @@ V2_KEYS = {
     "closed_loop", "noise_floor", "explained_of_explainable", "not_examined", "at_bound",
     "warnings", "thrust_sources",
 }  # fmt: skip
-V2_CAUSE_KEYS = {"statistic", "at_bound"}
+V2_CAUSE_KEYS = {"statistic", "at_bound", "unpinned"}
 CLOSED_LOOP_KEYS = {
     "baseline_vel_rmse_mps", "extended_vel_rmse_mps", "gain", "ground_hold_gain", "segments",
     "segments_reanchored", "segments_reanchored_baseline", "segments_reanchored_extended",
