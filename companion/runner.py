@@ -284,15 +284,17 @@ def mission_beyond_vehicle_limits(
 
     PX4 clips setpoints to MPC_XY_VEL_MAX and MPC_Z_VEL_MAX_UP/DN ([PX4-params]): a plan that
     counts on more would be flown slower than planned, so it is refused before take-off; so
-    is a flight (climb, reference, settling, descent) longer than the mission's ``endurance_s``
-    leaves before the vehicle's BAT_LOW_THR reserve. Limits the autopilot does not report are
-    not checked.
+    is a flight (climb, setpoint stream, the start hold at its longest, reference, settling,
+    descent) longer than the mission's ``endurance_s`` leaves before the vehicle's BAT_LOW_THR
+    reserve. Limits the autopilot does not report are not checked.
     """
     if mission.endurance_s is not None:
         reserve = link.read_param("BAT_LOW_THR") or 0.0
         usable_s = mission.endurance_s * (1.0 - reserve)
         flight_s = (
-            reference_s
+            config.stream_s
+            + config.start_settle_timeout_s
+            + reference_s
             + config.settle_timeout_s
             + mission.altitude_m / config.vertical_limit_up_mps
             + mission.altitude_m / config.vertical_limit_down_mps

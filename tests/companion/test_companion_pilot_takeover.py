@@ -9,6 +9,7 @@ the pilot chose.
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import threading
 import time
@@ -23,7 +24,12 @@ from companion.mission import load_mission
 from companion.mission_reference import reference_of
 from companion.planner_registry import make_planner
 from companion.pymavlink_link import PymavlinkLink
-from companion.runner import FlightOutcome, RunnerConfig, fly_mission
+from companion.runner import (
+    FlightOutcome,
+    RunnerConfig,
+    fly_mission,
+    mission_beyond_vehicle_limits,
+)
 from tests.companion.test_companion_mission_on_every_link import LINE, free_udp_port
 from vehicle_sim import FlightMode, Simulator, load_sim_config
 from vehicle_sim.mavlink import EndpointConfig, LinkConfig, MavlinkEndpoint
@@ -221,6 +227,35 @@ def test_a_mission_longer_than_the_endurance_is_refused_before_take_off(tmp_path
     outcome = fly_quietly(link, mission)
     assert outcome.status == "refused" and "endurance_s 20 s" in outcome.detail
     assert "BAT_LOW_THR" in outcome.detail and not sim.state.armed
+
+
+def _least_endurance_accepted_s(link, mission, config: RunnerConfig, reference_s: float) -> float:
+    """Bisect the mission's endurance_s [s] down to the least the endurance check accepts."""
+    low_s, high_s = 1.0, 10_000.0
+    while high_s - low_s > 0.01:
+        mid_s = 0.5 * (low_s + high_s)
+        trial = dataclasses.replace(mission, endurance_s=mid_s)
+        problem = mission_beyond_vehicle_limits(link, trial, config, reference_s)
+        low_s, high_s = (mid_s, high_s) if "endurance_s" in problem else (low_s, mid_s)
+    return high_s
+
+
+def test_the_endurance_check_counts_the_longest_start_hold() -> None:
+    rng = np.random.default_rng(17)
+    hold_s = float(rng.uniform(5.0, 60.0))
+    reserve = float(rng.uniform(0.1, 0.4))
+    sim = Simulator(load_sim_config("iris"), seed=5)
+    sim.set_param("BAT_LOW_THR", reserve)
+    link = InProcessLink(sim)
+    mission = load_mission(LINE)
+    reference_s = reference_of(mission).duration_s
+    without_s = _least_endurance_accepted_s(
+        link, mission, RunnerConfig(start_settle_timeout_s=0.0), reference_s
+    )
+    with_s = _least_endurance_accepted_s(
+        link, mission, RunnerConfig(start_settle_timeout_s=hold_s), reference_s
+    )
+    assert with_s - without_s == pytest.approx(hold_s / (1.0 - reserve), abs=0.05)
 
 
 def test_a_pilot_switch_during_the_climb_is_handed_over_too() -> None:
