@@ -122,8 +122,11 @@ class CompanionNmpc:
             check_residual_model(residual_model, settings.period_s)
             self.model = residual_model.features.nominal()
             if not structure_only(residual_model):
-                mean_fn = residual_model.flight_mean_function()
-                residual = ResidualTerm(mean_fn, residual_model.features.planner_map(self.model))
+                residual = ResidualTerm(
+                    residual_model.flight_mean_function(expand=False),
+                    residual_model.features.planner_map(self.model),
+                    residual_model.flight_mean_batch(),
+                )
         v, w = settings.speed_limit_mps, settings.yaw_rate_limit_radps
         config = NmpcConfig(
             horizon_steps=settings.horizon_steps,
