@@ -44,12 +44,8 @@ class BatchedLinearisation:
     ) -> None:
         f = formulation
         model, cfg, residual = f.model, f.config, f.residual
-        self._nx, self._nu, self._n, self._n_o = (
-            model.nx,
-            model.nu,
-            cfg.horizon_steps,
-            cfg.n_obstacles,
-        )
+        self._nx, self._nu = model.nx, model.nu
+        self._n, self._n_o = cfg.horizon_steps, cfg.n_obstacles
         self._dt = cfg.dt_s
         self._q, self._r = f.q_diag, f.r_diag
         self._u_min, self._u_max = np.tile(f.u_min, self._n), np.tile(f.u_max, self._n)
