@@ -57,9 +57,9 @@ class NmpcSettings:
         yaw_rate_limit_radps: bound on the yaw-rate command [rad/s].
         max_iterations: SQP iterations per plan (None: the solver's default, 10 with early
             stop; 1 is the real-time iteration scheme).
-        compile_functions: compile the solver's linearisation to C (cached per machine and
-            formulation); each new residual model is a new formulation, so a short flight
-            with a fresh model is faster uncompiled.
+        compile_functions: compile the symbolic linearisation to C (cached per machine and
+            formulation; planners.sqp_solver); the default batched linearisation has nothing
+            to compile and ignores it.
         latency_s: the known time [s] from the measured state to the command taking effect
             (link delay plus solve time). Before planning, the state is predicted forward over
             it with the planner's own model (and residual) under the last command sent, and
@@ -122,8 +122,11 @@ class CompanionNmpc:
             check_residual_model(residual_model, settings.period_s)
             self.model = residual_model.features.nominal()
             if not structure_only(residual_model):
-                mean_fn = residual_model.flight_mean_function()
-                residual = ResidualTerm(mean_fn, residual_model.features.planner_map(self.model))
+                residual = ResidualTerm(
+                    residual_model.flight_mean_function(expand=False),
+                    residual_model.features.planner_map(self.model),
+                    residual_model.flight_mean_batch(),
+                )
         v, w = settings.speed_limit_mps, settings.yaw_rate_limit_radps
         config = NmpcConfig(
             horizon_steps=settings.horizon_steps,

@@ -39,7 +39,7 @@ class NmpcPlanner:
 
     Arguments: the nominal model, the problem and solver settings, an optional learned
     residual, the obstacle world, ``compile_functions`` (compile the fast path's
-    linearisation to C at first use, cached per machine; see ``SqpOptions.compile``) and
+    symbolic linearisation to C at first use, cached per machine; see ``SqpOptions.compile``) and
     ``solver_factory`` (formulation -> an ``NlpSolver`` used instead of ``config.solver``, e.g.
     a benchmark peer).
 

@@ -147,7 +147,11 @@ class NmpcFormulation:
         self.clearance = ca.Function(
             "clearance", [x, slot], [obstacle_distance(position_of(model, x), slot)]
         )
-        self._rollout = self.step.mapaccum(n)
+        # The plan's simulation, node after node: built on MX so that a residual given as an
+        # MX Function (dense matrix operations) is evaluated as such, not expanded to scalars.
+        xm, um = ca.MX.sym("x", nx), ca.MX.sym("u", nu)
+        x_next_mx = model.rk4_step(xm, um, config.dt_s, residual)
+        self._rollout = ca.Function("nmpc_step_mx", [xm, um], [x_next_mx]).mapaccum(n)
 
     # -- packing ---------------------------------------------------------------------------
     def split_parameters(self, p: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX, ca.SX]:

@@ -73,7 +73,8 @@ def make_solver(
 ) -> NlpSolver:
     """Build a solver path by name; a bad name raises ValueError listing the valid ones.
 
-    ``compile_functions`` compiles the fast path's linearisation to C (cached per machine);
+    ``compile_functions`` compiles the fast path's symbolic linearisation to C (cached per
+    machine; the default batched one ignores it);
     ``max_wall_time_s`` limits each IPOPT solve (the fast path checks its budget per call).
     """
     if name == "fast":

@@ -11,10 +11,13 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import casadi as ca
+import numpy as np
 
 from planners.nominal_models import NominalModel
 
 FeatureMap = Callable[[ca.SX, ca.SX], ca.SX]
+# z (n, nz) -> (g (n, 3) [m/s^2], d g / d z (n, 3, nz)): the same g evaluated at many rows at once
+BatchedResidual = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
 
 
 @dataclass(frozen=True)
@@ -24,10 +27,14 @@ class ResidualTerm:
     Attributes:
         fn: CasADi Function z[nz] -> (g[3], ...) in m/s^2 (NED).
         features: builds z (SX column, nz) from the model state x (nx) and input u (nu).
+        batch: optional, the same g and its Jacobian in NumPy at many rows at once (e.g.
+            gp.batched_mean.BatchedMean); the fast solver path then linearises with it instead
+            of differentiating ``fn``'s graph (planners.batched_linearisation).
     """
 
     fn: ca.Function
     features: FeatureMap
+    batch: BatchedResidual | None = None
 
     def __post_init__(self) -> None:
         if self.fn.n_in() != 1 or self.fn.size1_out(0) * self.fn.size2_out(0) != 3:

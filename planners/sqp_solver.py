@@ -8,19 +8,26 @@ penalised slack so that a QP linearised at a poor iterate stays feasible. The He
 Hessian of the least-squares cost (Gauss-Newton: constraint curvature is dropped). With one
 iteration per control step and a shifted warm start this is the real-time iteration scheme.
 
-Linearisation is a single CasADi Function; with ``compile=True`` it is compiled to C at first
-use (see :mod:`planners.compiled_function`).
+The linearisation is evaluated node-parallel in NumPy by default
+(:mod:`planners.batched_linearisation`: the RK4 step's Jacobians through the chain rule, the
+residual's batched form, dense condensing); ``linearisation="symbolic"`` builds it as a single
+CasADi Function over the whole horizon instead (the path the planner used before; with
+``compile=True`` compiled to C at first use, see :mod:`planners.compiled_function`), kept as
+the reference the batched one is checked against.
 """
 
 from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from typing import Any, NamedTuple
+from typing import Any, Literal, NamedTuple
 
 import casadi as ca
 import numpy as np
+from threadpoolctl import ThreadpoolController
 
+from planners.batched_linearisation import BatchedLinearisation
+from planners.buffered_function import BufferedFunction
 from planners.compiled_function import compiled
 from planners.nmpc_formulation import NmpcFormulation
 from planners.solver_output import SolverOutput
@@ -51,6 +58,8 @@ class _Linearisation(NamedTuple):
 
 
 _SPARSE_OUTPUTS = ("g_h",)  # only a few obstacle rows are picked per iteration: keep it sparse
+LINEARISATIONS: tuple[str, ...] = ("batched", "symbolic")
+_THREADPOOLS: list[ThreadpoolController] = []  # built at the first solve (it scans the libraries)
 
 
 @dataclass(frozen=True)
@@ -63,10 +72,13 @@ class SqpOptions:
         cold_start_iterations: iterations when there is no previous solution to start from
             (first plan, after a failure), at least ``max_iterations``.
         step_tol: stop when the largest input step and dynamics gap are below this.
-        compile: compile the linearisation to C (needs a C compiler; falls back to the
-            CasADi virtual machine without one). Measured on the benchmark problem: about
+        linearisation: "batched" (NumPy, node-parallel; planners.batched_linearisation) or
+            "symbolic" (one CasADi Function over the horizon, the reference).
+        compile: compile the symbolic linearisation to C (needs a C compiler; falls back to
+            the CasADi virtual machine without one). Measured on the benchmark problem: about
             15 % faster per plan, but the first build of each formulation (each new residual
-            model) takes a minute or more, so it is off by default.
+            model) takes a minute or more, so it is off by default. The batched linearisation
+            has nothing to compile and ignores it.
         qp_feasibility_tol: a QP solution violating its constraints by more is a failure.
         screen_distance_m: obstacle rows whose linearised clearance exceeds this [m] are left
             out of the QP (they cannot become active within one step of a converging SQP).
@@ -79,6 +91,7 @@ class SqpOptions:
 
     max_iterations: int = 1
     cold_start_iterations: int = 10
+    linearisation: Literal["batched", "symbolic"] = "batched"
     step_tol: float = 1e-6
     compile: bool = False
     qp_feasibility_tol: float = 1e-6
@@ -90,6 +103,11 @@ class SqpOptions:
     def __post_init__(self) -> None:
         if self.max_iterations < 1:
             raise ValueError(f"max_iterations must be >= 1, got {self.max_iterations}")
+        if self.linearisation not in LINEARISATIONS:
+            raise ValueError(
+                f"unknown linearisation {self.linearisation!r}; choose one of "
+                f"{', '.join(LINEARISATIONS)}"
+            )
 
 
 class GaussNewtonSqp:
@@ -106,12 +124,16 @@ class GaussNewtonSqp:
         hi = np.tile(formulation.x_max, n)
         self._xrows = [int(i) for i in np.flatnonzero(np.isfinite(lo) | np.isfinite(hi))]
         self._x_lo, self._x_hi = lo[self._xrows], hi[self._xrows]
-        lin = self._build_linearisation()
-        self._lin = compiled(lin) if self.options.compile else lin
+        if self.options.linearisation == "batched":
+            self._lin = BatchedLinearisation(formulation, self._xrows, self._x_lo, self._x_hi)
+        else:
+            lin = self._build_linearisation()
+            lin = compiled(lin) if self.options.compile else lin
+            self._lin = lambda w, p: [_numpy(out) for out in lin(w, p)]
         # One QP step per size of the obstacle-row block (rows padded up to the bucket).
         cap = min(self.options.max_obstacle_rows, n * cfg.n_obstacles)
         self._buckets = sorted({min(cap, b) for b in range(0, cap + _BUCKET, _BUCKET)})
-        self._steps = {b: self._build_qp_step(b) for b in self._buckets}
+        self._steps = {b: BufferedFunction(self._build_qp_step(b)) for b in self._buckets}
         self._pad_row = n * cfg.n_obstacles  # index of the all-zero row lin appends
 
     def _build_qp_step(self, n_rows: int) -> ca.Function:
@@ -271,18 +293,28 @@ class GaussNewtonSqp:
         the iterate it has (each iteration's QP is feasible; the planner checks the plan)
         instead of overrunning the budget by its last iteration.
         """
+        if not _THREADPOOLS:
+            _THREADPOOLS.append(ThreadpoolController())
+        # The products are small: BLAS threads would only wait for a core (on a loaded
+        # computer, 3x the solve's CPU time, measured); one thread, only inside the solve.
+        with _THREADPOOLS[0].limit(limits=1, user_api="blas"):
+            return self._solve(w0, p, time_budget_s, cold_start)
+
+    def _solve(
+        self, w0: np.ndarray, p: np.ndarray, time_budget_s: float, cold_start: bool
+    ) -> SolverOutput:
         start = time.perf_counter()
         slowest_s = 0.0
         opts = self.options
-        w = ca.DM(w0)
-        p = ca.DM(p)
+        w = np.asarray(w0, dtype=float)
+        p = np.asarray(p, dtype=float)
         x_now = p[: self._nx]
         iterations = max(opts.max_iterations, opts.cold_start_iterations if cold_start else 1)
         for it in range(1, iterations + 1):
             iteration_start = time.perf_counter()
             lin = _Linearisation(*self._lin(w, p))
             # Only obstacle rows whose linearised clearance is small can become active.
-            clearance = -lin.lba_h.full().ravel()[: self._pad_row]
+            clearance = -lin.lba_h[: self._pad_row]
             near = np.flatnonzero(clearance < opts.screen_distance_m)
             if near.size > self._buckets[-1]:
                 near = near[np.argsort(clearance[near])[: self._buckets[-1]]]
@@ -303,13 +335,19 @@ class GaussNewtonSqp:
                 w,
                 x_now,
             )
-            step, violation = float(step), float(violation)
+            step, violation = float(step[0, 0]), float(violation[0, 0])
             if not (np.isfinite(step) and violation <= opts.qp_feasibility_tol):
                 reason = f"QP failed (constraint violation {violation:.3g})"
-                return SolverOutput(w.full().ravel(), False, reason, it)
-            w = w_next
+                return SolverOutput(w, False, reason, it)
+            w = w_next.ravel(order="F").copy()
             now = time.perf_counter()
             slowest_s = max(slowest_s, now - iteration_start)
             if step < opts.step_tol or now - start + slowest_s > time_budget_s:
                 break
-        return SolverOutput(w.full().ravel(), True, "", it)
+        return SolverOutput(w, True, "", it)
+
+
+def _numpy(value: ca.DM) -> np.ndarray:
+    """A CasADi matrix as a dense NumPy array; a column vector as a 1-D array."""
+    arr = np.asarray(value.full() if isinstance(value, ca.DM) else value, dtype=float)
+    return arr.ravel() if arr.ndim == 2 and arr.shape[1] == 1 else arr

@@ -74,7 +74,7 @@ def parse_args(argv: list[str] | None) -> StudyConfig:
     parser.add_argument(
         "--compile",
         action="store_true",
-        help="compile each augmented planner to C (minutes and gigabytes per model)",
+        help="compile the symbolic linearisation to C (not used by the default batched one)",
     )
     parser.add_argument("--quick", action="store_true", help="small smoke version")
     args = parser.parse_args(argv)

@@ -42,6 +42,17 @@ same problems back to back at normal priority. Figures:
                                             state_input features, m = 30 per output) to the
                                             companion's planner ready to fly (loaded, built,
                                             one warm-up plan) [s]
+    nmpc_learned_<regime>_median_ms, _p99_ms, _cpu_p99_ms
+                                            the companion's planner (fast path, batched
+                                            linearisation) with a learned model of each study
+                                            regime's shape (REGIME_SHAPES: first_order_lag +
+                                            the regime's features and m), back to back on one
+                                            closed loop of 50 Hz plans: wall and CPU time
+    nmpc_learned_<regime>_symbolic_median_ms, _symbolic_cpu_p99_ms
+                                            the same planner and problems with the symbolic
+                                            linearisation (the path before issue 17's session
+                                            7, still the reference)
+    nmpc_learned_<regime>_cmd_diff_max_mps  max |command difference| batched vs symbolic [m/s]
 ``quick=True`` flies 3 s instead of 30 s, for a smoke test.
 """
 
@@ -57,7 +68,7 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from companion.nmpc_planner import NmpcSettings, load_nmpc
+from companion.nmpc_planner import CompanionNmpc, NmpcSettings, load_nmpc
 from companion.realtime import realtime_section
 from companion.runner import COMPANION_RT_PRIORITY
 from experiments.bench.acados_peer import AcadosSolver, acados_unavailable
@@ -70,6 +81,7 @@ from planners.nominal_models import kinematic_4dof
 from planners.obstacles import random_forest
 from planners.reference import PlannerState
 from planners.residual import ResidualTerm
+from planners.sqp_solver import GaussNewtonSqp, SqpOptions
 from planners.trajectory_generator import generate_trajectories
 
 _N_INDUCING = 30
@@ -152,7 +164,67 @@ def run(progress: Callable[[str], None] = print, quick: bool = False) -> dict[st
     figures.update(_acados_figures(model, base, residual, world, problems, ipopt_res, progress))
     progress("nmpc: a new model file to a planner ready to fly")
     figures["nmpc_model_ready_s"] = model_ready_s()
+    for regime, (features_name, m) in REGIME_SHAPES.items():
+        progress(f"nmpc: {regime}'s learned model shape ({features_name}, m = {m})")
+        figures |= learned_model_figures(regime, features_name, m, 40 if quick else 300)
     return figures
+
+
+# Each study regime's learned model: (features, m per output) (experiments.study.regimes)
+REGIME_SHAPES: dict[str, tuple[str, int]] = {
+    "paper000": ("state_input", 30),
+    "agile": ("velocity", 30),
+    "wind_field": ("position_velocity", 60),
+}
+
+
+def learned_model_figures(regime: str, features_name: str, m: int, n_plans: int) -> dict:
+    """The companion's planner with a learned model of this shape, batched vs symbolic
+    linearisation, on the same ``n_plans`` problems (a closed loop at 50 Hz along a seeded
+    trajectory, the vehicle a first-order lag of 0.5 s), back to back at normal priority."""
+    settings = NmpcSettings(speed_limit_mps=4.0, time_budget_s=10.0)
+    companion = CompanionNmpc(settings, flying_model(m, 3, features_name))
+    f = companion._planner.formulation
+    planners = {
+        kind: NmpcPlanner(
+            f.model,
+            f.config,
+            f.residual,
+            solver_factory=lambda form, k=kind: GaussNewtonSqp(form, SqpOptions(linearisation=k)),
+        )
+        for kind in ("batched", "symbolic")
+    }
+    reference = generate_trajectories(1, seed=11)[0]
+    pos, vel, problems = reference.x_ref(0.0)[:3], np.zeros(3), []
+    for k in range(n_plans):  # the problems: the batched planner's own closed loop
+        state = PlannerState(pos.copy(), vel.copy(), 0.0)
+        problems.append((state, k * _TICK_S))
+        command = planners["batched"].plan(state, reference, k * _TICK_S).command[:3]
+        vel = vel + _TICK_S * (command - vel) / 0.5
+        pos = pos + _TICK_S * vel
+    timing, commands = {}, {}
+    for kind, planner in planners.items():
+        planner.reset()
+        wall, cpu, out = [], [], []
+        for state, t in problems:
+            cpu_start = time.thread_time()
+            result = planner.plan(state, reference, t)
+            cpu.append(1e3 * (time.thread_time() - cpu_start))
+            wall.append(1e3 * result.solve_time_s)
+            out.append(result.command)
+        timing[kind], commands[kind] = (np.array(wall), np.array(cpu)), np.array(out)
+    prefix = f"nmpc_learned_{regime}"
+    (wall, cpu), (sym_wall, sym_cpu) = timing["batched"], timing["symbolic"]
+    return {
+        f"{prefix}_median_ms": float(np.median(wall)),
+        f"{prefix}_p99_ms": float(np.percentile(wall, 99)),
+        f"{prefix}_cpu_p99_ms": float(np.percentile(cpu, 99)),
+        f"{prefix}_symbolic_median_ms": float(np.median(sym_wall)),
+        f"{prefix}_symbolic_cpu_p99_ms": float(np.percentile(sym_cpu, 99)),
+        f"{prefix}_cmd_diff_max_mps": float(
+            np.max(np.abs(commands["batched"] - commands["symbolic"]))
+        ),
+    }
 
 
 def _involuntary_switches() -> int:
@@ -211,12 +283,14 @@ def _acados_figures(model, base, residual, world, problems, ipopt_res, progress)
     }
 
 
-def flying_model(m: int = _N_INDUCING, seed: int = 3) -> ResidualModel:
+def flying_model(
+    m: int = _N_INDUCING, seed: int = 3, features_name: str = "state_input"
+) -> ResidualModel:
     """A seeded residual model of the shape the companion flies: first_order_lag (tau 0.5 s)
-    with state_input features, an SE-ARD posterior of ``m`` points per output (not fitted:
-    its numbers only need the shape and scale of a fitted one)."""
+    with ``features_name`` features, an SE-ARD posterior of ``m`` points per output (not
+    fitted: its numbers only need the shape and scale of a fitted one)."""
     rng = np.random.default_rng(seed)
-    features = feature_definition("state_input", "first_order_lag", tau_s=0.5, tau_d_s=0.4)
+    features = feature_definition(features_name, "first_order_lag", tau_s=0.5, tau_d_s=0.4)
     d, n_out = features.n_features, len(features.outputs)
     factor = np.tril(rng.normal(0.0, 0.05, (n_out, m, m)))
     posterior = Posterior(

@@ -39,9 +39,10 @@ class StudyConfig:
         features: GP feature set ("state_input" needs first_order_lag; "velocity" is paper
             000's).
         gp_restarts: hyperparameter restarts per fit.
-        compile_augmented: compile each augmented planner to C (cached on disk). Off by
-            default: with the identified-lag model gcc needs over 6 minutes and 3 GB per model,
-            and the uncompiled solves (about 4 ms) already fit a 50 Hz loop.
+        compile_augmented: compile each augmented planner's symbolic linearisation to C
+            (cached on disk; over 6 minutes and 3 GB per model). The planner the companion and
+            the study fly linearises batched in NumPy (planners.batched_linearisation), which
+            has nothing to compile and ignores it.
         regime: the name of the regime these settings come from (experiments.study.regimes).
         refit_rounds: [Ostafew16]'s trial-after-trial learning inside [Kulathunga23]'s
             experiment: after the fit on the nominal flights, each round flies every selection's

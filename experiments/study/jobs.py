@@ -22,8 +22,8 @@ from planners.bspline import BSplineReference
 class FlightJob:
     """One flight to fly: ``planner`` is "nominal" or an inducing selection's name.
 
-    ``compile_functions``: compile the NMPC's linearisation to C (about a minute and a half
-    per new residual model, then cached on disk; worth it when a model flies many flights).
+    ``compile_functions``: compile the NMPC's symbolic linearisation to C (cached on disk);
+    the batched linearisation the planner uses by default ignores it.
     """
 
     trajectory: int

@@ -28,6 +28,11 @@ def test_quick_nmpc_part_reports_augmented_acados_and_model_ready_figures():
     ):
         assert math.isfinite(figures[name]) and figures[name] > 0, name
     assert 0.0 <= figures["nmpc_augmented_preempted_fraction"] <= 1.0
+    for regime in nmpc.REGIME_SHAPES:  # each regime's learned model, batched vs symbolic
+        prefix = f"nmpc_learned_{regime}"
+        for name in ("median_ms", "p99_ms", "cpu_p99_ms", "symbolic_median_ms"):
+            assert math.isfinite(figures[f"{prefix}_{name}"]) and figures[f"{prefix}_{name}"] > 0
+        assert figures[f"{prefix}_cmd_diff_max_mps"] < 1e-5
     assert figures["nmpc_cmd_diff_median_mps"] < 1e-3
     acados = [figures[n] for n in ("nmpc_acados_median_ms", "nmpc_acados_solve_median_ms")]
     if acados_unavailable():
