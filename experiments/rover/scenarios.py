@@ -32,7 +32,10 @@ r_delta 1: measured from zero, r_omega pulls the robot outside every turn, and o
 the turn rate the robot must command is about twice v * curvature, so the pull grows with the
 slip the learner has found (noise-free localisation, 10 trials: last max e_L 0.056 m from zero,
 0.035 m from v * curvature; with the localisation error, trials 11-20 over seeds 0-2: mean max
-e_L 0.067 m -> 0.051 m).
+e_L 0.067 m -> 0.051 m). [Ostafew16] section 5.2's "roughly a 3:1 ratio" for the Husky, read as
+experiment 3 reads its 1:1 (q_lat : r_omega, here r_omega 13.3), keeps every learned trial at
+0.11-0.16 m in the 1 1/m turn on loose dirt (seed 0, 20 trials): r_omega resists the turn rate
+the learned slip asks for; the paper gives no units for its ratio, so r_omega stays 0.5.
 Experiments 2 and 3 look 3.5 and 4 s ahead (35 and 40 steps): the scheduler takes the robots
 past 1 m/s, where 1.5 s covered half of a 0.5 1/m arc (3.1 m) and the heavy robots' lags
 (steering 0.5 rad/s on the DMRV) need the turn seen well before it; at 0.35 m/s the DMRV's

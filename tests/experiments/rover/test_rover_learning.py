@@ -93,3 +93,36 @@ def test_localisation_error_wanders_slowly_with_small_frame_to_frame_noise() -> 
     assert np.std(step) < 0.3 * np.std(e[:, 0])
     with pytest.raises(ValueError, match="bias_tau_s"):
         LocalisationErrorConfig(bias_tau_s=0.0)
+
+
+def _chains(cfg: LocalisationErrorConfig, seed: int, n: int = 6000) -> np.ndarray:
+    """(8, n, 3) errors of independent chains (each starts stationary), 10 Hz."""
+    out = []
+    for k in range(8):
+        err = LocalisationError(cfg, 0.1, np.random.default_rng([seed, k]))
+        out.append(np.array([err.draw() for _ in range(n)]))
+    return np.stack(out)
+
+
+@pytest.mark.parametrize("seed", [11, 12])
+def test_localisation_wander_has_the_std_and_correlation_time_it_is_given(seed) -> None:
+    rng = np.random.default_rng(seed)
+    sigma, tau = rng.uniform(0.005, 0.015), rng.uniform(2.0, 4.0)
+    e = _chains(LocalisationErrorConfig((sigma, sigma, 0.005), tau, (0.0, 0.0, 0.0)), seed)
+    assert np.std(e[:, :, :2]) == pytest.approx(sigma, rel=0.15)
+    assert np.std(e[:, 0, :2]) == pytest.approx(sigma, rel=0.4)  # stationary from the start
+    x = e[:, :, 0] - e[:, :, 0].mean()
+    acf = [np.mean(x[:, lag:] * x[:, : x.shape[1] - lag]) for lag in range(int(12 * tau / 0.1))]
+    assert 0.1 * (np.sum(acf) - 0.5 * acf[0]) / acf[0] == pytest.approx(tau, rel=0.25)
+
+
+@pytest.mark.parametrize("seed", [21, 22])
+def test_scenario_localisation_wander_keeps_the_vo_bound_between_nearby_fixes(seed) -> None:
+    """[Stenning13]'s "less than 4 cm/m" (quoted by [Ostafew16] 5.1) between fixes d metres
+    apart at experiment 1's 0.4 m/s and 10 Hz, d from one frame (4 cm) to 4 m: the wander of the
+    scenarios' stand-in (its white per-frame noise left out)."""
+    cfg = LocalisationErrorConfig(white_std=(0.0, 0.0, 0.0))
+    e = _chains(cfg, seed)
+    for lag in (1, 2, 5, 10, 25, 50, 100):
+        rel = np.sqrt(np.mean(np.sum((e[:, lag:, :2] - e[:, :-lag, :2]) ** 2, axis=2)))
+        assert rel < 0.04 * (0.4 * 0.1 * lag), (lag, rel)
