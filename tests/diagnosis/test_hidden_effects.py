@@ -25,12 +25,36 @@ from vehicle_sim.sensor_noise import add_sensor_noise, draw_sensor_noise
 CLOSED_LOOP_FLOOR_MPS = 0.02  # closed-loop errors below this leave no gain worth a figure
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize("name", HIDDEN_EFFECTS)
-def test_hidden_effect_is_named_fitted_and_gains(name, tmp_path):
+@pytest.fixture(scope="module", params=HIDDEN_EFFECTS)
+def hidden_flight(request, tmp_path_factory):
+    """(name, seed, truth, base effects, logs): one flight per hidden effect, drawn at random
+    (seeded), shared by the exact and the noisy diagnosis of it (each its own test, so the two
+    run side by side on two workers)."""
+    name = request.param
     seed = HIDDEN_EFFECTS.index(name)
     truth, base = draw(name, np.random.default_rng(100 + seed))
-    logs = fly_hidden(truth, tmp_path, seed)
+    logs = read_only(fly_hidden(truth, tmp_path_factory.mktemp(name), seed))
+    return name, seed, truth, base, logs
+
+
+@pytest.fixture(scope="module")
+def clean_flight(tmp_path_factory):
+    """The excitation mission flown with no hidden effect (seed 11), shared by the tests that
+    diagnose it exact or with noise drawn on top."""
+    return read_only(fly_hidden({}, tmp_path_factory.mktemp("clean"), 11))
+
+
+def read_only(logs: list[FlightLog]) -> list[FlightLog]:
+    """``logs`` with their columns made read-only, so no test sharing them can change them."""
+    for log in logs:
+        for column in log.columns.values():
+            column.setflags(write=False)
+    return logs
+
+
+@pytest.mark.slow
+def test_hidden_effect_is_named_fitted_and_gains(hidden_flight):
+    name, _, truth, base, logs = hidden_flight
     result = diagnose(logs, load_sim_config("iris", base))
     assert result.verdict and result.verdict[0] == name, result.verdict
     assert result.causes[0].name == name
@@ -46,6 +70,11 @@ def test_hidden_effect_is_named_fitted_and_gains(name, tmp_path):
         assert more_whole or cl.ground_hold_gain() >= 3.0, info
     elif cl.baseline_rmse_mps() > CLOSED_LOOP_FLOOR_MPS:  # slow effects the integrator hides
         assert cl.scored.any() and cl.gain() >= 3.0, info
+
+
+@pytest.mark.slow
+def test_hidden_effect_is_named_and_fitted_on_a_noisy_log(hidden_flight):
+    name, seed, truth, base, logs = hidden_flight
     noise = draw_sensor_noise(np.random.default_rng(200 + seed))
     noisy = diagnose(
         [add_sensor_noise(log, noise, seed) for log in logs], load_sim_config("iris", base)
@@ -72,8 +101,8 @@ def test_two_hidden_effects_are_both_named(pair, tmp_path):
 
 
 @pytest.mark.slow
-def test_clean_log_gives_empty_verdict(tmp_path):
-    result = diagnose(fly_hidden({}, tmp_path, 11), load_sim_config("iris"))
+def test_clean_log_gives_empty_verdict(clean_flight):
+    result = diagnose(clean_flight, load_sim_config("iris"))
     assert result.verdict == ()
     assert result.causes[0].name == "none"
     assert result.added_effects == {}
@@ -97,11 +126,11 @@ def test_a_thrust_telemetry_scale_is_not_a_payload(tmp_path):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("seed", [0, 1, 2])
-def test_clean_noisy_logs_name_nothing(seed, tmp_path):
+def test_clean_noisy_logs_name_nothing(seed, clean_flight):
     """Three noise draws here (each about 20 s); the 20-seed rate is `bench --only diagnose`."""
-    logs = fly_hidden({}, tmp_path, 11)
     noise = draw_sensor_noise(np.random.default_rng(300 + seed))
-    result = diagnose([add_sensor_noise(log, noise, seed) for log in logs], load_sim_config("iris"))
+    logs = [add_sensor_noise(log, noise, seed) for log in clean_flight]
+    result = diagnose(logs, load_sim_config("iris"))
     assert result.verdict == (), (noise, result.verdict, result.warnings)
     assert result.causes[0].name == "none"
     floor = result.noise_floor["vel_mps"]
