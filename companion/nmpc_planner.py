@@ -1,10 +1,14 @@
 """The NMPC as the companion flies it: [Kulathunga23]'s planner, nominal or with a learned residual.
 
 The planner model is a nominal model from :mod:`planners.nominal_models`: [Kulathunga23]'s 4-DOF
-kinematic model (velocity and yaw-rate commands; the default) or the first-order velocity lag
-(an a-priori model in the sense of [Ostafew16]). Augmented, a residual model file from
-``fit-gp`` adds its mean g(z) [m/s^2] as in [Kulathunga23], eq. 1; the file names the nominal model
-and features it was trained on, and the planner is built for exactly those. The reference is
+kinematic model (velocity and yaw-rate commands; the default), the first-order velocity lag
+(an a-priori model in the sense of [Ostafew16]) or PX4's velocity PI loop, whose integrator the
+companion keeps itself: 0 at the first plan (the settled hover before the reference: the
+model's integrator is relative to the value that holds it), then I += Ki (u - v) dt between
+plans, with the planner's last command and the measured velocity (mean over the interval).
+Augmented, a residual model file from ``fit-gp`` adds its mean g(z) [m/s^2] as in
+[Kulathunga23], eq. 1; the file names the nominal model and features it was trained on, and
+the planner is built for exactly those. The reference is
 time-parametrised and the NMPC's input reference is its velocity (feed-forward), so the nominal
 planner already tracks well and what is left is the residual.
 
@@ -28,14 +32,15 @@ from gp.prediction_check import refusal
 from planners.model_vectors import state_vector
 from planners.nmpc import NmpcPlanner
 from planners.nmpc_formulation import NmpcConfig
-from planners.nominal_models import NominalModel, make_model
+from planners.nominal_models import INTEGRATOR_STATES, NominalModel, make_model
 from planners.plan_result import PlanResult
 from planners.reference import PlannerState, Reference, ReferenceSample
 from planners.residual import ResidualTerm
 
-MULTIROTOR_MODELS = ("kinematic_4dof", "first_order_lag")
+MULTIROTOR_MODELS = ("kinematic_4dof", "first_order_lag", "px4_velocity_pi")
 _DT_TOLERANCE = 0.05
 LATE_FALLBACK_S = 0.2  # oldest plan [s] flown on when a new plan comes back late
+INTEGRATOR_GAP_S = 0.5  # plans further apart [s] restart the companion's integrator at 0
 
 
 @dataclass(frozen=True)
@@ -151,6 +156,9 @@ class CompanionNmpc:
         self._last_command: np.ndarray | None = None
         self._last_ok: tuple[float, PlanResult] | None = None
         self._dt_s = settings.dt_s
+        self._ki = np.asarray(self.model.integrator_gains, dtype=float)
+        self._vel_int = np.zeros(3)
+        self._int_at: tuple[float, np.ndarray] | None = None  # (t [s], velocity [m/s])
         self._warm_up()
 
     def _warm_up(self) -> None:
@@ -161,6 +169,8 @@ class CompanionNmpc:
         self._planner.reset()
         self._last_command = None
         self._last_ok = None
+        self._vel_int = np.zeros(3)
+        self._int_at = None
 
     def set_obstacles(self, world: object | None) -> None:
         """Obstacles to keep d_o from: anything with ``clearance_m(points)`` and
@@ -175,6 +185,8 @@ class CompanionNmpc:
     def plan(self, state: PlannerState, reference: Reference, t_s: float) -> PlanResult:
         """One NMPC step (see :meth:`NmpcPlanner.plan`), from the state predicted over the
         known latency when ``latency_s`` is set; never raises."""
+        if self._ki.size and state.is_finite():
+            state = self._with_integrator(state, t_s)
         if self._advance is not None and self._last_command is not None and state.is_finite():
             state = self._predicted(state, self._last_command)
             t_s = t_s + self._latency_s
@@ -188,6 +200,32 @@ class CompanionNmpc:
             result = self._previous_plan(t_s, result.solve_time_s) or result
         self._last_command = np.array(result.command, dtype=float)
         return result
+
+    @property
+    def velocity_integrator_mps2(self) -> np.ndarray:
+        """The autopilot's velocity integrator (3,) [m/s^2] as this planner keeps it (relative
+        to the settled hover at the first plan; zeros for a model without one)."""
+        return self._vel_int.copy()
+
+    def _with_integrator(self, state: PlannerState, t_s: float) -> PlannerState:
+        """``state`` with the velocity integrator advanced to ``t_s``: I += Ki (u - v) dt
+        with the last command this planner returned (the loop's CommandLimits may still
+        saturate what is sent: the horizontal norm, climb and descent; such a cut is not seen
+        here) and the mean of the last and current measured velocity; restarted at 0 on the
+        first plan or after a gap over INTEGRATOR_GAP_S."""
+        vel = np.asarray(state.vel_ned_mps, dtype=float)
+        if self._int_at is None or self._last_command is None:
+            self._vel_int = np.zeros(3)
+        else:
+            t_prev, vel_prev = self._int_at
+            gap_s = t_s - t_prev
+            if not 0.0 <= gap_s <= INTEGRATOR_GAP_S:
+                self._vel_int = np.zeros(3)
+            else:
+                err = self._last_command[:3] - 0.5 * (vel + vel_prev)
+                self._vel_int = self._vel_int + self._ki * err * gap_s
+        self._int_at = (t_s, vel)
+        return PlannerState(state.pos_ned_m, vel, state.yaw_rad, self._vel_int.copy())
 
     def _previous_plan(self, t_s: float, solve_time_s: float) -> PlanResult | None:
         """The newest good plan's input for time ``t_s`` (its row floor((t - t_plan) / dt)),
@@ -221,7 +259,10 @@ class CompanionNmpc:
         if self.model.carries_velocity:
             vel = x[[names.index(c) for c in ("vel_n_mps", "vel_e_mps", "vel_d_mps")]]
         yaw = float(x[names.index("yaw_rad")]) if "yaw_rad" in names else state.yaw_rad
-        return PlannerState(pos, vel, yaw)
+        vel_int = state.vel_int_mps2
+        if self._ki.size:
+            vel_int = x[[names.index(c) for c in INTEGRATOR_STATES]]
+        return PlannerState(pos, vel, yaw, vel_int)
 
     def one_step_velocity(
         self,
@@ -232,10 +273,10 @@ class CompanionNmpc:
         """Velocity [m/s] (3,) this planner's model (with its residual) predicts one control
         period after sending ``cmd_vel_ned_mps`` (3,) at velocity ``vel_ned_mps`` (3,) and
         position ``pos_ned_m`` (3,) [m] (a residual on position features is evaluated there;
-        None: the origin); the yaw-rate command is taken as zero (the study's references hold
-        their yaw)."""
+        None: the origin), with the velocity integrator as this planner keeps it; the yaw-rate
+        command is taken as zero (the study's references hold their yaw)."""
         pos = np.zeros(3) if pos_ned_m is None else np.asarray(pos_ned_m, dtype=float)
-        state = PlannerState(pos, np.asarray(vel_ned_mps, dtype=float), 0.0)
+        state = PlannerState(pos, np.asarray(vel_ned_mps, dtype=float), 0.0, self._vel_int)
         x = state_vector(self.model, state)
         u = np.append(np.asarray(cmd_vel_ned_mps, dtype=float).reshape(3), 0.0)
         return np.asarray(self._one_step(x, u), dtype=float).reshape(3)

@@ -37,7 +37,8 @@ class NmpcConfig:
     Attributes:
         horizon_steps: N, number of shooting intervals.
         dt_s: interval length [s].
-        state_weights: diagonal of Q, length nx; None gives 10 for every state.
+        state_weights: diagonal of Q, length nx; None gives 10 for every state but the
+            model's untracked ones (0).
         input_weights: diagonal of R, length nu; None gives 1 for every input.
         state_min, state_max: bounds on x_1..x_N, length nx each (use +-inf to leave free);
             None leaves all states free.
@@ -131,6 +132,8 @@ class NmpcFormulation:
         self.residual = residual
         nx, nu, n = model.nx, model.nu, config.horizon_steps
         self.q_diag = _vector(config.state_weights, nx, 10.0, "state_weights")
+        if config.state_weights is None:  # a state without a reference costs nothing
+            self.q_diag[[model.state_names.index(s) for s in model.untracked_states]] = 0.0
         self.r_diag = _vector(config.input_weights, nu, 1.0, "input_weights")
         self.x_min = _vector(config.state_min, nx, -np.inf, "state_min")
         self.x_max = _vector(config.state_max, nx, np.inf, "state_max")

@@ -12,6 +12,15 @@ Models:
     first_order_lag: adds the velocity to the state, v_dot = (v_cmd - v) / tau per axis (tau_s
         horizontal, tau_d_s vertical: PX4 tunes the two loops apart); a residual adds to v_dot.
         State (pos[3], vel[3], yaw), same input.
+    px4_velocity_pi: PX4's velocity loop ([PX4-params] MPC_XY_VEL_P/I/D_ACC, MPC_Z_VEL_P/I/D_ACC)
+        on the velocity command, per axis (1 + Kd) v_dot = Kp (u - v) + I, I_dot = Ki (u - v)
+        ([PX4-params]'s D acts on the measured acceleration; no acceleration feed-forward in
+        OFFBOARD velocity control). I [m/s^2] is the autopilot's velocity integrator relative to
+        its value in the settled hover before the flight (which cancels the disturbance there):
+        a state the companion integrates itself from its commands and the measured velocity
+        (companion.nmpc_planner), 0 at the switch to OFFBOARD; the disturbance at the start is
+        held. State (pos[3], vel[3], vel_int[3], yaw), input as the lag's; a residual adds to
+        v_dot.
     unicycle: [Ostafew16]'s ground robot. State (x_n, x_e [m], heading [rad]); input (speed [m/s],
         turn rate [rad/s]); a residual (3-vector) adds to the state rates directly.
 """
@@ -24,6 +33,7 @@ import casadi as ca
 import numpy as np
 
 VELOCITY_STATES: tuple[str, ...] = ("vel_n_mps", "vel_e_mps", "vel_d_mps")
+INTEGRATOR_STATES: tuple[str, ...] = ("vel_int_n_mps2", "vel_int_e_mps2", "vel_int_d_mps2")
 
 
 @dataclass(frozen=True)
@@ -44,6 +54,10 @@ class NominalModel:
             the model should fly: u = v + lead * a keeps a first-order lag on a reference of
             velocity v and acceleration a (its time constants); empty for a model that flies
             its command at once.
+        untracked_states: states with no reference (an autopilot's integrator): their cost
+            weight defaults to 0.
+        integrator_gains: per NED axis, the I gain [1/s] of an autopilot velocity integrator
+            the model carries as INTEGRATOR_STATES; empty for a model without one.
     """
 
     name: str
@@ -54,6 +68,8 @@ class NominalModel:
     velocity_of: ca.Function
     params_from_logs: tuple[str, ...] = ()
     velocity_lead_s: tuple[float, ...] = ()
+    untracked_states: tuple[str, ...] = ()
+    integrator_gains: tuple[float, ...] = ()
 
     @property
     def nx(self) -> int:
@@ -179,6 +195,59 @@ def first_order_lag(tau_s: float = 0.3, tau_d_s: float | None = None) -> Nominal
     )
 
 
+def px4_velocity_pi(
+    vel_p_xy: float = 1.8,
+    vel_i_xy: float = 0.4,
+    vel_d_xy: float = 0.2,
+    vel_p_z: float = 4.0,
+    vel_i_z: float = 2.0,
+    vel_d_z: float = 0.0,
+    drag_xy_per_s: float = 0.0,
+    drag_z_per_s: float = 0.0,
+) -> NominalModel:
+    """PX4's velocity PI(D) loop with its integrator as a state (see the module docstring).
+
+    Gains as PX4 names them ([PX4-params]; defaults: PX4 v1.14's): vel_p_* = MPC_*_VEL_P_ACC
+    [1/s], vel_i_* = MPC_*_VEL_I_ACC [1/s^2 per m/s, PX4 writes 1/s], vel_d_* = MPC_*_VEL_D_ACC
+    [1]; *_xy for north and east, *_z for down. drag_*_per_s [1/s]: linear drag per unit mass
+    (acceleration per m/s of velocity, e.g. rotor drag / mass), relative to the hover (the
+    steady wind's part is in the integrator); 0: left to a residual."""
+    gains = {"vel_p_xy": vel_p_xy, "vel_p_z": vel_p_z}
+    gains.update({"vel_i_xy": vel_i_xy, "vel_i_z": vel_i_z, "vel_d_xy": vel_d_xy})
+    gains.update({"vel_d_z": vel_d_z, "drag_xy_per_s": drag_xy_per_s})
+    gains["drag_z_per_s"] = drag_z_per_s
+    for name, value in gains.items():
+        if not (value > 0 if name.startswith("vel_p") else value >= 0):
+            raise ValueError(
+                f"px4_velocity_pi: {name} must be > 0 (P) or >= 0 (I, D, drag), got {value}"
+            )
+    kp = ca.DM([vel_p_xy, vel_p_xy, vel_p_z])
+    ki = ca.DM([vel_i_xy, vel_i_xy, vel_i_z])
+    inertia = ca.DM([1 + vel_d_xy, 1 + vel_d_xy, 1 + vel_d_z])
+    x = ca.SX.sym("x", 10)
+    u = ca.SX.sym("u", 4)
+    err = u[:3] - x[3:6]
+    drag = ca.DM([drag_xy_per_s, drag_xy_per_s, drag_z_per_s])
+    vel_dot = (kp * err + x[6:9] - drag * x[3:6]) / inertia
+    xdot = ca.vertcat(x[3:6], vel_dot, ki * err, u[3])
+    f = ca.Function("px4_velocity_pi", [x, u], [xdot], ["x", "u"], ["x_dot"])
+    b = np.zeros((10, 3))
+    b[3:6, :3] = np.eye(3)
+    vel = ca.Function("px4_velocity_pi_velocity", [x, u], [x[3:6]], ["x", "u"], ["vel"])
+    lead = ((1 + vel_d_xy) / vel_p_xy, (1 + vel_d_xy) / vel_p_xy, (1 + vel_d_z) / vel_p_z)
+    return NominalModel(
+        "px4_velocity_pi",
+        ("pos_n_m", "pos_e_m", "pos_d_m", *VELOCITY_STATES, *INTEGRATOR_STATES, "yaw_rad"),
+        ("vel_n_mps", "vel_e_mps", "vel_d_mps", "yaw_rate_radps"),
+        f,
+        b,
+        vel,
+        velocity_lead_s=lead,
+        untracked_states=INTEGRATOR_STATES,
+        integrator_gains=(vel_i_xy, vel_i_xy, vel_i_z),
+    )
+
+
 def unicycle() -> NominalModel:
     """Paper 004's unicycle: (x_n, x_e, heading) driven by (speed, turn rate)."""
     x = ca.SX.sym("x", 3)
@@ -205,6 +274,7 @@ def unicycle() -> NominalModel:
 MODELS = {
     "kinematic_4dof": kinematic_4dof,
     "first_order_lag": first_order_lag,
+    "px4_velocity_pi": px4_velocity_pi,
     "unicycle": unicycle,
 }
 

@@ -72,11 +72,16 @@ class SampledReference:
 
 @dataclass(frozen=True)
 class PlannerState:
-    """The vehicle state a planner sees (NED, SI)."""
+    """The vehicle state a planner sees (NED, SI).
+
+    ``vel_int_mps2`` (3,): the autopilot's velocity integrator as the companion keeps it (for a
+    model that carries it, planners.nominal_models.px4_velocity_pi); None reads as zeros.
+    """
 
     pos_ned_m: np.ndarray
     vel_ned_mps: np.ndarray
     yaw_rad: float
+    vel_int_mps2: np.ndarray | None = None
 
     def is_finite(self) -> bool:
         """True when every element is finite (no NaN or inf)."""

@@ -13,6 +13,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from companion.app import LOCKSTEP_PLAN_BUDGET_S
+from companion.autopilot_gains import velocity_loop_gains
 from companion.control_loop import Tick
 from companion.flight_recorder import FlightRecorder
 from companion.inprocess_link import InProcessLink
@@ -66,9 +67,15 @@ def fly(
     progress: Callable[[str], None] = lambda message: None,
 ) -> FlightRecord:
     """Fly ``spec`` with the NMPC of ``settings`` (its speed limit is the command limit, its
-    period the loop's), nominal or augmented with ``residual_model``. The planner's time
-    budget is raised to LOCKSTEP_PLAN_BUDGET_S: in lockstep a slow plan costs no flight time."""
+    period the loop's), nominal or augmented with ``residual_model``; a px4_velocity_pi
+    planner takes the velocity loop's gains the autopilot reports, unless ``settings`` give
+    them. The planner's time budget is raised to LOCKSTEP_PLAN_BUDGET_S: in lockstep a slow
+    plan costs no flight time."""
     settings = replace(settings, time_budget_s=LOCKSTEP_PLAN_BUDGET_S)
+    link = InProcessLink.from_vehicle(spec.vehicle, spec.seed)
+    if settings.nominal_model == "px4_velocity_pi" and residual_model is None:
+        gains = dict(velocity_loop_gains(link)) | dict(settings.nominal_params)
+        settings = replace(settings, nominal_params=tuple(gains.items()))
     period_s = settings.period_s
     rate_hz = 1.0 / period_s
     planner = CompanionNmpc(settings, residual_model)
@@ -81,7 +88,6 @@ def fly(
         points_ned_m=tuple(tuple(float(c) for c in p) for p in points),
         goal_tolerance_m=0.5,
     )
-    link = InProcessLink.from_vehicle(spec.vehicle, spec.seed)
     recorder = FlightRecorder(period_s=period_s, wall_clock_columns=False)
     solve_times: list[float] = []
 

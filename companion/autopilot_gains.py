@@ -1,0 +1,34 @@
+"""The autopilot's velocity-loop gains, as the link reports them, for a planner model of PX4's
+velocity loop (planners.nominal_models.px4_velocity_pi)."""
+
+from __future__ import annotations
+
+from companion.link import Link
+
+# px4_velocity_pi's parameter -> PX4's parameter ([PX4-params] MPC_XY_VEL_*_ACC, MPC_Z_VEL_*_ACC)
+VELOCITY_LOOP_PARAMS: dict[str, str] = {
+    "vel_p_xy": "MPC_XY_VEL_P_ACC",
+    "vel_i_xy": "MPC_XY_VEL_I_ACC",
+    "vel_d_xy": "MPC_XY_VEL_D_ACC",
+    "vel_p_z": "MPC_Z_VEL_P_ACC",
+    "vel_i_z": "MPC_Z_VEL_I_ACC",
+    "vel_d_z": "MPC_Z_VEL_D_ACC",
+}
+
+
+def velocity_loop_gains(link: Link) -> tuple[tuple[str, float], ...]:
+    """px4_velocity_pi's parameters read from the autopilot over ``link``.
+
+    Raises:
+        ValueError: the autopilot did not report one of them (one line naming it).
+    """
+    out = []
+    for name, param in VELOCITY_LOOP_PARAMS.items():
+        value = link.read_param(param)
+        if value is None:
+            raise ValueError(
+                f"the autopilot did not report {param}; px4_velocity_pi needs it "
+                f"(give {name} in the NMPC's nominal_params, or fly first_order_lag)"
+            )
+        out.append((name, float(value)))
+    return tuple(out)

@@ -1,0 +1,56 @@
+"""The companion keeps the autopilot's velocity integrator itself (px4_velocity_pi): zero at
+the first plan, I += Ki (u_sent - v) dt after, restarted after a gap; the plan starts from it;
+the gains come from the parameters the autopilot reports."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from companion.autopilot_gains import VELOCITY_LOOP_PARAMS, velocity_loop_gains
+from companion.inprocess_link import InProcessLink
+from companion.nmpc_planner import INTEGRATOR_GAP_S, CompanionNmpc, NmpcSettings
+from planners.bspline import BSplineReference
+from planners.nominal_models import INTEGRATOR_STATES
+from planners.reference import PlannerState
+
+SEED = 20261123
+
+
+def test_integrator_is_integrated_from_the_commands_and_measured_velocity():
+    rng = np.random.default_rng(SEED)
+    ki_xy, ki_z = rng.uniform(0.2, 2.0), rng.uniform(0.2, 3.0)
+    params = (("vel_p_xy", rng.uniform(1.2, 3.0)), ("vel_i_xy", ki_xy), ("vel_i_z", ki_z))
+    settings = NmpcSettings(
+        speed_limit_mps=3.0, time_budget_s=30.0, nominal_model="px4_velocity_pi",
+        nominal_params=params,
+    )  # fmt: skip
+    planner = CompanionNmpc(settings)
+    ref = BSplineReference(
+        np.array([[0.0, 0.0, -3.0], [4.0, 2.0, -3.0], [8.0, 0.0, -3.5], [12.0, -1.0, -3.0]]), 2.0
+    )
+    ki = np.array([ki_xy, ki_xy, ki_z])
+    rows = [planner.model.state_names.index(s) for s in INTEGRATOR_STATES]
+    expected, prev = np.zeros(3), None
+    t_s = 0.0
+    for _ in range(40):
+        vel = rng.normal(0.0, 1.0, 3)
+        if prev is not None:
+            t_prev, vel_prev, command = prev
+            expected = expected + ki * (command - 0.5 * (vel + vel_prev)) * (t_s - t_prev)
+        result = planner.plan(PlannerState(rng.normal(0.0, 0.3, 3), vel, 0.0), ref, t_s)
+        assert result.ok, result.reason
+        np.testing.assert_allclose(planner.velocity_integrator_mps2, expected, atol=1e-12)
+        np.testing.assert_allclose(result.predicted_trajectory[0, rows], expected, atol=1e-12)
+        prev = (t_s, vel, np.asarray(result.command[:3], dtype=float))
+        t_s += rng.uniform(0.015, 0.03)
+    assert np.max(np.abs(expected)) > 0.05  # the drawn errors moved it
+    planner.plan(PlannerState(np.zeros(3), np.zeros(3), 0.0), ref, t_s + INTEGRATOR_GAP_S + 0.1)
+    np.testing.assert_array_equal(planner.velocity_integrator_mps2, np.zeros(3))
+
+
+def test_gains_are_the_autopilots_parameters():
+    link = InProcessLink.from_vehicle("iris_study", 0)
+    gains = dict(velocity_loop_gains(link))
+    assert set(gains) == set(VELOCITY_LOOP_PARAMS)
+    for name, param in VELOCITY_LOOP_PARAMS.items():
+        assert gains[name] == link.read_param(param)
