@@ -78,7 +78,11 @@ wind_field refit (`--seed 1`) that flew 0.156 m on a training seed where its pre
         (1.22x over the lag), 0.104 m cluster (1.27x). With the hold and the 2.5 m floor:
         0.163 m nominal, 0.079 m the lag alone, 0.056 m low_speed (1.42x), 0.062 m cluster
         (1.28x); with the hold on the old trajectories (no floor): 0.080 m, 0.069 m (1.17x),
-        0.067 m (1.19x). What the GP adds over the lag differs between the two trajectories
+        0.067 m (1.19x). With the closed-loop check (closed_loop_check) the round's
+        refits were refused (on the training seeds they tracked 0.057 / 0.063 m where the
+        first fits tracked 0.031 m): 0.031 m low_speed (2.57x over the lag), 0.031 m cluster;
+        `--seed 1` 0.040 / 0.029 m against the lag's 0.076 m (1.90x; 0.70x with the refit).
+        What the GP adds over the lag differs between the two trajectories
         (1.2-1.8x on one, 1.0-1.2x on the other) and moves with small changes of the paths and
         of the training flights: two trajectories are too few to call 1.3x met in general
         (see BENCHMARKS.md).
