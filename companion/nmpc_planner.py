@@ -312,10 +312,15 @@ def _one_step_function(
 
 def structure_only(model: ResidualModel) -> bool:
     """True when the model file records that its GP predicts worse over the horizon than its
-    own nominal model alone (the identified structure; gp.prediction_check): then the planner
-    flies that structure without the GP, never worse than what was learned without it."""
+    own nominal model alone (the identified structure; gp.prediction_check), or that a
+    closed-loop check chose the structure alone (the study's experiments.study.closed_loop):
+    then the planner flies that structure without the GP, never worse than what was learned
+    without it."""
     check = model.training.get("prediction_check_structure")
-    return isinstance(check, dict) and check.get("passed") is False
+    closed_loop = model.training.get("closed_loop_check")
+    return (isinstance(check, dict) and check.get("passed") is False) or (
+        isinstance(closed_loop, dict) and closed_loop.get("structure_flies") is True
+    )
 
 
 def check_residual_model(model: ResidualModel, period_s: float) -> None:

@@ -4,7 +4,7 @@
           [--workers 2 | --scheduler tcp://HOST:8786] [--vehicle iris_study]
           [--learned-model first_order_lag|kinematic_4dof]
           [--features state_input|velocity] [--seed 0] [--compile] [--quick]
-          [--regime paper000|agile|wind_field] [--refit-rounds N]
+          [--regime paper000|agile|wind_field] [--refit-rounds N] [--closed-loop-check]
 
 ``--regime`` picks the task (experiments.study.regimes, physics written down there):
 [Kulathunga23]'s low-speed task (default), an agile task at up to 6 m/s, or repeated paths
@@ -70,6 +70,12 @@ def parse_args(argv: list[str] | None) -> StudyConfig:
         default=None,
         help="refits on augmented flights of the training seeds (default: the regime's)",
     )
+    parser.add_argument(
+        "--closed-loop-check",
+        action="store_true",
+        help="fly the model that would fly on the training seeds first; refuse it if it tracks "
+        "worse than the model it replaces (on in the agile and wind_field regimes)",
+    )
     parser.add_argument("--seed", type=int, default=0, help="trajectory generator seed")
     parser.add_argument(
         "--compile",
@@ -98,6 +104,8 @@ def parse_args(argv: list[str] | None) -> StudyConfig:
             config = replace(config, features=args.features)
         if args.refit_rounds is not None:
             config = replace(config, refit_rounds=args.refit_rounds)
+        if args.closed_loop_check:
+            config = replace(config, closed_loop_check=True)
     except ValueError as exc:
         parser.error(str(exc))
     return config.quick() if args.quick else config

@@ -55,6 +55,12 @@ class StudyConfig:
             structure (first_order_lag) alone on the nominal flights' seeds and fit the GP on
             those flights instead, on that same structure (experiments.study.paper000): the
             GP learns what the structure leaves where a planner on it flies.
+        closed_loop_check: before the held-out comparison, fly each selection's newest model
+            on the training seeds (where the rounds above have not flown it yet) and let it fly
+            only if it tracks no worse there than the model it replaces and the identified
+            structure alone; otherwise the model it replaced, ultimately the structure alone,
+            flies (experiments.study.closed_loop; the structure's flights are flown too unless
+            learn_from_structure flew them).
     """
 
     out_dir: Path = Path("out/study")
@@ -78,6 +84,7 @@ class StudyConfig:
     regime: str = "paper000"
     refit_rounds: int = 0
     learn_from_structure: bool = False
+    closed_loop_check: bool = False
 
     def __post_init__(self) -> None:
         if self.n_trajectories < 1 or self.repeats < 1 or self.n_trials < 2:

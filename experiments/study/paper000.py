@@ -7,6 +7,8 @@ augmented flights are held out from the model's training data (and fly other gus
 With the default learned model (first_order_lag, time constants identified from the nominal
 flights, then the GP), an ablation flies the identified lag alone (no GP) on the augmented
 seeds too, so the report separates what the identified structure and the GP each bring.
+With ``closed_loop_check``, the model that would fly is first flown on the training seeds and
+refused if it tracks worse there than the model it replaces (experiments.study.closed_loop).
 """
 
 from __future__ import annotations
@@ -15,7 +17,8 @@ from collections.abc import Callable
 from concurrent.futures import Executor
 from dataclasses import dataclass, replace
 
-from companion.nmpc_planner import NmpcSettings
+from companion.nmpc_planner import NmpcSettings, structure_only
+from experiments.study.closed_loop import confirm_lineage
 from experiments.study.config import StudyConfig
 from experiments.study.fitting import fit_residual
 from experiments.study.jobs import FlightJob, FlightSummary, run_flight_job, warm_up_planner
@@ -28,6 +31,15 @@ from planners.trajectory_generator import TrajectorySpec, generate_trajectories
 
 NOMINAL = "nominal"
 IDENTIFIED_LAG = "identified_lag"
+
+
+@dataclass(eq=False)
+class Learned:
+    """One model a selection learned, and its flights on the training seeds once flown."""
+
+    name: str
+    fit: TrainingResult
+    flights: list[FlightSummary] | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -66,13 +78,24 @@ def run_paper000(
     fits = _fit_selections(logs, config, pool)
     structure = fits[config.selections[0]].model.features.nominal_params
     identification = fits[config.selections[0]].model.training.get("identified_lag")
+    structure_flights: list[FlightSummary] = []
     if config.learn_from_structure:
-        fits = _refit_on_structure(config, refs, logs, fits, pool, progress, structure)
+        fits, structure_flights = _refit_on_structure(
+            config, refs, logs, fits, pool, progress, structure
+        )
+    lineage = {sel: [Learned(f"{sel} first fit", fit)] for sel, fit in fits.items()}
     augmented_logs: dict[str, list[FlightLog]] = {sel: [] for sel in config.selections}
     for round_ in range(1, config.refit_rounds + 1):
-        fits = _refit_on_augmented(
+        fits, flown = _refit_on_augmented(
             config, refs, logs, augmented_logs, fits, pool, round_, progress, structure
         )
+        for sel, summaries in flown.items():
+            latest = lineage[sel][-1]
+            latest.flights = latest.flights or summaries  # a kept model flies the same again
+            if fits[sel] is not latest.fit:
+                lineage[sel].append(Learned(f"{sel} round {round_} refit", fits[sel]))
+    if config.closed_loop_check:
+        fits = _confirm_in_closed_loop(config, refs, lineage, structure_flights, pool, progress)
     if identification is not None:  # the later rounds keep the structure: say where it came from
         fits = {sel: _with_identification(fit, identification) for sel, fit in fits.items()}
     for sel, fit in fits.items():
@@ -85,6 +108,8 @@ def run_paper000(
             progress(f"fit {sel}: {refusal(fit.model)}; its flights fly the nominal planner")
         elif not fit.gp_earns_its_place:
             progress(f"fit {sel}: the GP does not beat its structure; the structure flies alone")
+        elif structure_only(fit.model):
+            progress(f"fit {sel}: the structure flies alone (closed-loop check)")
     flying = {sel: fit.model if fit.may_fly else None for sel, fit in fits.items()}
     if config.compile_augmented:
         progress("compiling the augmented planners (once per model, cached on disk)")
@@ -135,13 +160,14 @@ def _refit_on_augmented(
     round_: int,
     progress: Callable[[str], None],
     structure: tuple[tuple[str, float], ...],
-) -> dict[str, TrainingResult]:
+) -> tuple[dict[str, TrainingResult], dict[str, list[FlightSummary]]]:
     """One round of [Ostafew16]'s trial-after-trial learning: fly each selection's model on
     the nominal seeds (0..repeats-1; the comparison's seeds stay held out) and refit its GP on
     the nominal flights plus its augmented flights of every round so far (``augmented_logs``,
     extended here), on the ``structure`` (nominal parameters) identified from the nominal
     flights. A refit that does not predict the held-out logs better than the model it
-    replaces is dropped (the old fit stays)."""
+    replaces is dropped (the old fit stays). Returns the fits and, per selection, the flights
+    of the model it flew in this round."""
     jobs = [
         FlightJob(i, ref, sel, seed, config.vehicle, config.nmpc, fit.model, False)
         for sel, fit in fits.items()
@@ -149,13 +175,13 @@ def _refit_on_augmented(
         for i, ref in enumerate(refs)
         for seed in range(config.repeats)
     ]
-    flown: dict[str, list[FlightLog]] = {}
+    flown: dict[str, list[FlightSummary]] = {}
     for summary in _fly_all(jobs, pool, f"refit round {round_}", progress):
-        flown.setdefault(summary.planner, []).append(summary.log)
+        flown.setdefault(summary.planner, []).append(summary)
     futures = {
         sel: pool.submit(
             fit_residual,
-            [*nominal_logs, *augmented_logs[sel], *flown[sel]],
+            [*nominal_logs, *augmented_logs[sel], *(s.log for s in flown[sel])],
             sel,
             config.nmpc.period_s,
             learned_model=config.learned_model,
@@ -169,14 +195,14 @@ def _refit_on_augmented(
     }
     out = dict(fits)
     for sel, fut in futures.items():
-        augmented_logs[sel].extend(flown[sel])
+        augmented_logs[sel].extend(s.log for s in flown[sel])
         refit = fut.result()
         if refit.may_fly:
             out[sel] = refit
             progress(f"refit {sel} round {round_}: {refit.check.describe()}")
         else:
             progress(f"refit {sel} round {round_}: {refusal(refit.model)}; keeping the previous")
-    return out
+    return out, flown
 
 
 def _refit_on_structure(
@@ -187,7 +213,7 @@ def _refit_on_structure(
     pool: Executor,
     progress: Callable[[str], None],
     structure: tuple[tuple[str, float], ...],
-) -> dict[str, TrainingResult]:
+) -> tuple[dict[str, TrainingResult], list[FlightSummary]]:
     """[Ostafew16]'s trial after trial with the structure as the first learned model: fly the
     identified lag alone on the nominal flights' seeds (the comparison's seeds stay held
     out) and fit every selection's GP on the nominal flights and those flights together, so
@@ -198,17 +224,76 @@ def _refit_on_structure(
     from the lag's own flights its time constants came out longer (agile: 0.77 s, vertical
     0.65 s, against 0.72 s and 0.36 s) and flew worse alone (0.057 m against 0.044 m on the
     held-out seeds), so the GP was partly repairing its own structure. The fit is checked as
-    any other (gp.prediction_check)."""
+    any other (gp.prediction_check). Returns the fits and the structure's flights."""
     lag = identified_lag_settings(config, fits[config.selections[0]])
     if lag is None:
-        return fits
-    jobs = [
+        return fits, []
+    flights = _fly_all(_structure_jobs(config, refs, lag), pool, "structure round", progress)
+    logs = [s.log for s in flights]
+    return _fit_selections([*nominal_logs, *logs], config, pool, structure), flights
+
+
+def _confirm_in_closed_loop(
+    config: StudyConfig,
+    refs: list[BSplineReference],
+    lineage: dict[str, list[Learned]],
+    structure_flights: list[FlightSummary],
+    pool: Executor,
+    progress: Callable[[str], None],
+) -> dict[str, TrainingResult]:
+    """experiments.study.closed_loop's check on the training seeds: fly what has not flown
+    there yet (each selection's newest model, and the structure alone unless the structure
+    round flew it), keep per selection the newest model no worse than its predecessor and
+    the structure alone, and record the verdict in its model file (``closed_loop_check``; a
+    verdict for the structure alone makes the companion fly the structure without the GP)."""
+    checked = {}
+    for sel, models in lineage.items():
+        fit = models[-1].fit
+        if not fit.may_fly:
+            progress(f"closed-loop check {sel}: none, {models[-1].name} was refused open loop")
+        elif structure_only(fit.model):
+            progress(f"closed-loop check {sel}: none, {models[-1].name} flies the structure alone")
+        else:
+            checked[sel] = models
+    lag = identified_lag_settings(config, next(iter(lineage.values()))[0].fit)
+    if not checked or lag is None:
+        return {sel: models[-1].fit for sel, models in lineage.items()}
+    jobs = [] if structure_flights else _structure_jobs(config, refs, lag)
+    jobs += [
+        FlightJob(i, ref, sel, seed, config.vehicle, config.nmpc, models[-1].fit.model, False)
+        for sel, models in checked.items()
+        if models[-1].flights is None
+        for i, ref in enumerate(refs)
+        for seed in range(config.repeats)
+    ]
+    flown: dict[str, list[FlightSummary]] = {}
+    for summary in _fly_all(jobs, pool, "closed-loop check", progress):
+        flown.setdefault(summary.planner, []).append(summary)
+    structure_flights = structure_flights or flown[IDENTIFIED_LAG]
+    out = {sel: models[-1].fit for sel, models in lineage.items()}
+    for sel, models in checked.items():
+        models[-1].flights = models[-1].flights or flown[sel]
+        verdict = confirm_lineage([(m.name, m.flights) for m in models], structure_flights)
+        for comparison in verdict.comparisons:
+            progress(f"closed-loop check {sel}: {comparison.describe()}")
+        for line in verdict.refusals():
+            progress(f"closed-loop check {sel}: {line}")
+        progress(f"closed-loop check {sel}: {verdict.flies_name} flies")
+        fit = models[-1 if verdict.flies is None else verdict.flies].fit
+        training = {**fit.model.training, "closed_loop_check": verdict.to_dict()}
+        out[sel] = replace(fit, model=replace(fit.model, training=training))
+    return out
+
+
+def _structure_jobs(
+    config: StudyConfig, refs: list[BSplineReference], lag: NmpcSettings
+) -> list[FlightJob]:
+    """The identified lag alone on every trajectory and training seed."""
+    return [
         FlightJob(i, ref, IDENTIFIED_LAG, seed, config.vehicle, lag, compile_functions=False)
         for i, ref in enumerate(refs)
         for seed in range(config.repeats)
     ]
-    logs = [s.log for s in _fly_all(jobs, pool, "structure round", progress)]
-    return _fit_selections([*nominal_logs, *logs], config, pool, structure)
 
 
 def _fit_selections(

@@ -76,6 +76,7 @@ def render_report(
         nom = ", ".join(f"{v:.4f}" for v in fit.metrics["nominal_rmse_mps"])
         aug = ", ".join(f"{v:.4f}" for v in fit.metrics["augmented_rmse_mps"])
         lines.append(f"- `{sel}`: nominal [{nom}] -> augmented [{aug}]")
+    lines += _closed_loop_lines(result)
     lines += ["", *[f"![{p}]({p})" for p in images["paths"]], ""]
     lines += ["Residual vs velocity (held-out rows), GP mean and inducing points:", ""]
     lines += [f"![{p}]({p})" for p in images["residuals"]]
@@ -93,6 +94,37 @@ def render_report(
         lines.append(f"| {k} | {t.planner} | {t.tracking_rmse_m:.4f} | {t.residual_rmse_mps:.4f} |")
     lines += ["", *[f"![{p}]({p})" for p in images["trials"]], ""]
     return "\n".join(lines)
+
+
+def _closed_loop_lines(result: Paper000Result) -> list[str]:
+    """The closed-loop check's verdicts (experiments.study.closed_loop): per selection which
+    model flew and every comparison with both RMSEs; none if the check did not run."""
+    records = {
+        sel: fit.model.training["closed_loop_check"]
+        for sel, fit in result.fits.items()
+        if "closed_loop_check" in fit.model.training
+    }
+    if not records:
+        return []
+    lines = [
+        "",
+        "Closed-loop check on the training seeds (each model that would fly, flown on the "
+        "nominal flights' seeds and compared flight for flight with the model it replaces and "
+        "the identified lag alone; it flies only if it tracks no worse, pooled tracking RMSE):",
+        "",
+        "| selection | candidate | incumbent | candidate [m] | incumbent [m] | flights | verdict |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for sel, record in records.items():
+        for c in record["comparisons"]:
+            verdict = "no worse" if c["passed"] else "worse: refused"
+            lines.append(
+                f"| {sel} | {c['candidate']} | {c['incumbent']} | {c['candidate_rmse_m']:.4f} "
+                f"| {c['incumbent_rmse_m']:.4f} | {c['n_flights']} | {verdict} |"
+            )
+    lines.append("")
+    lines += [f"- `{sel}` flew: {record['flies']}" for sel, record in records.items()]
+    return lines
 
 
 def _identified(result: Paper000Result) -> str:

@@ -98,3 +98,8 @@ def test_a_gp_that_does_not_beat_its_structure_flies_without_it(hidden_plant_log
     assert structure_only(
         replace(model, training={**model.training, "prediction_check_structure": worse})
     )
+    # the study's closed-loop check chose the structure alone (experiments.study.closed_loop)
+    for chosen in (True, False):
+        record = {"flies": "x", "structure_flies": chosen, "comparisons": []}
+        trained = {**model.training, "closed_loop_check": record}
+        assert structure_only(replace(model, training=trained)) is chosen
