@@ -106,9 +106,20 @@ def _sigterm_as_interrupt(_signum: int, _frame: FrameType | None) -> None:
     raise Terminated
 
 
+def _stop_signals_answered() -> tuple[object, object, set[signal.Signals]]:
+    """Make Ctrl-C (SIGINT) and SIGTERM reach the flight as a safe stop, whatever this process
+    inherited: a parent that ignores SIGINT (a shell's background job, a supervisor) or blocks
+    it leaves it ignored or blocked in its children, and the companion would fly on through the
+    operator's stop. Returns what to restore: the two handlers and the blocked signals."""
+    previous_int = signal.signal(signal.SIGINT, signal.default_int_handler)
+    previous_term = signal.signal(signal.SIGTERM, _sigterm_as_interrupt)
+    blocked = signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM})
+    return previous_int, previous_term, blocked
+
+
 def main(argv: list[str] | None = None) -> int:
     config = parse_args(argv)
-    previous = signal.signal(signal.SIGTERM, _sigterm_as_interrupt)
+    previous_int, previous_term, blocked = _stop_signals_answered()
     try:
         result = run_companion(config, _progress)
     except CompanionInputError as exc:
@@ -118,7 +129,9 @@ def main(argv: list[str] | None = None) -> int:
         _progress("interrupted again during the safe stop; the vehicle was commanded to land")
         return EXIT_TERMINATED if isinstance(exc, Terminated) else EXIT_INTERRUPTED
     finally:
-        signal.signal(signal.SIGTERM, previous)
+        signal.signal(signal.SIGINT, previous_int)
+        signal.signal(signal.SIGTERM, previous_term)
+        signal.pthread_sigmask(signal.SIG_SETMASK, blocked)
     outcome = result.outcome
     if outcome.status == "handed_over":
         print(f"companion: {outcome.detail}", file=sys.stderr, flush=True)

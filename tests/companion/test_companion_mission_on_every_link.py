@@ -147,6 +147,10 @@ class StderrReader:
         return "\n".join(self.lines)
 
 
+def _as_a_background_job() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize(
     ("sig", "code_expected", "said", "status"),
@@ -165,7 +169,11 @@ def test_ctrl_c_or_sigterm_in_the_air_holds_then_lands_and_exits_128_plus_signal
         sys.executable, "-m", "scripts.companion_cli", str(LINE), "--link", "mavsdk",
         "--url", f"udpin://127.0.0.1:{port}", "--log", str(log_path),
     ]  # fmt: skip
-    proc = subprocess.Popen(cmd, cwd=REPO, stderr=subprocess.PIPE, text=True)
+    # Started as a shell starts a background job (SIGINT ignored, inherited across exec): the
+    # companion must still answer the operator's Ctrl-C with a safe stop.
+    proc = subprocess.Popen(
+        cmd, cwd=REPO, stderr=subprocess.PIPE, text=True, preexec_fn=_as_a_background_job
+    )
     stderr = StderrReader(proc)
     try:
         stderr.wait_for("following the reference", timeout_s=60.0)
@@ -294,7 +302,11 @@ def test_sigkill_mid_flight_leaves_a_readable_log_of_every_row_flown(
         sys.executable, "-m", "scripts.companion_cli", str(LINE), "--link", "pymavlink",
         "--url", f"udpin://127.0.0.1:{port}", "--log", str(log_path),
     ]  # fmt: skip
-    proc = subprocess.Popen(cmd, cwd=REPO, stderr=subprocess.PIPE, text=True)
+    # Started as a shell starts a background job (SIGINT ignored, inherited across exec): the
+    # companion must still answer the operator's Ctrl-C with a safe stop.
+    proc = subprocess.Popen(
+        cmd, cwd=REPO, stderr=subprocess.PIPE, text=True, preexec_fn=_as_a_background_job
+    )
     stderr = StderrReader(proc)
     try:
         stderr.wait_for("following the reference", timeout_s=60.0)
