@@ -4,6 +4,7 @@ velocity loop (planners.nominal_models.px4_velocity_pi)."""
 from __future__ import annotations
 
 from companion.link import Link
+from gp.velocity_integrator import GAINS_METADATA_KEY
 
 # px4_velocity_pi's parameter -> PX4's parameter ([PX4-params] MPC_XY_VEL_*_ACC, MPC_Z_VEL_*_ACC)
 VELOCITY_LOOP_PARAMS: dict[str, str] = {
@@ -32,3 +33,13 @@ def velocity_loop_gains(link: Link) -> tuple[tuple[str, float], ...]:
             )
         out.append((name, float(value)))
     return tuple(out)
+
+
+def velocity_loop_metadata(link: Link) -> dict[str, object]:
+    """The velocity-loop gains for a flight log's sidecar (``velocity_loop_gains``: what
+    fit-gp rebuilds px4_velocity_pi's integrator with, gp.velocity_integrator), or nothing
+    when the autopilot does not report them all."""
+    try:
+        return {GAINS_METADATA_KEY: dict(velocity_loop_gains(link))}
+    except ValueError:
+        return {}

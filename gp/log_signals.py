@@ -2,7 +2,9 @@
 
 The planners' models name their signals (``pos_n_m``, ``yaw_rad``, ``vel_n_mps``, ...); a log
 holds measurements and commands (``vel_n_mps`` measured, ``cmd_vel_n_mps`` commanded, the
-attitude as a quaternion). States come from measurements, inputs from the logged commands.
+attitude as a quaternion). States come from measurements, inputs from the logged commands;
+an autopilot velocity integrator (px4_velocity_pi's ``vel_int_*``) is rebuilt from both as the
+companion keeps it in flight (gp.velocity_integrator), 0 at the log's (segment's) first row.
 """
 
 from __future__ import annotations
@@ -13,7 +15,8 @@ import numpy as np
 
 from flightlog.schema import FlightLog
 from gp.errors import DatasetError
-from planners.nominal_models import NominalModel
+from gp.velocity_integrator import velocity_integrator
+from planners.nominal_models import INTEGRATOR_STATES, NominalModel
 
 
 def yaw_from_quaternion(log: FlightLog) -> np.ndarray:
@@ -38,8 +41,13 @@ _INPUT_SIGNALS: dict[str, Callable[[FlightLog], np.ndarray]] = {
 
 
 def model_state(model: NominalModel, log: FlightLog) -> np.ndarray:
-    """The model's state per log row, (n, nx), from measured signals."""
-    return _stack(model, log, model.state_names, _STATE_SIGNALS, "state")
+    """The model's state per log row, (n, nx), from measured signals (an integrator state from
+    0 at the first row: pass one segment)."""
+    table = dict(_STATE_SIGNALS)
+    if model.integrator_gains:
+        integrator = velocity_integrator(log, model.integrator_gains)
+        table |= {c: (lambda _log, i=i: integrator[:, i]) for i, c in enumerate(INTEGRATOR_STATES)}
+    return _stack(model, log, model.state_names, table, "state")
 
 
 def model_input(model: NominalModel, log: FlightLog) -> np.ndarray:

@@ -20,6 +20,7 @@ from gp.lag_identification import LagIdentification, identify_velocity_lag
 from gp.model_io import ResidualModel
 from gp.prediction_check import PredictionCheck, Predictor, check_prediction, split_logs
 from gp.sparse_gp import SparseGP
+from gp.velocity_integrator import VELOCITY_LOOP_GAIN_NAMES, logged_velocity_loop_gains
 from planners.nominal_models import kinematic_4dof, make_model
 
 
@@ -156,7 +157,8 @@ def resolve_features(
 ) -> tuple[FeatureDefinition, LagIdentification | None]:
     """The feature definition with the nominal parameters the logs decide: kinematic_4dof's
     residual_dt_s (their median step), first_order_lag's time constants when not given
-    (identified; the identification is returned too, else None)."""
+    (identified; the identification is returned too, else None), px4_velocity_pi's gains when
+    not given (the autopilot's, recorded with the logs)."""
     params = dict(config.nominal_params)
     identified = None
     from_logs = set(make_model(config.nominal).params_from_logs) - set(params)
@@ -167,6 +169,10 @@ def resolve_features(
     if "tau_s" in from_logs:
         identified = identify_velocity_lag(logs, config.modes)
         params = {**identified.nominal_params(), **params}
+    gains = from_logs & set(VELOCITY_LOOP_GAIN_NAMES)
+    if gains:
+        logged = logged_velocity_loop_gains(logs)
+        params |= {n: v for n, v in logged.items() if n in gains}
     definition = feature_definition(
         config.features, config.nominal, residual_steps=config.residual_steps, **params
     )

@@ -49,7 +49,8 @@ class NominalModel:
             (the command itself for the kinematic model, the velocity state for the lag model).
         params_from_logs: the model's parameters that flight logs decide when a user does not
             give them (the residual's time base from the log rate; a velocity lag's time
-            constants by identification, see gp.lag_identification).
+            constants by identification, see gp.lag_identification; an autopilot's velocity
+            loop gains as recorded with the logs, see gp.velocity_integrator).
         velocity_lead_s: per NED axis, how far [s] the velocity input must lead the velocity
             the model should fly: u = v + lead * a keeps a first-order lag on a reference of
             velocity v and acceleration a (its time constants); empty for a model that flies
@@ -242,6 +243,7 @@ def px4_velocity_pi(
         f,
         b,
         vel,
+        params_from_logs=("vel_p_xy", "vel_i_xy", "vel_d_xy", "vel_p_z", "vel_i_z", "vel_d_z"),
         velocity_lead_s=lead,
         untracked_states=INTEGRATOR_STATES,
         integrator_gains=(vel_i_xy, vel_i_xy, vel_i_z),
