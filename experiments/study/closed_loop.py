@@ -29,7 +29,7 @@ from dataclasses import dataclass
 from experiments.study.jobs import FlightSummary
 from experiments.study.metrics import pooled_rmse
 
-STRUCTURE = "the identified lag alone"
+STRUCTURE = "the structure alone"  # the learned model's nominal model without the GP
 
 
 @dataclass(frozen=True)

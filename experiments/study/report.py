@@ -57,8 +57,9 @@ def render_report(
         "inducing selection fitted on all nominal flights; each trajectory flown "
         f"{config.repeats}x augmented per selection on other seeds (held-out flights)"
         + (
-            f"; `{IDENTIFIED_LAG}` flies the identified lag without the GP on the same seeds "
-            "(what the GP adds is the difference)."
+            f"; `{IDENTIFIED_LAG}` flies the learned model's structure "
+            f"(`{config.learned_model}`) without the GP on the same seeds (what the GP adds is "
+            "the difference)."
             if IDENTIFIED_LAG in figs
             else "."
         ),
@@ -110,7 +111,7 @@ def _closed_loop_lines(result: Paper000Result) -> list[str]:
         "",
         "Closed-loop check on the training seeds (each model that would fly, flown on the "
         "nominal flights' seeds and compared flight for flight with the model it replaces and "
-        "the identified lag alone; it flies only if it tracks no worse, pooled tracking RMSE):",
+        "the structure alone; it flies only if it tracks no worse, pooled tracking RMSE):",
         "",
         "| selection | candidate | incumbent | candidate [m] | incumbent [m] | flights | verdict |",
         "|---|---|---|---|---|---|---|",
@@ -128,11 +129,19 @@ def _closed_loop_lines(result: Paper000Result) -> list[str]:
 
 
 def _identified(result: Paper000Result) -> str:
-    """ "with time constants identified from the nominal flights (...) " or ""."""
+    """ "with time constants identified from the nominal flights (...) ", "with the
+    autopilot's velocity-loop gains recorded with the nominal flights (...) " or ""."""
     fit = next(iter(result.fits.values()))
     lag = fit.model.training.get("identified_lag")
     if lag is None:
-        return ""
+        gains = [(k, v) for k, v in fit.model.features.nominal_params if k.startswith("vel_")]
+        if not gains:
+            return ""
+        listed = ", ".join(f"{k}={v:g}" for k, v in gains)
+        return (
+            f"with the autopilot's velocity-loop gains recorded with the nominal flights "
+            f"({listed}) "
+        )
     return (
         f"with time constants identified from the nominal flights (tau_s={lag['tau_s']:.3f} s, "
         f"tau_d_s={lag['tau_d_s']:.3f} s) "

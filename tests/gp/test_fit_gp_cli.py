@@ -41,6 +41,7 @@ def test_fit_gp_writes_model_plots_and_reports_rmse(tmp_path, capsys):
         (["LOG", "--inducing", "kmeans"], "invalid choice: 'kmeans'"),
         (["LOG", "--holdout-fraction", "1.5"], "--holdout-fraction must be in (0, 1)"),
         (["LOG", "--nominal-param", "tau_s"], "expected NAME=NUMBER"),
+        (["LOG", "--nominal", "px4_velocity_pi"], "its sidecar has no velocity_loop_gains"),
     ],
 )
 def test_bad_input_exits_non_zero_with_one_line(tmp_path, capsys, args, message):

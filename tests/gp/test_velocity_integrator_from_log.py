@@ -14,14 +14,16 @@ from companion.inprocess_link import InProcessLink
 from companion.mission import Mission
 from companion.nmpc_planner import CompanionNmpc, NmpcSettings
 from companion.runner import RunnerConfig, fly_mission
-from flightlog.schema import FlightLog
+from flightlog.schema import FlightLog, write_flight_log
 from gp.datasets import DatasetConfig, residual_dataset, split_segments
 from gp.errors import DatasetError
 from gp.features import feature_definition
 from gp.log_signals import model_state
-from gp.training import TrainingConfig, train_residual_model
+from gp.model_io import read_model_header
+from gp.training import TrainingConfig, resolve_features, train_residual_model
 from planners.bspline import BSplineReference
 from planners.nominal_models import INTEGRATOR_STATES
+from scripts.fit_gp import main as fit_gp
 
 SEED = 20261124
 PERIOD_S = 0.02
@@ -89,6 +91,10 @@ def test_pi_residual_is_fitted_with_the_logged_gains(pi_flight):
     )  # fmt: skip
     result = train_residual_model([log], config)
     assert dict(result.model.features.nominal_params) == pytest.approx(gains)
+    retuned = {k: v * 1.5 for k, v in gains.items()}  # the gains are read, not defaulted
+    relog = FlightLog(log.columns, {**log.metadata, "velocity_loop_gains": retuned})
+    features, _ = resolve_features([relog], config)
+    assert dict(features.nominal_params) == pytest.approx(retuned)
     # the PI structure explains the flight better than the kinematic model does
     kinematic = residual_dataset(
         [log],
@@ -105,3 +111,16 @@ def test_pi_residual_is_fitted_with_the_logged_gains(pi_flight):
     assert "\n" not in str(refused.value)
     given = TrainingConfig(**{**config.__dict__, "nominal_params": tuple(gains.items())})
     assert train_residual_model([bare], given).model.features.nominal_params
+
+
+@pytest.mark.slow
+def test_fit_gp_cli_fits_the_pi_structure_from_a_log_file(pi_flight, tmp_path):
+    log, _, gains = pi_flight
+    path = write_flight_log(tmp_path / "pi.csv", log)
+    out = tmp_path / "pi_model"
+    argv = [str(path), "--out", str(out), "--nominal", "px4_velocity_pi", "--mode", "OFFBOARD"]
+    code = fit_gp([*argv, "--m", "10", "--restarts", "1", "--no-plots", "--force"])
+    assert code == 0
+    doc = read_model_header(tmp_path / "pi_model.npz")
+    nominal = doc["feature_definition"]["nominal_model"]
+    assert nominal["name"] == "px4_velocity_pi" and nominal["params"] == pytest.approx(gains)
