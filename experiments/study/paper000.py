@@ -20,9 +20,10 @@ from dataclasses import dataclass, replace
 from companion.nmpc_planner import NmpcSettings, structure_only
 from experiments.study.closed_loop import confirm_lineage
 from experiments.study.config import StudyConfig
-from experiments.study.fitting import fit_residual
+from experiments.study.fitting import FOLLOWING_MODES, fit_residual, regular_rows
 from experiments.study.jobs import FlightJob, FlightSummary, run_flight_job, warm_up_planner
 from flightlog.schema import FlightLog
+from gp.lag_identification import identify_velocity_lag
 from gp.prediction_check import Predictor, refusal
 from gp.training import TrainingResult
 from planners.bspline import BSplineReference
@@ -30,7 +31,8 @@ from planners.nominal_models import make_model
 from planners.trajectory_generator import TrajectorySpec, generate_trajectories
 
 NOMINAL = "nominal"
-IDENTIFIED_LAG = "identified_lag"
+IDENTIFIED_LAG = "identified_lag"  # the learned model's structure alone (the ablation)
+LAG_BESIDE = "lag_structure"  # the identified lag alone, beside another learned structure
 
 
 @dataclass(eq=False)
@@ -142,6 +144,21 @@ def run_paper000(
                 lag,
                 compile_functions=False,
             )
+            for i, ref in enumerate(refs)
+            for seed in range(config.repeats)
+        ]
+    if lag is not None and lag.nominal_model != "first_order_lag":
+        beside = _identified_lag_beside(config, logs, progress)
+        aug_jobs += [
+            FlightJob(
+                i,
+                ref,
+                LAG_BESIDE,
+                config.repeats + seed,
+                config.vehicle,
+                beside,
+                compile_functions=False,
+            )  # fmt: skip
             for i, ref in enumerate(refs)
             for seed in range(config.repeats)
         ]
@@ -340,6 +357,19 @@ def identified_lag_settings(config: StudyConfig, fit: TrainingResult) -> NmpcSet
     return replace(
         config.nmpc, nominal_model=features.nominal_model, nominal_params=features.nominal_params
     )
+
+
+def _identified_lag_beside(
+    config: StudyConfig, logs: list[FlightLog], progress: Callable[[str], None]
+) -> NmpcSettings:
+    """The nominal NMPC on first_order_lag with its time constants identified from the
+    nominal flights ``logs`` (as the default learned model's structure is), flown beside a
+    learned model on another structure so the report compares the two structures."""
+    regular = [regular_rows(log, config.nmpc.period_s) for log in logs]
+    identified = identify_velocity_lag(regular, FOLLOWING_MODES)
+    progress(f"{LAG_BESIDE}: identified {identified.describe()}")
+    params = tuple(sorted(identified.nominal_params().items()))
+    return replace(config.nmpc, nominal_model="first_order_lag", nominal_params=params)
 
 
 def _fly_all(

@@ -85,7 +85,15 @@ wind_field refit (`--seed 1`) that flew 0.156 m on a training seed where its pre
         What the GP adds over the lag differs between the two trajectories
         (1.2-1.8x on one, 1.0-1.2x on the other) and moves with small changes of the paths and
         of the training flights: two trajectories are too few to call 1.3x met in general
-        (see BENCHMARKS.md).
+        (see BENCHMARKS.md). With PX4's velocity PI loop as the structure (`study --regime
+        wind_field --learned-model px4_velocity_pi`: its integrator a planner state the
+        companion keeps, rebuilt from the logs for the GP, gp.velocity_integrator; the gains
+        the autopilot reports, recorded with every flight) the GP learns the jet's drag
+        relative to the hover at the start as a function of position: 0.038 m low_speed,
+        0.042 m cluster (`--seed 1`: 0.044 / 0.042 m) against the lag alone's 0.079 m (0.076
+        m), 1.7-2.1x; but the PI structure alone holds the start's drag everywhere and flies
+        0.32 m (0.30 m), 2x worse than nominal, so the study's structure-alone arm and the
+        closed-loop check's floor are weak there.
 """
 
 from __future__ import annotations

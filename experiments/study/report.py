@@ -5,7 +5,7 @@ from __future__ import annotations
 from experiments.study.config import StudyConfig
 from experiments.study.figures import PlannerFigures
 from experiments.study.metrics import SETTLE_S
-from experiments.study.paper000 import IDENTIFIED_LAG, NOMINAL, Paper000Result
+from experiments.study.paper000 import IDENTIFIED_LAG, LAG_BESIDE, NOMINAL, Paper000Result
 from experiments.study.paper004 import TrialsResult
 
 
@@ -62,6 +62,12 @@ def render_report(
             "the difference)."
             if IDENTIFIED_LAG in figs
             else "."
+        )
+        + (
+            f" `{LAG_BESIDE}` flies first_order_lag alone, its time constants identified from "
+            "the nominal flights, on the same seeds (the default learned model's structure)."
+            if LAG_BESIDE in figs
+            else ""
         ),
         "",
         "Residual: one-step velocity error of the model that flew, "
