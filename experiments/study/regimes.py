@@ -90,10 +90,11 @@ wind_field refit (`--seed 1`) that flew 0.156 m on a training seed where its pre
         companion keeps, rebuilt from the logs for the GP, gp.velocity_integrator; the gains
         the autopilot reports, recorded with every flight) the GP learns the jet's drag
         relative to the hover at the start as a function of position: 0.038 m low_speed,
-        0.042 m cluster (`--seed 1`: 0.044 / 0.042 m) against the lag alone's 0.079 m (0.076
-        m), 1.7-2.1x; but the PI structure alone holds the start's drag everywhere and flies
-        0.32 m (0.30 m), 2x worse than nominal, so the study's structure-alone arm and the
-        closed-loop check's floor are weak there.
+        0.042 m cluster (`--seed 1`: 0.044 / 0.042 m; `--seed 2`: 0.036 / 0.040 m) against
+        the lag alone's 0.079 m (0.076, 0.063 m), 1.6-2.1x; but the PI structure alone holds
+        the start's drag everywhere and flies 0.32 m (0.30, 0.18 m), worse than nominal, so
+        the study's structure-alone arm and the closed-loop check's floor are weak there. On
+        agile it is no structure: PI + GP 0.053 m against the lag alone's 0.043 m.
 """
 
 from __future__ import annotations
