@@ -19,6 +19,7 @@ import math
 
 import numpy as np
 from scipy import linalg
+from scipy.linalg.lapack import dpotrf, dpotrs
 
 from gp.kernels import SquaredExponentialARD
 from gp.local_gp import ExperienceBinsConfig, LocalGP
@@ -68,9 +69,15 @@ class LocalDisturbance:
         alphas = []
         for j, (k, s2) in enumerate(zip(gp.kernels, gp.noise_variances, strict=True)):
             C = k.variance * E if self._shared else k(X, X)
-            C[np.diag_indices_from(C)] += s2
-            factor = linalg.cho_factor(C, lower=True, check_finite=False)
-            alphas.append(linalg.cho_solve(factor, Y[:, j], check_finite=False) * k.variance)
+            C.flat[:: self.n_experiences + 1] += s2  # the diagonal
+            # LAPACK's potrf/potrs directly: what linalg.cho_factor / cho_solve call, without
+            # their per-call argument checks and copies (about 0.1 ms of each control step)
+            L, info = dpotrf(C, lower=1, clean=0, overwrite_a=1)
+            if info == 0:
+                alpha, info = dpotrs(L, Y[:, j], lower=1)
+            if info != 0:
+                raise linalg.LinAlgError(f"local GP kernel matrix not positive definite ({info})")
+            alphas.append(alpha * k.variance)
         self._alpha = np.stack(alphas)  # (3, n), each scaled by its signal variance
 
     @property

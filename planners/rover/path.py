@@ -62,6 +62,7 @@ class TaughtPath:
         self.xy_m = np.column_stack([np.interp(s_new, s, xy[:, 0]), np.interp(s_new, s, xy[:, 1])])
         d = np.gradient(self.xy_m, axis=0)
         self.heading_rad = np.arctan2(d[:, 1], d[:, 0])
+        self._heading_unwrapped = np.unwrap(self.heading_rad)  # for ref_at
         self.s_m = s_new
         self.spacing_m = float(s_new[1] - s_new[0])
 
@@ -157,7 +158,7 @@ class TaughtPath:
     def ref_at(self, s_m: np.ndarray) -> np.ndarray:
         """Reference poses (n, 3) at arc lengths s_m (n,), clamped to the path."""
         s = np.clip(s_m, 0.0, self.s_m[-1])
-        th = np.unwrap(self.heading_rad)
+        th = self._heading_unwrapped
         return np.column_stack(
             [
                 np.interp(s, self.s_m, self.xy_m[:, 0]),

@@ -130,35 +130,39 @@ def rollout(
             e_L, e_H (default: zero errors).
     """
     K = len(v_mps)
+    v = [float(x) for x in v_mps]
+    om = [float(x) for x in omega_radps]
     P = np.empty((K + 1, 3))
-    D = np.zeros((K + 1, 3, K))
     G = np.zeros((K, 3))
     A = np.empty((K, N_QUERY))
     P[0] = x0
-    prev, d_prev = np.asarray(pose_prev, dtype=float), np.zeros((3, K))
-    s = s0_m
     chain = model is not None and model.has_jacobian
+    D = np.zeros((K + 1, 3, K))
+    rot = np.empty(K)  # dt (d/d theta of the step's x-advance), per step (chain-free form)
+    rot_y = np.empty(K)  # the same for y
+    x, y, th = (float(c) for c in x0)
+    px, py, pth = (float(c) for c in pose_prev)
+    d_prev = np.zeros((3, K))
+    s = s0_m
     for b in range(K):
-        x, y, th = P[b]
-        Db = D[b]
-        dx, dy = x - prev[0], y - prev[1]
+        dx, dy = x - px, y - py
         dist = math.hypot(dx, dy)
-        w_prev = omega_prev_radps if b == 0 else omega_radps[b - 1]
+        w_prev = omega_prev_radps if b == 0 else om[b - 1]
         if ref_poses is not None:
             xr, yr, tr = ref_poses[b]
             sr, cr = math.sin(tr), math.cos(tr)
             e_lat, e_head = -sr * (xr - x) + cr * (yr - y), _wrap(tr - th)
         else:
             sr = cr = e_lat = e_head = 0.0
-        A[b] = (s, e_lat, e_head, dist / dt_s, _wrap(th - prev[2]) / dt_s, v_mps[b],
-                omega_radps[b], w_prev)  # fmt: skip
-        va, vl = v_mps[b], 0.0
-        dg = None
+        A[b] = (s, e_lat, e_head, dist / dt_s, _wrap(th - pth) / dt_s, v[b], om[b], w_prev)
+        va, vl = v[b], 0.0
         if model is not None:
             g, J = model.mean_and_jacobian(A[b])
             G[b] = g
-            va, vl = va + g[0], g[1]
-        if chain:
+            va, vl = va + float(g[0]), float(g[1])
+        c, sn = math.cos(th), math.sin(th)
+        if chain:  # derivatives through the learned model: carried step by step
+            Db = D[b]
             dD = Db - d_prev
             dv_act = (dx * dD[0] + dy * dD[1]) / (max(dist, 1e-9) * dt_s)
             dg = np.outer(J[:, 3], dv_act) + np.outer(J[:, 4], dD[2] / dt_s)
@@ -167,24 +171,44 @@ def rollout(
             dg[:, b] += J[:, 6]
             if b > 0:
                 dg[:, b - 1] += J[:, 7]
-        c, sn = math.cos(th), math.sin(th)
-        Dn = D[b + 1]
-        Dn[0] = Db[0] + dt_s * (-sn * va - c * vl) * Db[2]
-        Dn[1] = Db[1] + dt_s * (c * va - sn * vl) * Db[2]
-        Dn[2] = Db[2]
-        Dn[2, b] += dt_s
-        if dg is not None:
+            Dn = D[b + 1]
+            Dn[0] = Db[0] + dt_s * (-sn * va - c * vl) * Db[2]
+            Dn[1] = Db[1] + dt_s * (c * va - sn * vl) * Db[2]
+            Dn[2] = Db[2]
+            Dn[2, b] += dt_s
             Dn[0] += dt_s * (c * dg[0] - sn * dg[1])
             Dn[1] += dt_s * (sn * dg[0] + c * dg[1])
             Dn[2] += dt_s * dg[2]
-        P[b + 1] = (
+            d_prev = Db
+        else:
+            rot[b] = dt_s * (-sn * va - c * vl)
+            rot_y[b] = dt_s * (c * va - sn * vl)
+        px, py, pth = x, y, th
+        x, y, th = (
             x + dt_s * (c * va - sn * vl),
             y + dt_s * (sn * va + c * vl),
-            th + dt_s * (omega_radps[b] + G[b, 2]),
+            th + dt_s * (om[b] + float(G[b, 2])),
         )
-        prev, d_prev = P[b], Db
-        s += v_mps[b] * dt_s
+        P[b + 1] = (x, y, th)
+        s += v[b] * dt_s
+    if not chain:
+        _pose_derivatives(D, rot, rot_y, dt_s)
     return Rollout(P, D, G, A)
+
+
+def _pose_derivatives(D: np.ndarray, rot: np.ndarray, rot_y: np.ndarray, dt_s: float) -> None:
+    """Fill D (K+1, 3, K) with d pose_b / d omega_k when the disturbance does not depend on omega.
+
+    Then d th_b / d omega_k = dt for k < b, and d x_{b+1} = d x_b + rot_b d th_b (rot_b = dt
+    d(x-advance)/d th at step b), so d x_b / d omega_k = sum_{k < j < b} rot_j dt: a cumulative
+    sum down the steps of the strictly lower-triangular increments, added in the same order as
+    the step-by-step recursion (bit for bit the same numbers).
+    """
+    K = D.shape[2]
+    below = np.tri(K, K, -1, dtype=bool)  # [j, k]: k < j
+    D[1:, 2] = np.where(np.tri(K, K, 0, dtype=bool), dt_s, 0.0)
+    np.cumsum(np.where(below, (rot * dt_s)[:, None], 0.0), axis=0, out=D[1:, 0])
+    np.cumsum(np.where(below, (rot_y * dt_s)[:, None], 0.0), axis=0, out=D[1:, 1])
 
 
 def unicycle_rollout(
@@ -193,14 +217,20 @@ def unicycle_rollout(
     """Predicted poses (K+1, 3) from x0 (3,), speeds (K,), turn rates (K,), disturbances (K, 3)."""
     out = np.empty((len(v_mps) + 1, 3))
     out[0] = x0
-    for b in range(len(v_mps)):
-        x, y, th = out[b]
-        va, vl = v_mps[b] + g[b, 0], g[b, 1]
-        out[b + 1] = (
-            x + dt_s * (np.cos(th) * va - np.sin(th) * vl),
-            y + dt_s * (np.sin(th) * va + np.cos(th) * vl),
-            th + dt_s * (omega_radps[b] + g[b, 2]),
+    x, y, th = (float(c) for c in x0)
+    v_l, w_l = (
+        np.asarray(v_mps, dtype=float).tolist(),
+        np.asarray(omega_radps, dtype=float).tolist(),
+    )
+    g_l = np.asarray(g, dtype=float).tolist()
+    for b, (v, w, (ga, gl, gy)) in enumerate(zip(v_l, w_l, g_l, strict=True)):
+        va, vl, c, sn = v + ga, gl, math.cos(th), math.sin(th)
+        x, y, th = (
+            x + dt_s * (c * va - sn * vl),
+            y + dt_s * (sn * va + c * vl),
+            th + dt_s * (w + gy),
         )
+        out[b + 1] = (x, y, th)
     return out
 
 

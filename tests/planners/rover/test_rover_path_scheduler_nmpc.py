@@ -125,6 +125,40 @@ def test_rollout_derivatives_match_finite_differences_through_the_learned_model(
     assert np.abs(ro.d_poses).max() > 0.01
 
 
+class _NoChainModel(_LinearYawModel):
+    """The same disturbance, its Jacobian declared zero: the solver takes the closed form."""
+
+    has_jacobian = False
+
+
+class _ZeroJacobianModel(_LinearYawModel):
+    """The same disturbance with a zero Jacobian declared: the step-by-step recursion."""
+
+    def mean_and_jacobian(self, query: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return super().mean_and_jacobian(query)[0], np.zeros((3, 8))
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_closed_form_derivatives_equal_the_step_by_step_recursion_bit_for_bit(seed: int) -> None:
+    # Without dg/du, rollout fills d pose / d omega by cumulative sums after the loop (the fast
+    # path of every experiment without gp_jacobian); it must give the very numbers the general
+    # per-step recursion gives, so that the commands do not change.
+    rng = np.random.default_rng(seed)
+    K = 25
+    c = rng.normal(0, 0.3, 8)
+    x0, prev = rng.normal(0, 0.2, 3), rng.normal(0, 0.2, 3)
+    v, w = rng.uniform(0.3, 1.2, K), rng.normal(0, 0.6, K)
+    ref = np.column_stack([0.05 * np.arange(K), rng.normal(0, 0.1, K), rng.normal(0, 0.1, K)])
+    fast = rollout(x0, prev, 2.0, v, w, 0.3, 0.1, _NoChainModel(c), ref)
+    slow = rollout(x0, prev, 2.0, v, w, 0.3, 0.1, _ZeroJacobianModel(c), ref)
+    assert np.array_equal(fast.poses, slow.poses) and np.array_equal(fast.g, slow.g)
+    assert np.array_equal(fast.d_poses, slow.d_poses)
+    assert np.abs(fast.d_poses[:, :2]).max() > 0.01
+    plain = rollout(x0, prev, 2.0, v, w, 0.3, 0.1)  # no model at all
+    assert np.array_equal(unicycle_rollout(x0, v, w, np.zeros((K, 3)), 0.1), plain.poses)
+    assert np.array_equal(unicycle_rollout(x0, v, w, slow.g, 0.1), slow.poses)
+
+
 def test_turn_rate_penalty_from_the_path_feedforward_keeps_a_heavy_r_omega_on_an_arc() -> None:
     cfg = UnicycleNmpcConfig(r_omega=10.0, r_delta=1.0, q_lat=10.0, q_head=1.0)
     K, v, curv = cfg.horizon, 0.5, 0.4
