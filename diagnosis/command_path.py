@@ -36,7 +36,7 @@ from diagnosis.controller_fit import (
     refit_vertical_integral,
 )
 from diagnosis.noise_floor import block_bootstrap
-from diagnosis.replay import ReplayResult, Window, replay
+from diagnosis.replay import ReplayResult, Window, replay, replay_sse
 from flightlog.schema import FlightLog
 from vehicle_sim import SimConfig
 from vehicle_sim.effects import EFFECT_CLASSES, effects_with_role
@@ -76,12 +76,11 @@ class CommandFit:
 
     Attributes:
         name: cause name; params: its parameters and fitted values.
-        train_rmse_mps, test_rmse_mps: replay velocity RMSE with it, training / held-out windows.
+        test_rmse_mps: held-out replay velocity RMSE with it [m/s].
     """
 
     name: str
     params: dict[str, float]
-    train_rmse_mps: float
     test_rmse_mps: float
     test: ReplayResult | None = None
     at_bound: bool = False
@@ -127,13 +126,12 @@ def fit_command_cause(
             progress(f"  {name}: not fitted ({exc})")
             return None
         refined = {k: v for k, v in fit.gains.items() if k != Z_INTEGRAL}
-        gains, _ = _refine_gains(config, logs, train, refined)
+        gains = _refine_gains(config, logs, train, refined)
         integral = refit_vertical_integral(logs, config, rows, gains)
         gains[Z_INTEGRAL] = integral.value
         unpinned = {}
         if not integral.pinned(UNPINNED_REL_HALF_WIDTH):
             unpinned[Z_INTEGRAL] = integral.interval()
-        train_rmse = replay(configured(config, {name: gains}), logs, train).rmse_mps()
         held_out = replay(configured(config, {name: gains}), logs, test)
         shown = ", ".join(f"{k} = {v:.3g}" for k, v in gains.items())
         progress(f"  {name}: {shown}, held-out replay RMSE {held_out.rmse_mps():.4f} m/s")
@@ -147,15 +145,13 @@ def fit_command_cause(
             for k, v in gains.items()
             if k not in unpinned
         )
-        return CommandFit(
-            name, gains, train_rmse, held_out.rmse_mps(), held_out, at_bound, unpinned
-        )
+        return CommandFit(name, gains, held_out.rmse_mps(), held_out, at_bound, unpinned)
     param, grid = search_grid(name)
 
     def train_rmse(value: float) -> float:
         return replay(with_cause(config, name, value), logs, train).rmse_mps()
 
-    scores = [train_rmse(v) for v in grid]
+    scores = _grid_rmse(name, config, logs, train)
     k = int(np.argmin(scores))
     lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]
     best_value, best_score = float(grid[k]), scores[k]
@@ -170,7 +166,36 @@ def fit_command_cause(
     test_rmse = held_out.rmse_mps()
     at_bound = bool(best_value >= grid[-1] * (1.0 - 1e-3))
     progress(f"  {name}: {param} = {best_value:.4g}, held-out replay RMSE {test_rmse:.4f} m/s")
-    return CommandFit(name, {param: best_value}, best_score, test_rmse, held_out, at_bound)
+    return CommandFit(name, {param: best_value}, test_rmse, held_out, at_bound)
+
+
+def grid_order(name: str) -> np.ndarray:
+    """Indices of the search grid of ``name`` (:func:`search_grid`), nearest the middle of the
+    effect's typical range first (geometrically for a geometric grid): a search that stops
+    trying a value once it is worse than the best so far finds a good one early this way."""
+    _, grid = search_grid(name)
+    spec = next(s for s in EFFECT_CLASSES[name].PARAMS if s.search is not None)
+    scale = np.log if spec.search.geometric else np.asarray
+    return np.argsort(np.abs(scale(grid) - scale(np.mean(spec.typical))), kind="stable")
+
+
+def _grid_rmse(
+    name: str, config: SimConfig, logs: Sequence[FlightLog], train: Sequence[Window]
+) -> np.ndarray:
+    """(grid,) training replay RMSE [m/s] of one-parameter cause ``name`` at each value of its
+    search grid, ``inf`` for a value that cannot be the least: its replay stops as soon as its
+    squared error exceeds the least one so far (:func:`.replay.replay_sse`; values tried in
+    :func:`grid_order`), so the least value and where it is are those a replay of every value
+    in full gives."""
+    _, grid = search_grid(name)
+    n_rows = max(sum(w.stop - w.anchor for w in train), 1)
+    sse = np.full(len(grid), np.inf)
+    least = np.inf
+    for k in grid_order(name):
+        # a margin of 1e-9: a value within rounding of the least is replayed in full
+        sse[k] = replay_sse(with_cause(config, name, grid[k]), logs, train, least * (1 + 1e-9))
+        least = min(least, sse[k])
+    return np.sqrt(sse / n_rows)
 
 
 def _refine_gains(
@@ -178,7 +203,7 @@ def _refine_gains(
     logs: Sequence[FlightLog],
     train: Sequence[Window],
     start: Mapping[str, float],
-) -> tuple[dict[str, float], float]:
+) -> dict[str, float]:
     """The regression's gains refined by training-window replay error (Nelder-Mead on the log
     of each gain, PX4's bounds kept, at most ``REFINE_EVALUATIONS`` replays): the replay is
     far more sensitive to P than the regression's lag model is exact (10 % in P, 0.13 m/s).
@@ -186,19 +211,21 @@ def _refine_gains(
     The objective weighs the horizontal and the vertical replay error each against its value
     at the start: the vertical error is a few percent of the horizontal one on an excitation
     flight, and in their plain sum the vertical gains would not be refined at all (seen: a
-    vertical P driven to its bound). Returns the gains and their training replay RMSE [m/s]."""
+    vertical P driven to its bound). Returns the gains."""
     names = list(start)
     lo = np.array([max(PX4_PARAMS[n].lo, 1e-3) for n in names])
     hi = np.array([PX4_PARAMS[n].hi for n in names])
     x0 = np.log(np.clip([start[n] for n in names], lo, hi))
-    rmse_of: dict[tuple[float, ...], float] = {}
+    mse_of: dict[tuple[float, ...], np.ndarray] = {}  # the start is the simplex's first vertex
 
     def axis_mse(x: np.ndarray) -> np.ndarray:
-        gains = dict(zip(names, np.clip(np.exp(x), lo, hi).tolist(), strict=True))
-        result = replay(configured(config, {FLIGHT_CONTROL: gains}), logs, train)
-        rmse_of[tuple(x)] = result.rmse_mps()
-        err = result.sim_vel_ned_mps - result.meas_vel_ned_mps
-        return np.array([np.mean(err[:, :2] ** 2), np.mean(err[:, 2] ** 2)])
+        key = tuple(x)
+        if key not in mse_of:
+            gains = dict(zip(names, np.clip(np.exp(x), lo, hi).tolist(), strict=True))
+            result = replay(configured(config, {FLIGHT_CONTROL: gains}), logs, train)
+            err = result.sim_vel_ned_mps - result.meas_vel_ned_mps
+            mse_of[key] = np.array([np.mean(err[:, :2] ** 2), np.mean(err[:, 2] ** 2)])
+        return mse_of[key]
 
     scale = np.maximum(axis_mse(x0), 1e-12)
 
@@ -208,10 +235,7 @@ def _refine_gains(
     simplex = np.vstack([x0, *(x0 + 0.1 * e for e in np.eye(len(names)))])
     options = {"initial_simplex": simplex, "maxfev": REFINE_EVALUATIONS, "xatol": 0.01}
     sol = minimize(objective, x0, method="Nelder-Mead", options=options)
-    best = dict(zip(names, np.clip(np.exp(sol.x), lo, hi).tolist(), strict=True))
-    if tuple(sol.x) not in rmse_of:
-        axis_mse(sol.x)
-    return best, rmse_of[tuple(sol.x)]
+    return dict(zip(names, np.clip(np.exp(sol.x), lo, hi).tolist(), strict=True))
 
 
 def _row_sq(result: ReplayResult) -> np.ndarray:

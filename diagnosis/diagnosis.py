@@ -207,7 +207,7 @@ def diagnose(
     force_fits = ({c.name: c for c in causes}, {k: dict(v) for k, v in effects.items()})
     if added:
         causes, moved, effects, current = _physics_check(
-            sim_config, logs, test, causes, effects, base, current, progress
+            sim_config, logs, test, causes, effects, base, current, baseline, progress
         )
         rejected += moved
         force_config = configured(sim_config, _added(base, effects))
@@ -338,7 +338,7 @@ def _velocity_noise(logs: Sequence[FlightLog]) -> np.ndarray:
     return white_noise_std(vel, seg)
 
 
-def _physics_check(sim_config, logs, test, causes, effects, base, current, progress):
+def _physics_check(sim_config, logs, test, causes, effects, base, current, baseline, progress):
     """Keep a force cause only if the held-out replay is not worse with it (within
     ``REPLAY_WORSE_TOLERANCE``; issue 18: a fit of the force residual that makes the vehicle fly
     worse is not the vehicle's dynamics).
@@ -347,6 +347,7 @@ def _physics_check(sim_config, logs, test, causes, effects, base, current, progr
     true one, m (a - g) = F_T / c + D, which the payload fit reads as mass_ratio = c; it changes
     the force residual but not how the vehicle flies. It is named ``thrust_scale`` with
     ``logged_over_true`` = c.
+    ``baseline``: the held-out replay of ``sim_config`` (the replay without the only cause).
     Returns (kept causes, moved-out causes, effects, held-out replay of the kept effects).
     """
     kept, moved = [], []
@@ -356,8 +357,9 @@ def _physics_check(sim_config, logs, test, causes, effects, base, current, progr
         if cause.name in base:
             without[cause.name] = dict(base[cause.name])
         added_without = _added(base, without)
-        cfg = configured(sim_config, added_without)
-        other = replay(cfg, logs, test)
+        other = (
+            replay(configured(sim_config, added_without), logs, test) if added_without else baseline
+        )
         if current.rmse_mps() <= (1.0 + REPLAY_WORSE_TOLERANCE) * other.rmse_mps():
             kept.append(cause)
             continue

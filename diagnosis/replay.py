@@ -14,8 +14,9 @@ velocity.
 from __future__ import annotations
 
 import copy
+import math
 import weakref
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -111,8 +112,50 @@ def replay(
     sim_config: SimConfig, logs: Sequence[FlightLog], wins: Sequence[Window]
 ) -> ReplayResult:
     """Replay ``wins`` of ``logs`` through a vehicle of ``sim_config``."""
+    flown = list(_flown_windows(sim_config, logs, wins))
+    if not flown:
+        return ReplayResult(np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0, int))
+    return ReplayResult(
+        np.concatenate([f.t_s for f in flown]),
+        np.vstack([f.sim_vel_ned_mps for f in flown]),
+        np.vstack([f.meas_vel_ned_mps for f in flown]),
+        np.concatenate([np.full(len(f.t_s), f.window) for f in flown]),
+    )
+
+
+def replay_sse(
+    sim_config: SimConfig, logs: Sequence[FlightLog], wins: Sequence[Window], above: float
+) -> float:
+    """Sum over rows of the squared 3-D velocity error [m^2/s^2] that :func:`replay` gives, or
+    ``inf`` as soon as the windows flown so far exceed ``above``: a search that only needs the
+    best of several configs stops replaying one that can no longer be it (the sum only grows
+    with each window, and every config is replayed on the same rows)."""
+    sse = 0.0
+    for flown in _flown_windows(sim_config, logs, wins):
+        err = flown.sim_vel_ned_mps - flown.meas_vel_ned_mps
+        sse += float(np.sum(err * err))
+        if sse > above:
+            return math.inf
+    return sse
+
+
+@dataclass(frozen=True)
+class _Flown:
+    """One window flown free: ``window`` (index into the windows given), and per compared row
+    (m,) its log time [s], (m, 3) simulated and measured velocity NED [m/s]."""
+
+    window: int
+    t_s: np.ndarray
+    sim_vel_ned_mps: np.ndarray
+    meas_vel_ned_mps: np.ndarray
+
+
+def _flown_windows(
+    sim_config: SimConfig, logs: Sequence[FlightLog], wins: Sequence[Window]
+) -> Iterator[_Flown]:
+    """Each of ``wins`` flown free from its anchor row, log by log and in row order (the
+    anchored follower running along each airborne run, as the module docstring says)."""
     template = sim_anchor.hovering_template(sim_config)
-    t_out, sim_out, meas_out, win_out = [], [], [], []
     for i, log in enumerate(logs):
         a = LogArrays.of(log)
         mine = {w.anchor: (k, w) for k, w in enumerate(wins) if w.log_index == i}
@@ -135,18 +178,14 @@ def replay(
                 if j in mine:
                     k, w = mine[j]
                     free = sim_anchor.fresh_copy(follower)
+                    sim = []
                     for r in range(w.anchor, w.stop):
                         if r > w.anchor:
                             free.set_velocity_setpoint(a.setpoint[r])
-                        state = free.step(a.t[r + 1] - a.t[r])
-                        t_out.append(a.t[r + 1])
-                        sim_out.append(state.vel_ned_mps)
-                        meas_out.append(a.state[r + 1, 3:6])
-                        win_out.append(k)
+                        sim.append(free.step(a.t[r + 1] - a.t[r]).vel_ned_mps)
+                    rows = slice(w.anchor + 1, w.stop + 1)
+                    yield _Flown(k, a.t[rows], np.array(sim), a.state[rows, 3:6])
                 follower.advance(a.t[j + 1] - a.t[j])
-    if not t_out:
-        return ReplayResult(np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0, int))
-    return ReplayResult(np.array(t_out), np.array(sim_out), np.array(meas_out), np.array(win_out))
 
 
 class LogArrays:

@@ -80,7 +80,8 @@ measurement error models. Journal of the American Statistical Association 89 (42
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import math
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -88,7 +89,7 @@ from scipy.optimize import minimize_scalar
 
 from diagnosis import sim_anchor
 from diagnosis.cause import Cause
-from diagnosis.command_path import search_grid, with_cause
+from diagnosis.command_path import grid_order, search_grid, with_cause
 from diagnosis.forces import GRAVITY_MPS2
 from diagnosis.noise_floor import NOISE_VAR_REL_SE_SQRT_N, block_bootstrap, white_noise_std
 from diagnosis.replay import LEAD_IN_S, LogArrays, Window, airborne_runs
@@ -205,8 +206,55 @@ def track_thrust(
     """The follower's thrust one row after each row of ``wins`` (rows [anchor, stop - 1));
     ``extra_vel_noise_mps`` (3,): std of white noise added to the anchored velocity (seeded by
     ``replicate``: the same draw for every config)."""
+    return _tracking(list(_tracked_rows(config, logs, wins, extra_vel_noise_mps, replicate)))
+
+
+def thrust_mse(
+    config: SimConfig,
+    logs: Sequence[FlightLog],
+    wins: Sequence[Window],
+    extra_vel_noise_mps: np.ndarray | None = None,
+    above: float = math.inf,
+) -> float:
+    """``track_thrust(config, logs, wins, extra_vel_noise_mps).mse()`` [N^2], or ``inf`` as
+    soon as the rows tracked so far show it above ``above``: a run's squared deviations from
+    its own mean, summed over the rows tracked so far, never exceed those of the whole run, so
+    their sum over the runs so far, over all rows to come, is a lower bound of the mean square
+    that only grows (a search that needs only the least of several configs stops tracking one
+    that can no longer be it)."""
+    n_rows = sum(max(w.stop - 1 - w.anchor, 0) for w in wins)
+    rows = []
+    done_n2, run, count, mean, dev_n2 = 0.0, None, 0, 0.0, 0.0
+    for row in _tracked_rows(config, logs, wins, extra_vel_noise_mps, 0):
+        if row[3] != run:  # a new run: Welford's running mean and squared deviations restart
+            done_n2, run, count, mean, dev_n2 = done_n2 + dev_n2, row[3], 0, 0.0, 0.0
+        err = row[0] - row[1]
+        count += 1
+        step = err - mean
+        mean += step / count
+        dev_n2 += step * (err - mean)
+        if (done_n2 + dev_n2) / n_rows > above:
+            return math.inf
+        rows.append(row)
+    return _tracking(rows).mse()
+
+
+def _tracking(rows: list[tuple[float, float, int, int]]) -> ThrustTracking:
+    """The :class:`ThrustTracking` of rows (sim thrust, logged thrust, window, run)."""
+    sim, meas, win, run = zip(*rows, strict=True) if rows else ((), (), (), ())
+    return ThrustTracking(np.array(sim), np.array(meas), np.array(win, int), np.array(run, int))
+
+
+def _tracked_rows(
+    config: SimConfig,
+    logs: Sequence[FlightLog],
+    wins: Sequence[Window],
+    extra_vel_noise_mps: np.ndarray | None,
+    replicate: int,
+) -> Iterator[tuple[float, float, int, int]]:
+    """(simulated thrust [N], logged thrust [N], window, run) of each row :func:`track_thrust`
+    compares, in row order."""
     template = sim_anchor.hovering_template(config)
-    sim, meas, win, run = [], [], [], []
     for i, log in enumerate(logs):
         row_window = np.full(log.n_rows, -1)
         for k, w in enumerate(wins):
@@ -231,11 +279,7 @@ def track_thrust(
                 follower.anchor(a.anchor(j, lead), integral="match_thrust" if match else "keep")
                 state = follower.step(a.t[j + 1] - a.t[j])
                 if row_window[j] >= 0:
-                    sim.append(state.thrust_n)
-                    meas.append(a.thrust[j + 1])
-                    win.append(row_window[j])
-                    run.append(1000 * i + k)
-    return ThrustTracking(np.array(sim), np.array(meas), np.array(win, int), np.array(run, int))
+                    yield state.thrust_n, a.thrust[j + 1], row_window[j], 1000 * i + k
 
 
 def thrust_noise_var(logs: Sequence[FlightLog]) -> float:
@@ -264,8 +308,8 @@ def select_thrust_response(
     and the others are fitted again on top of it. (named, not named)."""
     named: list[Cause] = []
     left = list(names)
+    before = HeldOut.of(config, logs, test, vel_noise_mps)
     while left:
-        before = HeldOut.of(config, logs, test, vel_noise_mps)
         fits = [
             fit_thrust_response(n, config, logs, train, test, vel_noise_mps, before) for n in left
         ]
@@ -276,6 +320,7 @@ def select_thrust_response(
         best, cause = min(ok, key=lambda fc: fc[0].after.mse())
         named.append(cause)
         config = with_cause(config, best.name, best.value)
+        before = best.after  # the held-out errors of that config: the next round's start
         left.remove(best.name)
     return named, []
 
@@ -296,13 +341,20 @@ def fit_thrust_response(
     param, grid = search_grid(name)
     extra = np.asarray(vel_noise_mps, float)
 
-    def train_mse(value: float) -> float:
+    def train_mse(value: float, above: float = math.inf) -> float:
+        """The SIMEX training error ``2 once - twice`` [N^2] (``inf`` once above ``above``)."""
         cfg = with_cause(config, name, value)
-        once = track_thrust(cfg, logs, train).mse()
-        twice = track_thrust(cfg, logs, train, extra).mse()
-        return 2.0 * once - twice
+        twice = thrust_mse(cfg, logs, train, extra)
+        return 2.0 * thrust_mse(cfg, logs, train, above=(above + twice) / 2.0) - twice
 
-    scores = [train_mse(v) for v in grid]
+    # Every grid value's error, ``inf`` for those that cannot be the least (as in
+    # ``command_path._grid_rmse``, whose order they are tried in): the least and where it is
+    # are those of the full errors; a margin of 1e-9 keeps values within rounding in full.
+    scores = np.full(len(grid), np.inf)
+    least = math.inf
+    for k in grid_order(name):
+        scores[k] = train_mse(grid[k], least + 1e-9 * abs(least))
+        least = min(least, scores[k])
     k = int(np.argmin(scores))
     lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]
     best, best_score = float(grid[k]), scores[k]
