@@ -36,7 +36,7 @@ def cpu_hog():
         hog.wait()
 
 
-@pytest.mark.slow
+@pytest.mark.slow(expected_s=180)
 def test_demo_flies_nominal_learns_and_flies_augmented_over_mavsdk(tmp_path, capsys, cpu_hog):
     mission = tmp_path / "demo_short.toml"
     mission.write_text(SHORT_MISSION)
