@@ -5,7 +5,9 @@ replace, over the horizon the NMPC plans on (N x dt, 2 s for [Kulathunga23]'s 20
 From every ``stride``-th row k of a clean segment of a held-out log, each model is rolled out
 open loop under the *logged* commands u(k..k+H-1), starting from the measured state at k
 (one RK4 step per log row, of that row's dt, residual g(z) evaluated at every stage as in the
-NMPC), and the predicted position is compared with the measured one:
+NMPC; an autopilot integrator state starts as the companion plans from it: as rebuilt from the
+log with a residual, 0 without one, companion.nmpc_planner), and the predicted position is
+compared with the measured one:
 
     e = sqrt(mean over starts k and steps h = 1..H of |p_hat(k+h) - p(k+h)|^2)     [m]
 
@@ -29,7 +31,7 @@ from gp.errors import DatasetError
 from gp.features import feature_definition
 from gp.log_signals import model_input, model_state
 from gp.model_io import ResidualModel
-from planners.nominal_models import NominalModel
+from planners.nominal_models import INTEGRATOR_STATES, NominalModel
 from planners.residual import ResidualTerm
 
 _POS = ("pos_n_m", "pos_e_m", "pos_d_m")
@@ -50,6 +52,16 @@ class Predictor:
     def of_residual_model(cls, residual: ResidualModel, name: str = "learned") -> Predictor:
         """The residual model on the nominal model it was trained against."""
         return cls(name, residual.features.nominal(), residual)
+
+    def start_states(self, x: np.ndarray) -> np.ndarray:
+        """The states (nx, n) rollouts start from, given the states rebuilt from a log (nx, n):
+        without a residual, an integrator state is 0 (offset-free, as the companion plans)."""
+        if self.residual is not None:
+            return x
+        rows = [i for i, c in enumerate(self.model.state_names) if c in INTEGRATOR_STATES]
+        x = np.array(x, dtype=float)
+        x[rows] = 0.0
+        return x
 
     def step_function(self) -> ca.Function:
         """(x, u, dt [s]) -> x_next, one RK4 step with the residual's mean, if any."""
@@ -134,7 +146,7 @@ def horizon_prediction_rmse(
             k0 = np.arange(0, seg.n_rows - steps, stride)
             if steps < 1 or k0.size == 0:
                 continue
-            x = model_state(predictor.model, seg)[k0].T
+            x = predictor.start_states(model_state(predictor.model, seg)[k0].T)
             u_all = model_input(predictor.model, seg)
             pos = seg.stack(*_POS)
             step = predictor.step_function().map(k0.size)

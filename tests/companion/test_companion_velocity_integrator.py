@@ -1,14 +1,19 @@
 """The companion keeps the autopilot's velocity integrator itself (px4_velocity_pi): zero at
-the first plan, I += Ki (u_sent - v) dt after, restarted after a gap; the plan starts from it;
-the gains come from the parameters the autopilot reports."""
+the first plan, I += Ki (u_sent - v) dt after, restarted after a gap; with a learned residual
+the plan starts from it, without one from 0 (offset-free: the integrator's value is held as the
+disturbance it cancels); the gains come from the parameters the autopilot reports."""
 
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from companion.autopilot_gains import VELOCITY_LOOP_PARAMS, velocity_loop_gains
 from companion.inprocess_link import InProcessLink
 from companion.nmpc_planner import INTEGRATOR_GAP_S, CompanionNmpc, NmpcSettings
+from gp.exact_gp import ExactGP
+from gp.features import feature_definition
+from gp.model_io import ResidualModel
 from planners.bspline import BSplineReference
 from planners.nominal_models import INTEGRATOR_STATES
 from planners.reference import PlannerState
@@ -16,15 +21,26 @@ from planners.reference import PlannerState
 SEED = 20261123
 
 
-def test_integrator_is_integrated_from_the_commands_and_measured_velocity():
+def _residual_on(params: dict[str, float], rng: np.random.Generator) -> ResidualModel:
+    """A small GP residual on px4_velocity_pi with ``params``, on random data (its values do
+    not matter here, only that the planner is augmented)."""
+    features = feature_definition("velocity", "px4_velocity_pi", **params)
+    x = rng.normal(0.0, 1.0, (30, features.n_features))
+    y = 0.01 * rng.normal(0.0, 1.0, (30, len(features.outputs)))
+    gp = ExactGP(noise_variance=1e-4, optimize=False).fit(x, y)
+    return ResidualModel.from_estimator(gp, features)
+
+
+@pytest.mark.parametrize("learned", [False, True], ids=["offset_free", "learned"])
+def test_integrator_is_integrated_from_the_commands_and_measured_velocity(learned):
     rng = np.random.default_rng(SEED)
     ki_xy, ki_z = rng.uniform(0.2, 2.0), rng.uniform(0.2, 3.0)
-    params = (("vel_p_xy", rng.uniform(1.2, 3.0)), ("vel_i_xy", ki_xy), ("vel_i_z", ki_z))
+    params = {"vel_p_xy": rng.uniform(1.2, 3.0), "vel_i_xy": ki_xy, "vel_i_z": ki_z}
     settings = NmpcSettings(
         speed_limit_mps=3.0, time_budget_s=30.0, nominal_model="px4_velocity_pi",
-        nominal_params=params,
+        nominal_params=tuple(params.items()),
     )  # fmt: skip
-    planner = CompanionNmpc(settings)
+    planner = CompanionNmpc(settings, _residual_on(params, rng) if learned else None)
     ref = BSplineReference(
         np.array([[0.0, 0.0, -3.0], [4.0, 2.0, -3.0], [8.0, 0.0, -3.5], [12.0, -1.0, -3.0]]), 2.0
     )
@@ -40,7 +56,8 @@ def test_integrator_is_integrated_from_the_commands_and_measured_velocity():
         result = planner.plan(PlannerState(rng.normal(0.0, 0.3, 3), vel, 0.0), ref, t_s)
         assert result.ok, result.reason
         np.testing.assert_allclose(planner.velocity_integrator_mps2, expected, atol=1e-12)
-        np.testing.assert_allclose(result.predicted_trajectory[0, rows], expected, atol=1e-12)
+        planned = expected if learned else np.zeros(3)
+        np.testing.assert_allclose(result.predicted_trajectory[0, rows], planned, atol=1e-12)
         prev = (t_s, vel, np.asarray(result.command[:3], dtype=float))
         t_s += rng.uniform(0.015, 0.03)
     assert np.max(np.abs(expected)) > 0.05  # the drawn errors moved it

@@ -1,6 +1,7 @@
 """px4_velocity_pi's integrator rebuilt from a flight log is the one the companion held in
 flight; fit-gp's pipeline fits the PI structure's residual with the gains recorded with the
-log, and refuses in one line a log without them."""
+log, and refuses in one line a log without them; the structure alone predicts the flight
+offset-free (the integrator held as the disturbance it cancels)."""
 
 from __future__ import annotations
 
@@ -20,6 +21,7 @@ from gp.errors import DatasetError
 from gp.features import feature_definition
 from gp.log_signals import model_state
 from gp.model_io import read_model_header
+from gp.prediction_check import Predictor, horizon_prediction_rmse
 from gp.training import TrainingConfig, resolve_features, train_residual_model
 from planners.bspline import BSplineReference
 from planners.nominal_models import INTEGRATOR_STATES
@@ -124,3 +126,22 @@ def test_fit_gp_cli_fits_the_pi_structure_from_a_log_file(pi_flight, tmp_path):
     doc = read_model_header(tmp_path / "pi_model.npz")
     nominal = doc["feature_definition"]["nominal_model"]
     assert nominal["name"] == "px4_velocity_pi" and nominal["params"] == pytest.approx(gains)
+
+
+class _IntegratorAsAcceleration(Predictor):
+    """The PI structure started from the integrator rebuilt from the log, as if it were an
+    acceleration the vehicle has (the rule offset-free planning replaces)."""
+
+    def start_states(self, x: np.ndarray) -> np.ndarray:
+        return x
+
+
+@pytest.mark.slow
+def test_offset_free_pi_predicts_the_wind_flight_better_than_reading_the_integrator(pi_flight):
+    log, _, gains = pi_flight
+    model = feature_definition("velocity", "px4_velocity_pi", **gains).nominal()
+    offset_free, _ = horizon_prediction_rmse(Predictor("pi", model), [log], 2.0, ("OFFBOARD",))
+    raw, _ = horizon_prediction_rmse(
+        _IntegratorAsAcceleration("raw", model), [log], 2.0, ("OFFBOARD",)
+    )
+    assert offset_free < 0.8 * raw
