@@ -193,6 +193,7 @@ def _write_log(
             "landed_error_m": outcome.landed_error_m,
             "loop_ticks": outcome.ticks,
             "loop_deadline_misses": outcome.deadline_misses,
+            **outcome.autopilot_metadata,
         }
     path = live.finish(recorder.to_log(metadata))
     progress(f"flight log: {path} ({len(recorder)} rows)")

@@ -18,12 +18,13 @@ abandoned"), as a PX4 offboard application must. The outcome is returned, never 
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
 from typing import Literal
 
 import numpy as np
 
+from companion.autopilot_gains import velocity_loop_metadata
 from companion.control_loop import LoopCounters, Tick, run_fixed_rate
 from companion.decision import CommandLimits, HoverPolicy
 from companion.link import ZERO_VELOCITY, CommandOutcome, LandedPhase, Link, LinkError, LinkState
@@ -151,6 +152,8 @@ class FlightOutcome:
         landed_error_m: horizontal distance from the goal after landing [m], or None.
         disarmed: True if the vehicle was seen disarmed at the end.
         ticks, deadline_misses: control loop counts over the whole flight.
+        autopilot_metadata: what the autopilot reported before flying that a flight log
+            keeps (its velocity-loop gains, companion.autopilot_gains; empty when not read).
     """
 
     status: FlightStatus
@@ -160,6 +163,7 @@ class FlightOutcome:
     disarmed: bool
     ticks: int
     deadline_misses: int
+    autopilot_metadata: Mapping[str, object] = field(default_factory=dict)
 
 
 def fly_mission(
@@ -192,6 +196,7 @@ def _fly(
     goal_error_m: float | None = None
     status: FlightStatus = "failed"
     detail = ""
+    autopilot: dict[str, object] = {}
     try:
         link.connect(config.connect_timeout_s)
         progress(f"connected over {link.name}; {describe(link.read_state())}")
@@ -200,6 +205,7 @@ def _fly(
         if problem:
             progress(f"refused: {problem}")
             return FlightOutcome("refused", problem, None, None, False, 0, 0)
+        autopilot = velocity_loop_metadata(link)
         command_until_accepted(link, link.arm, config.arm_timeout_s, "arm")
         airborne = True
         progress("armed; taking off")
@@ -274,6 +280,7 @@ def _fly(
         disarmed=disarmed,
         ticks=counters.ticks,
         deadline_misses=counters.deadline_misses,
+        autopilot_metadata=autopilot,
     )
 
 

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from companion.autopilot_gains import velocity_loop_gains
 from companion.flight_recorder import FlightRecorder
 from companion.inprocess_link import InProcessLink
 from companion.link import VelocityCommand
@@ -120,6 +121,9 @@ def test_cli_flies_in_process_and_writes_a_readable_log(tmp_path: Path, capsys) 
     assert log.metadata["link"] == "inprocess"
     assert log.metadata["outcome"] == "completed"
     assert log.metadata["rate_hz"] == 30.0
+    # the autopilot's velocity-loop gains, which fit-gp's px4_velocity_pi structure needs
+    reported = dict(velocity_loop_gains(InProcessLink.from_vehicle("iris", 0)))
+    assert log.metadata["velocity_loop_gains"] == reported
     np.testing.assert_allclose(np.diff(log["t_s"]), 1.0 / 30.0, atol=0.003)
     assert "completed" in err
 
