@@ -13,7 +13,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from companion.app import LOCKSTEP_PLAN_BUDGET_S
-from companion.autopilot_gains import velocity_loop_gains, velocity_loop_metadata
+from companion.autopilot_gains import velocity_loop_gains
 from companion.control_loop import Tick
 from companion.flight_recorder import FlightRecorder
 from companion.inprocess_link import InProcessLink
@@ -107,7 +107,7 @@ def fly(
         "rate_hz": rate_hz,
         "outcome": outcome.status,
         **link.metadata(),
-        **velocity_loop_metadata(link),
+        **outcome.autopilot_metadata,
     }
     return FlightRecord(
         spec, planner.augmented, recorder.to_log(metadata), outcome, np.asarray(solve_times)
