@@ -91,10 +91,13 @@ wind_field refit (`--seed 1`) that flew 0.156 m on a training seed where its pre
         the autopilot reports, recorded with every flight) the GP learns the jet's drag
         relative to the hover at the start as a function of position: 0.038 m low_speed,
         0.042 m cluster (`--seed 1`: 0.044 / 0.042 m; `--seed 2`: 0.036 / 0.040 m) against
-        the lag alone's 0.079 m (0.076, 0.063 m), 1.6-2.1x; but the PI structure alone holds
-        the start's drag everywhere and flies 0.32 m (0.30, 0.18 m), worse than nominal, so
-        the study's structure-alone arm and the closed-loop check's floor are weak there. On
-        agile it is no structure: PI + GP 0.053 m against the lag alone's 0.043 m.
+        the lag alone's 0.079 m (0.076, 0.063 m), 1.6-2.1x. The PI structure alone flies
+        offset-free (companion.nmpc_planner: the integrator at each plan's start held as the
+        disturbance it cancels): 0.080 m (0.081, 0.068 m), like the lag and 1.9-2.2x better
+        than nominal, so PI + GP is 1.85-2.07x over its own structure (read as an
+        acceleration, the integrator holding the start's drag had made the structure alone
+        fly 0.32 m, worse than nominal). On agile it is no structure: PI + GP 0.053 m against
+        the lag alone's 0.043 m.
 """
 
 from __future__ import annotations
