@@ -1,0 +1,122 @@
+"""The replay and the simulator give the same floats as the recorded reference, bit for bit.
+
+A noisy log of a vehicle with effects its config does not know (wind, rotor drag, gusts, a
+command delay) is replayed with the plain config and with one carrying a command delay (the
+delayed setpoints in flight), through :func:`replay` and :func:`replay_sse`; and a vehicle is
+flown through takeoff, hold, OFFBOARD with a command delay, LAND and the disarm after it. The
+reference (``tests/fixtures/replay_reference.npz``) was recorded with the same code before its
+per-step Python was cut down: the numbers must not move by one bit on this platform. Record it
+again only for an intended change of the numbers: ``np.savez(REFERENCE, **computed())``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from diagnosis.replay import replay, replay_sse, windows
+from flightlog.schema import FlightLog, FlightLogRecorder
+from vehicle_sim import FlightMode, Simulator, VelocitySetpoint, load_sim_config
+from vehicle_sim.sensor_noise import add_sensor_noise, draw_sensor_noise
+
+REFERENCE = Path(__file__).resolve().parents[1] / "fixtures" / "replay_reference.npz"
+HIDDEN = {
+    "wind": {"vel_ned_mps": [1.5, -1.0, 0.0]},
+    "rotor_drag": {"k_n_per_mps": [0.35, 0.3, 0.1]},
+    "gusts": {"intensity_mps": 0.3},
+    "command_delay": {"delay_s": 0.08},
+}
+RATE_HZ = 25.0
+
+
+def excited_log(duration_s: float = 14.0) -> FlightLog:
+    """A log of an Iris with ``HIDDEN`` effects flying OFFBOARD velocity steps and a sine, with
+    a yaw rate, recorded at ``RATE_HZ``."""
+    sim = Simulator(load_sim_config("iris", HIDDEN), seed=5)
+    sim.arm()
+    sim.takeoff(4.0)
+    while sim.state.mode is not FlightMode.HOLD:
+        sim.step(0.5)
+    sim.set_velocity_setpoint(VelocitySetpoint((0.0, 0.0, 0.0)))
+    sim.step(0.1)
+    sim.set_mode(FlightMode.OFFBOARD)
+    recorder = FlightLogRecorder({**sim.log_metadata(), "rate_hz": RATE_HZ})
+    t0_s = sim.t_s
+    for k in range(round(duration_s * RATE_HZ)):
+        t = k / RATE_HZ
+        step = 2.0 if (t // 3.0) % 2 else -1.0
+        cmd = VelocitySetpoint((step, 1.2 * np.sin(1.3 * t), 0.4 * np.cos(0.9 * t)), 0.3)
+        sim.set_velocity_setpoint(cmd)
+        row = sim.log_row(cmd)
+        row["t_s"] -= t0_s
+        recorder.append(row)
+        sim.step(1.0 / RATE_HZ)
+    return recorder.to_log()
+
+
+def flown_states() -> np.ndarray:
+    """(m, 24) time, position, velocity, acceleration, quaternion, rates, thrust, motors, mode
+    and armed flag of a vehicle with a command delay, every 0.1 s from takeoff to disarm."""
+    sim = Simulator(load_sim_config("iris", {"command_delay": {"delay_s": 0.1}}), seed=2)
+    rows = []
+
+    def record(seconds: float, cmd: VelocitySetpoint | None = None) -> None:
+        for _ in range(round(seconds / 0.1)):
+            if cmd is not None:
+                sim.set_velocity_setpoint(cmd)
+            s = sim.step(0.1)
+            rows.append(
+                np.r_[
+                    s.t_s,
+                    s.pos_ned_m,
+                    s.vel_ned_mps,
+                    s.acc_ned_mps2,
+                    s.q_wxyz,
+                    s.rates_frd_radps,
+                    s.thrust_n,
+                    s.motor_speeds_norm,
+                    s.mode.value,
+                    float(s.armed),
+                ]  # fmt: skip
+            )
+
+    sim.arm()
+    sim.takeoff(3.0)
+    record(6.0)
+    record(0.2, VelocitySetpoint((0.0, 0.0, 0.0)))
+    sim.set_mode(FlightMode.OFFBOARD)
+    record(3.0, VelocitySetpoint((1.5, -0.5, -0.3), 0.2))
+    sim.set_mode(FlightMode.LAND)
+    record(9.0)
+    return np.array(rows)
+
+
+def computed() -> dict[str, np.ndarray]:
+    """The figures compared with the reference, by name."""
+    noisy = add_sensor_noise(excited_log(), draw_sensor_noise(np.random.default_rng(3)), 3)
+    wins = windows([noisy], window_s=1.5)
+    out = {}
+    for name, config in (
+        ("plain", load_sim_config("iris")),
+        ("delayed", load_sim_config("iris", {"command_delay": {"delay_s": 0.08}})),
+    ):
+        result = replay(config, [noisy], wins)
+        out[f"{name}_t_s"] = result.t_s
+        out[f"{name}_sim_vel_ned_mps"] = result.sim_vel_ned_mps
+        out[f"{name}_meas_vel_ned_mps"] = result.meas_vel_ned_mps
+        out[f"{name}_sse"] = np.array(replay_sse(config, [noisy], wins, np.inf))
+    out["flown_states"] = flown_states()
+    return out
+
+
+def test_replay_and_simulator_give_the_reference_floats_bit_for_bit():
+    reference = np.load(REFERENCE)
+    got = computed()
+    assert set(got) == set(reference.files)
+    assert len(got["plain_t_s"]) > 200  # windows were flown
+    assert got["flown_states"][-1, -1] == 0.0  # the flight ended landed and disarmed
+    for name, value in got.items():
+        ref = reference[name]
+        diff = np.max(np.abs(value - ref)) if value.shape == ref.shape else "shape"
+        assert value.shape == ref.shape and np.array_equal(value, ref), (name, diff)
