@@ -275,7 +275,8 @@ class Commander:
         warnings, trigger = self.failsafes.check(
             t, self.armed and not self._landed, battery_remaining
         )
-        self.events += [(SEVERITY_CRITICAL, text) for text in warnings]
+        if warnings:
+            self.events += [(SEVERITY_CRITICAL, text) for text in warnings]
         if trigger is not None:
             self._trigger(trigger, t, pos_ned_m, yaw_rad)
         if self._pending is not None and t >= self._pending[1] - 1e-9:
@@ -369,14 +370,11 @@ class Commander:
         if self._touchdown_t is not None and land_t > 0 and t - self._touchdown_t >= land_t - eps:
             self._disarm("Disarmed after landing", SEVERITY_INFO)
             return
-        target_alt_m = -self._hold_pos[2]
-        accept_m = min(TAKEOFF_ACCEPT_M, 0.5 * target_alt_m)
-        climbed = not contact and -pos_ned_m[2] >= target_alt_m - accept_m
         if self.mode is FlightMode.RTL:
             self._update_rtl(pos_ned_m)
         if self.mode is FlightMode.MISSION:
             self._update_mission(t, pos_ned_m, yaw_rad)
-        if self.mode is FlightMode.TAKEOFF and climbed:
+        if self.mode is FlightMode.TAKEOFF and self._climbed(pos_ned_m, contact):
             self._set_mode(FlightMode.HOLD)
             self.events.append((SEVERITY_INFO, "Takeoff complete, holding"))
         if self.mode is FlightMode.OFFBOARD and not self._setpoint_fresh(t):
@@ -466,6 +464,12 @@ class Commander:
         return self._sp_params
 
     # --- helpers ------------------------------------------------------------------------------
+    def _climbed(self, pos_ned_m: np.ndarray, contact: bool) -> bool:
+        """Whether a takeoff has reached its target altitude (within TAKEOFF_ACCEPT_M)."""
+        target_alt_m = -self._hold_pos[2]
+        accept_m = min(TAKEOFF_ACCEPT_M, 0.5 * target_alt_m)
+        return not contact and -pos_ned_m[2] >= target_alt_m - accept_m
+
     def _setpoint_fresh(self, t: float) -> bool:
         return self._last_sp_t is not None and t - self._last_sp_t < self.params.get(
             "COM_OF_LOSS_T"

@@ -28,7 +28,13 @@ from vehicle_sim.config import GRAVITY_MPS2, SimConfig
 from vehicle_sim.mission_plan import MissionItem
 from vehicle_sim.params import Px4Params
 from vehicle_sim.truth_log import truth_row
-from vehicle_sim.vehicle_types import FlightMode, VehicleState, VelocitySetpoint, check_setpoint
+from vehicle_sim.vehicle_types import (
+    FlightMode,
+    LandedState,
+    VehicleState,
+    VelocitySetpoint,
+    check_setpoint,
+)
 from vehicle_sim.world_contact import (
     CONTACT_CHECK_STEPS,
     DEFAULT_VEHICLE_RADIUS_M,
@@ -352,11 +358,24 @@ class Simulator:
             raise ValueError(f"velocity integral {value_mps2!r} must be 3 finite numbers [m/s^2]")
         self._cs[fc.CS_VEL_INT : fc.CS_VEL_INT + 3] = value
 
+    # parts of :attr:`state` without building it, for loops that read only them (a replay)
     @property
     def vel_ned_mps(self) -> np.ndarray:
-        """(3,) the true velocity NED now [m/s] (a copy): ``state.vel_ned_mps`` without building
-        the whole state, for loops that read only the velocity, e.g. a replay's free flight."""
+        """(3,) the true velocity NED now [m/s] (a copy), as ``state.vel_ned_mps``."""
         return self._plant.x[ph.VEL : ph.VEL + 3].copy()
+
+    @property
+    def thrust_n(self) -> float:
+        """The total rotor thrust now [N], as ``state.thrust_n``."""
+        return float(self._plant.aux[ph.AUX_THRUST_NOM])
+
+    @property
+    def landed_state(self) -> LandedState:
+        """The flight controller's landed state now, as ``state.landed_state``."""
+        x = self._plant.x
+        return self._commander.landed_state(
+            self._plant.aux[ph.AUX_CONTACT] > 0.5, x[ph.VEL + 2] < -0.1
+        )
 
     # --- state and logging ----------------------------------------------------------------------
     @property
@@ -365,22 +384,21 @@ class Simulator:
         backend what the nominal rotor model gives for the current rotor speeds (what a vehicle
         with RPM telemetry would report), on "jsbsim" JSBSim's propeller thrust."""
         x, aux = self._plant.x, self._plant.aux
-        contact = aux[ph.AUX_CONTACT] > 0.5
         v = self.config.vehicle
         discharge = x[ph.DISCHARGE]
         return VehicleState(
             t_s=self.t_s,
             pos_ned_m=x[ph.POS : ph.POS + 3].copy(),
-            vel_ned_mps=x[ph.VEL : ph.VEL + 3].copy(),
+            vel_ned_mps=self.vel_ned_mps,
             acc_ned_mps2=aux[ph.AUX_ACC : ph.AUX_ACC + 3].copy(),
             q_wxyz=x[ph.QUAT : ph.QUAT + 4].copy(),
             rates_frd_radps=x[ph.RATES : ph.RATES + 3].copy(),
-            thrust_n=float(aux[ph.AUX_THRUST_NOM]),
+            thrust_n=self.thrust_n,
             motor_speeds_norm=x[ph.MOTORS : ph.MOTORS + 4].copy(),
             battery_v=v.battery_full_v - (v.battery_full_v - v.battery_empty_v) * discharge,
             armed=self._commander.armed,
             mode=self._commander.mode,
-            landed_state=self._commander.landed_state(contact, x[ph.VEL + 2] < -0.1),
+            landed_state=self.landed_state,
             home_ned_m=self._commander.home_ned_m,
         )
 

@@ -2,7 +2,9 @@
 
 A noisy log of a vehicle with effects its config does not know (wind, rotor drag, gusts, a
 command delay) is replayed with the plain config and with one carrying a command delay (the
-delayed setpoints in flight), through :func:`replay` and :func:`replay_sse`; and a vehicle is
+delayed setpoints in flight), through :func:`replay` and :func:`replay_sse`, its thrust tracked
+(:func:`track_thrust`, also with extra velocity noise) and its segments flown in closed loop
+(:func:`closed_loop`, plain against delayed); and a vehicle is
 flown through takeoff, hold, OFFBOARD with a command delay, LAND and the disarm after it. The
 reference (``tests/fixtures/replay_reference.npz``) was recorded with the same code before its
 per-step Python was cut down: the numbers must not move by one bit on this platform. Record it
@@ -15,7 +17,9 @@ from pathlib import Path
 
 import numpy as np
 
+from diagnosis.closed_loop import closed_loop
 from diagnosis.replay import replay, replay_sse, windows
+from diagnosis.thrust_response import track_thrust
 from flightlog.schema import FlightLog, FlightLogRecorder
 from vehicle_sim import FlightMode, Simulator, VelocitySetpoint, load_sim_config
 from vehicle_sim.sensor_noise import add_sensor_noise, draw_sensor_noise
@@ -97,15 +101,20 @@ def computed() -> dict[str, np.ndarray]:
     noisy = add_sensor_noise(excited_log(), draw_sensor_noise(np.random.default_rng(3)), 3)
     wins = windows([noisy], window_s=1.5)
     out = {}
-    for name, config in (
-        ("plain", load_sim_config("iris")),
-        ("delayed", load_sim_config("iris", {"command_delay": {"delay_s": 0.08}})),
-    ):
+    plain = load_sim_config("iris")
+    delayed = load_sim_config("iris", {"command_delay": {"delay_s": 0.08}})
+    for name, config in (("plain", plain), ("delayed", delayed)):
         result = replay(config, [noisy], wins)
         out[f"{name}_t_s"] = result.t_s
         out[f"{name}_sim_vel_ned_mps"] = result.sim_vel_ned_mps
         out[f"{name}_meas_vel_ned_mps"] = result.meas_vel_ned_mps
         out[f"{name}_sse"] = np.array(replay_sse(config, [noisy], wins, np.inf))
+    out["thrust_n"] = track_thrust(plain, [noisy], wins).sim_thrust_n
+    extra = np.array([0.05, 0.05, 0.02])
+    out["thrust_extra_noise_n"] = track_thrust(delayed, [noisy], wins, extra, 1).sim_thrust_n
+    loop = closed_loop(plain, delayed, [noisy], wins)
+    out["closed_loop_baseline_vel_ned_mps"] = loop.baseline_vel_ned_mps
+    out["closed_loop_extended_vel_ned_mps"] = loop.extended_vel_ned_mps
     out["flown_states"] = flown_states()
     return out
 
