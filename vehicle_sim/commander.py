@@ -66,6 +66,9 @@ class ActiveSetpoint:
     yaw_rad: float | None
     pos_ned_m: tuple[float, float, float] | None = None
 
+    def __deepcopy__(self, memo: dict[int, object]) -> ActiveSetpoint:
+        return self  # immutable: tuples of numbers
+
 
 @dataclass(frozen=True)
 class _SetpointParams:
@@ -98,6 +101,9 @@ class _SetpointParams:
             p("MPC_LAND_SPEED"),
             p("MPC_ACC_HOR"),
         )
+
+    def __deepcopy__(self, memo: dict[int, object]) -> _SetpointParams:
+        return self  # immutable: numbers
 
 
 def _earlier(deadline: float, candidate: float) -> float:

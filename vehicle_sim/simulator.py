@@ -6,6 +6,7 @@ same numbers. See the package docstring for the contract.
 
 from __future__ import annotations
 
+import copy
 import math
 from collections import deque
 from collections.abc import Callable
@@ -105,6 +106,17 @@ class Simulator:
         self._range_sensor = RangeSensorSpec()
         self.contacts: list[Contact] = []
 
+    def __deepcopy__(self, memo: dict[int, object]) -> Simulator:
+        """An independent copy (``copy.deepcopy``): it shares the config (immutable) and its
+        generator continues from this one's state (the same gust noise from here on)."""
+        memo[id(self.config)] = self.config
+        bit_generator = copy.copy(self._rng.bit_generator)
+        memo[id(self._rng)] = np.random.Generator(bit_generator)
+        clone = object.__new__(type(self))
+        memo[id(self)] = clone
+        clone.__dict__.update(copy.deepcopy(self.__dict__, memo))
+        return clone
+
     # --- the world ------------------------------------------------------------------------------
     def set_world(
         self,
@@ -167,9 +179,9 @@ class Simulator:
             commander.fill_setpoint(self._sp, aux[ph.AUX_CONTACT] > 0.5, self._active)
             n = remaining
             t_s = self._k * dt
-            deadline = commander.next_deadline(t_s)
-            if deadline < math.inf:
-                n = min(n, max(1, math.ceil(round((deadline - t_s) / dt, 6))))
+            steps_to_deadline = (commander.next_deadline(t_s) - t_s) / dt
+            if steps_to_deadline < n:  # (rounded to 1e-6, steps_to_deadline >= n cuts nothing)
+                n = min(n, max(1, math.ceil(round(steps_to_deadline, 6))))
             if self._pending:
                 n = min(n, max(1, self._pending[0][0] - self._k))
             if self._world is not None:

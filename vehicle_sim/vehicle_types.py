@@ -94,7 +94,10 @@ def check_setpoint(sp: VelocitySetpoint) -> None:
         yaw = None if sp.yaw_rad is None else float(sp.yaw_rad)
     except (TypeError, ValueError):
         raise ValueError(f"setpoint {sp!r} has non-numeric fields; give floats") from None
-    if len(vel) != 3 or not all(abs(v) <= MAX_SETPOINT_SPEED_MPS for v in vel):  # no NaN, inf
+    limit = MAX_SETPOINT_SPEED_MPS  # (abs(NaN) <= limit and abs(inf) <= limit are False)
+    if len(vel) != 3 or not (
+        abs(vel[0]) <= limit and abs(vel[1]) <= limit and abs(vel[2]) <= limit
+    ):
         raise ValueError(
             f"invalid velocity setpoint {sp.vel_mps!r} rejected: need 3 finite values within "
             f"+-{MAX_SETPOINT_SPEED_MPS:g} m/s"
