@@ -5,7 +5,8 @@ command delay) is replayed with the plain config and with one carrying a command
 delayed setpoints in flight), through :func:`replay` and :func:`replay_sse`, its thrust tracked
 (:func:`track_thrust`, also with extra velocity noise) and its segments flown in closed loop
 (:func:`closed_loop`, plain against delayed); and a vehicle is
-flown through takeoff, hold, OFFBOARD with a command delay, LAND and the disarm after it. The
+flown through takeoff, hold, OFFBOARD with a command delay, LAND and the disarm after it, and
+another through a mission (takeoff, a speed change, two waypoints, return to launch) in gusts. The
 reference (``tests/fixtures/replay_reference.npz``) was recorded with the same code before its
 per-step Python was cut down: the numbers must not move by one bit on this platform. Record it
 again only for an intended change of the numbers: ``np.savez(REFERENCE, **computed())``.
@@ -22,6 +23,13 @@ from diagnosis.replay import replay, replay_sse, windows
 from diagnosis.thrust_response import track_thrust
 from flightlog.schema import FlightLog, FlightLogRecorder
 from vehicle_sim import FlightMode, Simulator, VelocitySetpoint, load_sim_config
+from vehicle_sim.mission_plan import (
+    DO_CHANGE_SPEED,
+    NAV_RETURN_TO_LAUNCH,
+    NAV_TAKEOFF,
+    NAV_WAYPOINT,
+    MissionItem,
+)
 from vehicle_sim.sensor_noise import add_sensor_noise, draw_sensor_noise
 
 REFERENCE = Path(__file__).resolve().parents[1] / "fixtures" / "replay_reference.npz"
@@ -96,6 +104,33 @@ def flown_states() -> np.ndarray:
     return np.array(rows)
 
 
+def flown_mission() -> np.ndarray:
+    """(900, 14) time, position, velocity, quaternion, thrust, mode and armed flag every 0.1 s
+    of a mission flown in gusts with a command delay, from arming to the disarm after its RTL."""
+    effects = {"rotor_drag": {}, "gusts": {"intensity_mps": 0.4}, "command_delay": {}}
+    sim = Simulator(load_sim_config("iris", effects), seed=3)
+    sim.set_param("RTL_RETURN_ALT", 8.0)
+    nan3 = (np.nan, np.nan, np.nan)
+    sim.set_mission(
+        (
+            MissionItem(NAV_TAKEOFF, (np.nan, np.nan, -4.0), (0.0, 0.0, 0.0, 0.0)),
+            MissionItem(DO_CHANGE_SPEED, nan3, (1.0, 3.0, -1.0, 0.0)),
+            MissionItem(NAV_WAYPOINT, (10.0, 5.0, -5.0), (1.0, 0.5, 0.0, 0.0)),
+            MissionItem(NAV_WAYPOINT, (0.0, 12.0, -4.0), (0.0, 0.5, 0.0, 0.0)),
+            MissionItem(NAV_RETURN_TO_LAUNCH, nan3, (0.0, 0.0, 0.0, 0.0)),
+        )
+    )
+    sim.arm()
+    sim.set_mode(FlightMode.MISSION)
+    rows = []
+    for _ in range(900):
+        s = sim.step(0.1)
+        rows.append(
+            np.r_[s.t_s, s.pos_ned_m, s.vel_ned_mps, s.q_wxyz, s.thrust_n, s.mode.value, s.armed]
+        )
+    return np.array(rows)
+
+
 def computed() -> dict[str, np.ndarray]:
     """The figures compared with the reference, by name."""
     noisy = add_sensor_noise(excited_log(), draw_sensor_noise(np.random.default_rng(3)), 3)
@@ -116,6 +151,7 @@ def computed() -> dict[str, np.ndarray]:
     out["closed_loop_baseline_vel_ned_mps"] = loop.baseline_vel_ned_mps
     out["closed_loop_extended_vel_ned_mps"] = loop.extended_vel_ned_mps
     out["flown_states"] = flown_states()
+    out["flown_mission"] = flown_mission()
     return out
 
 
@@ -125,6 +161,9 @@ def test_replay_and_simulator_give_the_reference_floats_bit_for_bit():
     assert set(got) == set(reference.files)
     assert len(got["plain_t_s"]) > 200  # windows were flown
     assert got["flown_states"][-1, -1] == 0.0  # the flight ended landed and disarmed
+    modes = set(got["flown_mission"][:, -2])
+    assert {FlightMode.MISSION.value, FlightMode.RTL.value} <= modes, modes
+    assert got["flown_mission"][-1, -1] == 0.0  # ... and so did the mission
     for name, value in got.items():
         ref = reference[name]
         diff = np.max(np.abs(value - ref)) if value.shape == ref.shape else "shape"
