@@ -4,12 +4,12 @@ A noisy log of a vehicle with effects its config does not know (wind, rotor drag
 command delay) is replayed with the plain config and with one carrying a command delay (the
 delayed setpoints in flight), through :func:`replay` and :func:`replay_sse`, its thrust tracked
 (:func:`track_thrust`, also with extra velocity noise) and its segments flown in closed loop
-(:func:`closed_loop`, plain against delayed); and a vehicle is
-flown through takeoff, hold, OFFBOARD with a command delay, LAND and the disarm after it, and
-another through a mission (takeoff, a speed change, two waypoints, return to launch) in gusts. The
-reference (``tests/fixtures/replay_reference.npz``) was recorded with the same code before its
-per-step Python was cut down: the numbers must not move by one bit on this platform. Record it
-again only for an intended change of the numbers: ``np.savez(REFERENCE, **computed())``.
+(:func:`closed_loop`, plain against delayed); a vehicle is flown through takeoff, hold,
+OFFBOARD with a command delay, LAND and the disarm after it, and another through a mission
+(takeoff, a speed change, two waypoints, return to launch) in gusts. The reference
+(``tests/fixtures/replay_reference.npz``) was recorded with the same code before its per-step
+Python was cut down: the numbers must not move by one bit on this platform. Record it again
+only for an intended change of the numbers: ``np.savez(REFERENCE, **computed())``.
 """
 
 from __future__ import annotations
