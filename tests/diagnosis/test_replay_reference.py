@@ -8,8 +8,11 @@ delayed setpoints in flight), through :func:`replay` and :func:`replay_sse`, its
 OFFBOARD with a command delay, LAND and the disarm after it, and another through a mission
 (takeoff, a speed change, two waypoints, return to launch) in gusts. The reference
 (``tests/fixtures/replay_reference.npz``) was recorded with the same code before its per-step
-Python was cut down: the numbers must not move by one bit on this platform. Record it again
-only for an intended change of the numbers: ``np.savez(REFERENCE, **computed())``.
+Python was cut down, and the change kept the numbers bit for bit on the machine that recorded
+it. The test allows a relative 1e-9 (RTOL): NumPy picks its vectorised maths by the CPU's
+features, so another machine may differ in the last bits, but no change of behaviour hides
+below that. Record it again only for an intended change of the numbers:
+``np.savez(REFERENCE, **computed())``.
 """
 
 from __future__ import annotations
@@ -40,6 +43,7 @@ HIDDEN = {
     "command_delay": {"delay_s": 0.08},
 }
 RATE_HZ = 25.0
+RTOL = 1e-9  # relative; absolute floor RTOL too (for values near 0)
 
 
 def excited_log(duration_s: float = 14.0) -> FlightLog:
@@ -155,7 +159,7 @@ def computed() -> dict[str, np.ndarray]:
     return out
 
 
-def test_replay_and_simulator_give_the_reference_floats_bit_for_bit():
+def test_replay_and_simulator_give_the_reference_floats():
     reference = np.load(REFERENCE)
     got = computed()
     assert set(got) == set(reference.files)
@@ -166,5 +170,5 @@ def test_replay_and_simulator_give_the_reference_floats_bit_for_bit():
     assert got["flown_mission"][-1, -1] == 0.0  # ... and so did the mission
     for name, value in got.items():
         ref = reference[name]
-        diff = np.max(np.abs(value - ref)) if value.shape == ref.shape else "shape"
-        assert value.shape == ref.shape and np.array_equal(value, ref), (name, diff)
+        assert value.shape == ref.shape, (name, value.shape, ref.shape)
+        np.testing.assert_allclose(value, ref, rtol=RTOL, atol=RTOL, err_msg=name)
