@@ -151,9 +151,9 @@ def _fly(
             for r in range(start, stop - 1):
                 if r > start:
                     sim.set_velocity_setpoint(a.setpoint[r])
-                state = sim.step(a.t[r + 1] - a.t[r])
-                vel[r + 1 - start] = state.vel_ned_mps
-                if state.landed_state is LandedState.ON_GROUND and alt[r + 1] > REANCHOR_ALT_M:
+                sim.advance(a.t[r + 1] - a.t[r])
+                vel[r + 1 - start] = sim.vel_ned_mps
+                if sim.landed_state is LandedState.ON_GROUND and alt[r + 1] > REANCHOR_ALT_M:
                     lead = bool(a.thrust[r + 1] > 0.0)
                     sim.anchor(a.anchor(r + 1, lead), integral="match_thrust" if lead else "keep")
                     reanchored = True

@@ -182,7 +182,8 @@ def _flown_windows(
                     for r in range(w.anchor, w.stop):
                         if r > w.anchor:
                             free.set_velocity_setpoint(a.setpoint[r])
-                        sim.append(free.step(a.t[r + 1] - a.t[r]).vel_ned_mps)
+                        free.advance(a.t[r + 1] - a.t[r])
+                        sim.append(free.vel_ned_mps)
                     rows = slice(w.anchor + 1, w.stop + 1)
                     yield _Flown(k, a.t[rows], np.array(sim), a.state[rows, 3:6])
                 follower.advance(a.t[j + 1] - a.t[j])

@@ -277,9 +277,9 @@ def _tracked_rows(
                 follower.set_velocity_setpoint(a.setpoint[j])
                 match = lead and a.thrust[j] > 0.0
                 follower.anchor(a.anchor(j, lead), integral="match_thrust" if match else "keep")
-                state = follower.step(a.t[j + 1] - a.t[j])
+                follower.advance(a.t[j + 1] - a.t[j])
                 if row_window[j] >= 0:
-                    yield state.thrust_n, a.thrust[j + 1], row_window[j], 1000 * i + k
+                    yield follower.thrust_n, a.thrust[j + 1], row_window[j], 1000 * i + k
 
 
 def thrust_noise_var(logs: Sequence[FlightLog]) -> float:

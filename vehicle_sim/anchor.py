@@ -8,7 +8,7 @@ and the velocity-loop integral under which the flight control commands a measure
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Literal, get_args
 
 import numpy as np
@@ -36,6 +36,9 @@ class AnchorState:
             nominal rotor model gives it (0 or None: rotor speeds kept).
         acc_ned_mps2: (3,) measured acceleration NED [m/s^2], the input of the velocity loop's
             D term at the next step (None: the simulated acceleration is kept).
+        physics_state: (13,) position, velocity, quaternion and rates as the simulator's state
+            vector holds them (:mod:`vehicle_sim.physics`, entries POS to RATES + 3), built once
+            here, since a replay anchors at the same states again and again.
 
     Raises:
         ValueError: a wrong length, a non-finite value, a negative thrust or a quaternion that
@@ -48,6 +51,7 @@ class AnchorState:
     rates_frd_radps: tuple[float, ...] = (0.0, 0.0, 0.0)
     thrust_n: float | None = None
     acc_ned_mps2: tuple[float, ...] | None = None
+    physics_state: np.ndarray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         for name, size in (
@@ -69,6 +73,10 @@ class AnchorState:
             if not (math.isfinite(thrust_n) and thrust_n >= 0.0):
                 raise ValueError(f"thrust_n {self.thrust_n!r} must be finite and >= 0 N")
             object.__setattr__(self, "thrust_n", thrust_n)
+        measured = (*self.pos_ned_m, *self.vel_ned_mps, *self.q_wxyz, *self.rates_frd_radps)
+        physics_state = np.array(measured)
+        physics_state.setflags(write=False)
+        object.__setattr__(self, "physics_state", physics_state)
 
 
 def check_integral_mode(integral: str, state: AnchorState) -> None:

@@ -36,6 +36,14 @@ RTL_ACCEPT_ALT_M = 0.3  # the RTL climb is done this close to the return altitud
 RTL_ACCEPT_XY_M = 0.5  # the RTL return is done this close above home (then it lands)
 RTL_POLL_S = 0.05  # how often RTL progress is checked
 
+# Commander.fill_setpoint writes the whole setpoint vector in this order
+SETPOINT_LAYOUT = (
+    (fc.SP_POS, fc.SP_VEL, fc.SP_YAW, fc.SP_YAW_RATE, fc.SP_VMAX_XY, fc.SP_VMAX_UP),
+    (fc.SP_VMAX_DN, fc.SP_TILT, fc.SP_IDLE, fc.SP_ARMED, fc.SP_ACC_MAX, fc.N_SP),
+)
+if SETPOINT_LAYOUT != ((0, 3, 6, 7, 8, 9), (10, 11, 12, 13, 14, 15)):
+    raise ImportError(f"setpoint layout {SETPOINT_LAYOUT} changed: update Commander.fill_setpoint")
+
 RtlPhase = Literal["climb", "return"]
 _VERB: dict[str, str] = {"rtl": "returning", "land": "landing", "disarm": "disarming"}
 
@@ -57,6 +65,51 @@ class ActiveSetpoint:
     yaw_rate_radps: float
     yaw_rad: float | None
     pos_ned_m: tuple[float, float, float] | None = None
+
+    def __deepcopy__(self, memo: dict[int, object]) -> ActiveSetpoint:
+        return self  # immutable: tuples of numbers
+
+
+@dataclass(frozen=True)
+class _SetpointParams:
+    """The parameters the setpoint vector is built from (velocities [m/s], tilt [rad],
+    acceleration [m/s^2]), read once per parameter version."""
+
+    tilt_rad: float
+    xy_cruise: float
+    xy_vel_max: float
+    z_v_auto_up: float
+    z_v_auto_dn: float
+    z_vel_max_up: float
+    z_vel_max_dn: float
+    tko_speed: float
+    land_speed: float
+    acc_hor: float
+
+    @classmethod
+    def of(cls, params: Px4Params) -> _SetpointParams:
+        p = params.get
+        return cls(
+            math.radians(p("MPC_TILTMAX_AIR")),
+            p("MPC_XY_CRUISE"),
+            p("MPC_XY_VEL_MAX"),
+            p("MPC_Z_V_AUTO_UP"),
+            p("MPC_Z_V_AUTO_DN"),
+            p("MPC_Z_VEL_MAX_UP"),
+            p("MPC_Z_VEL_MAX_DN"),
+            p("MPC_TKO_SPEED"),
+            p("MPC_LAND_SPEED"),
+            p("MPC_ACC_HOR"),
+        )
+
+    def __deepcopy__(self, memo: dict[int, object]) -> _SetpointParams:
+        return self  # immutable: numbers
+
+
+def _earlier(deadline: float, candidate: float) -> float:
+    """``candidate`` if it is earlier than ``deadline``, else ``deadline`` (as ``min`` over the
+    deadlines in the order given)."""
+    return candidate if candidate < deadline else deadline
 
 
 def _ok(reason: str = "") -> CommandResult:
@@ -88,6 +141,8 @@ class Commander:
         self.failsafes = FailsafeMonitor(params)
         self._pending: tuple[FailsafeAction, float] | None = None  # action and when it runs
         self.mode_epoch = 0  # increments on every mode change (the simulator resets yaw then)
+        self._sp_params_version = -1  # params.version _sp_params was read at
+        self._sp_params: _SetpointParams | None = None
 
     # --- commands -------------------------------------------------------------------------
     def arm(self, t: float, pos_ned_m: np.ndarray, force: bool = False) -> CommandResult:
@@ -226,7 +281,8 @@ class Commander:
         warnings, trigger = self.failsafes.check(
             t, self.armed and not self._landed, battery_remaining
         )
-        self.events += [(SEVERITY_CRITICAL, text) for text in warnings]
+        if warnings:
+            self.events += [(SEVERITY_CRITICAL, text) for text in warnings]
         if trigger is not None:
             self._trigger(trigger, t, pos_ned_m, yaw_rad)
         if self._pending is not None and t >= self._pending[1] - 1e-9:
@@ -320,14 +376,11 @@ class Commander:
         if self._touchdown_t is not None and land_t > 0 and t - self._touchdown_t >= land_t - eps:
             self._disarm("Disarmed after landing", SEVERITY_INFO)
             return
-        target_alt_m = -self._hold_pos[2]
-        accept_m = min(TAKEOFF_ACCEPT_M, 0.5 * target_alt_m)
-        climbed = not contact and -pos_ned_m[2] >= target_alt_m - accept_m
         if self.mode is FlightMode.RTL:
             self._update_rtl(pos_ned_m)
         if self.mode is FlightMode.MISSION:
             self._update_mission(t, pos_ned_m, yaw_rad)
-        if self.mode is FlightMode.TAKEOFF and climbed:
+        if self.mode is FlightMode.TAKEOFF and self._climbed(pos_ned_m, contact):
             self._set_mode(FlightMode.HOLD)
             self.events.append((SEVERITY_INFO, "Takeoff complete, holding"))
         if self.mode is FlightMode.OFFBOARD and not self._setpoint_fresh(t):
@@ -336,26 +389,29 @@ class Commander:
 
     def next_deadline(self, t: float) -> float:
         """Latest simulated time to which physics may run before :meth:`update` is due."""
-        deadlines = [math.inf]
-        if self.armed:
-            prflt = self.params.get("COM_DISARM_PRFLT")
-            if not self._took_off and prflt > 0:
-                deadlines.append(self._t_armed + prflt)
-            land_t = self.params.get("COM_DISARM_LAND")
-            if self._touchdown_t is not None and land_t > 0:
-                deadlines.append(self._touchdown_t + land_t)
-            if self.mode is FlightMode.TAKEOFF:
-                deadlines.append(t + TAKEOFF_POLL_S)
-            if self.mode in (FlightMode.RTL, FlightMode.MISSION):
-                deadlines.append(t + RTL_POLL_S)
-            if self._pending is not None:
-                deadlines.append(self._pending[1])
-            link_lost_s = self.failsafes.next_check_s(t)
-            if link_lost_s is not None:
-                deadlines.append(link_lost_s + 1e-3)
-            if self.mode is FlightMode.OFFBOARD and self._last_sp_t is not None:
-                deadlines.append(self._last_sp_t + self.params.get("COM_OF_LOSS_T"))
-        return min(deadlines)
+        if not self.armed:
+            return math.inf
+        deadline = math.inf
+        p = self.params.get
+        prflt = p("COM_DISARM_PRFLT")
+        if not self._took_off and prflt > 0:
+            deadline = _earlier(deadline, self._t_armed + prflt)
+        land_t = p("COM_DISARM_LAND")
+        if self._touchdown_t is not None and land_t > 0:
+            deadline = _earlier(deadline, self._touchdown_t + land_t)
+        mode = self.mode
+        if mode is FlightMode.TAKEOFF:
+            deadline = _earlier(deadline, t + TAKEOFF_POLL_S)
+        if mode is FlightMode.RTL or mode is FlightMode.MISSION:
+            deadline = _earlier(deadline, t + RTL_POLL_S)
+        if self._pending is not None:
+            deadline = _earlier(deadline, self._pending[1])
+        link_lost_s = self.failsafes.next_check_s(t)
+        if link_lost_s is not None:
+            deadline = _earlier(deadline, link_lost_s + 1e-3)
+        if mode is FlightMode.OFFBOARD and self._last_sp_t is not None:
+            deadline = _earlier(deadline, self._last_sp_t + p("COM_OF_LOSS_T"))
+        return deadline
 
     def landed_state(self, contact: bool, climbing: bool) -> LandedState:
         if self.armed and self.mode is FlightMode.TAKEOFF and (contact or climbing):
@@ -367,49 +423,59 @@ class Commander:
         return LandedState.IN_AIR
 
     def fill_setpoint(self, sp: np.ndarray, contact: bool, active: ActiveSetpoint | None) -> None:
-        """Write the flight-control setpoint vector for the current mode into ``sp``."""
-        p = self.params.get
-        sp[fc.SP_ARMED] = 1.0 if self.armed else 0.0
-        sp[fc.SP_TILT] = math.radians(p("MPC_TILTMAX_AIR"))
-        sp[fc.SP_VMAX_XY] = p("MPC_XY_CRUISE")
-        sp[fc.SP_VMAX_UP] = p("MPC_Z_V_AUTO_UP")
-        sp[fc.SP_VMAX_DN] = p("MPC_Z_V_AUTO_DN")
-        sp[fc.SP_POS : fc.SP_POS + 3] = self._hold_pos
-        sp[fc.SP_VEL : fc.SP_VEL + 3] = math.nan
-        sp[fc.SP_YAW] = self._hold_yaw
-        sp[fc.SP_YAW_RATE] = 0.0
-        sp[fc.SP_ACC_MAX] = p("MPC_ACC_HOR")
+        """Write the flight-control setpoint vector for the current mode into ``sp`` (all of its
+        N_SP entries in one assignment; called before every stretch of physics)."""
+        p = self._setpoint_params()
+        pos = self._hold_pos
+        pos_n, pos_e, pos_d = pos[0], pos[1], pos[2]
+        vel_n = vel_e = vel_d = math.nan
+        yaw, yaw_rate = self._hold_yaw, 0.0
+        vmax_xy, vmax_up, vmax_dn, acc_max = p.xy_cruise, p.z_v_auto_up, p.z_v_auto_dn, p.acc_hor
         idle = contact
-        if self.mode is FlightMode.TAKEOFF or (
-            self.mode is FlightMode.MISSION and self._mission_takeoff
-        ):
-            sp[fc.SP_VMAX_UP] = p("MPC_TKO_SPEED")
+        mode = self.mode
+        if mode is FlightMode.TAKEOFF or (mode is FlightMode.MISSION and self._mission_takeoff):
+            vmax_up = p.tko_speed
             idle = False
-        elif self.mode is FlightMode.MISSION and self._navigator is not None:
+        elif mode is FlightMode.MISSION and self._navigator is not None:
             speed = self._navigator.speed_mps
             if speed is not None:
-                sp[fc.SP_VMAX_XY] = min(speed, p("MPC_XY_VEL_MAX"))
-        elif self.mode is FlightMode.LAND:
-            sp[fc.SP_VEL + 2] = p("MPC_LAND_SPEED")
-            sp[fc.SP_VMAX_DN] = p("MPC_LAND_SPEED")
-        elif self.mode is FlightMode.OFFBOARD and active is not None:
-            sp[fc.SP_POS : fc.SP_POS + 3] = (
-                math.nan if active.pos_ned_m is None else active.pos_ned_m
-            )
-            sp[fc.SP_VEL : fc.SP_VEL + 3] = active.vel_ned_mps
-            sp[fc.SP_YAW] = math.nan if active.yaw_rad is None else active.yaw_rad
-            sp[fc.SP_YAW_RATE] = 0.0 if active.yaw_rad is not None else active.yaw_rate_radps
-            sp[fc.SP_VMAX_XY] = p("MPC_XY_VEL_MAX")
-            sp[fc.SP_VMAX_UP] = p("MPC_Z_VEL_MAX_UP")
-            sp[fc.SP_VMAX_DN] = p("MPC_Z_VEL_MAX_DN")
-            sp[fc.SP_ACC_MAX] = 0.0
+                vmax_xy = min(speed, p.xy_vel_max)
+        elif mode is FlightMode.LAND:
+            vel_d = vmax_dn = p.land_speed
+        elif mode is FlightMode.OFFBOARD and active is not None:
+            if active.pos_ned_m is None:
+                pos_n = pos_e = pos_d = math.nan
+            else:
+                pos_n, pos_e, pos_d = active.pos_ned_m
+            vel_n, vel_e, vel_d = active.vel_ned_mps
+            yaw = math.nan if active.yaw_rad is None else active.yaw_rad
+            yaw_rate = 0.0 if active.yaw_rad is not None else active.yaw_rate_radps
+            vmax_xy, vmax_up, vmax_dn = p.xy_vel_max, p.z_vel_max_up, p.z_vel_max_dn
+            acc_max = 0.0
             wants_climb = -active.vel_ned_mps[2] >= CLIMB_INTENT_MPS or (
                 active.pos_ned_m is not None and active.pos_ned_m[2] < self._home[2] - LIFT_OFF_M
             )
             idle = contact and not wants_climb
-        sp[fc.SP_IDLE] = 1.0 if idle else 0.0
+        sp[:] = (
+            pos_n, pos_e, pos_d, vel_n, vel_e, vel_d, yaw, yaw_rate,
+            vmax_xy, vmax_up, vmax_dn, p.tilt_rad,
+            1.0 if idle else 0.0, 1.0 if self.armed else 0.0, acc_max,
+        )  # fmt: skip
+
+    def _setpoint_params(self) -> _SetpointParams:
+        """The parameters :meth:`fill_setpoint` reads, read again only after a parameter set."""
+        if self._sp_params_version != self.params.version:
+            self._sp_params = _SetpointParams.of(self.params)
+            self._sp_params_version = self.params.version
+        return self._sp_params
 
     # --- helpers ------------------------------------------------------------------------------
+    def _climbed(self, pos_ned_m: np.ndarray, contact: bool) -> bool:
+        """Whether a takeoff has reached its target altitude (within TAKEOFF_ACCEPT_M)."""
+        target_alt_m = -self._hold_pos[2]
+        accept_m = min(TAKEOFF_ACCEPT_M, 0.5 * target_alt_m)
+        return not contact and -pos_ned_m[2] >= target_alt_m - accept_m
+
     def _setpoint_fresh(self, t: float) -> bool:
         return self._last_sp_t is not None and t - self._last_sp_t < self.params.get(
             "COM_OF_LOSS_T"

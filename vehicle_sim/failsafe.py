@@ -72,8 +72,11 @@ class FailsafeMonitor:
         ):
             self._link_lost = True
             trigger = Trigger(DATALINK_LOSS_ACTIONS[action], "data link lost")
-        thresholds = (p("BAT_LOW_THR"), p("BAT_CRIT_THR"), p("BAT_EMERGEN_THR"))
-        level = sum(battery_remaining < thr for thr in thresholds)
+        level = (
+            (battery_remaining < p("BAT_LOW_THR"))
+            + (battery_remaining < p("BAT_CRIT_THR"))
+            + (battery_remaining < p("BAT_EMERGEN_THR"))
+        )
         if level > self._battery_level:
             self._battery_level = level
             name = ("", "low", "critical", "emergency")[level]

@@ -134,6 +134,14 @@ class Px4Params:
         for name, value in (overrides or {}).items():
             self.set(name, value)
 
+    def __deepcopy__(self, memo: dict[int, object]) -> Px4Params:
+        """An independent copy (``copy.deepcopy``; the values are immutable numbers)."""
+        clone = object.__new__(type(self))
+        clone._values = dict(self._values)
+        clone.version = self.version
+        memo[id(self)] = clone
+        return clone
+
     def names(self) -> tuple[str, ...]:
         """All parameter names in a stable order."""
         return tuple(sorted(self._values))

@@ -6,6 +6,7 @@ same numbers. See the package docstring for the contract.
 
 from __future__ import annotations
 
+import copy
 import math
 from collections import deque
 from collections.abc import Callable
@@ -28,7 +29,13 @@ from vehicle_sim.config import GRAVITY_MPS2, SimConfig
 from vehicle_sim.mission_plan import MissionItem
 from vehicle_sim.params import Px4Params
 from vehicle_sim.truth_log import truth_row
-from vehicle_sim.vehicle_types import FlightMode, VehicleState, VelocitySetpoint, check_setpoint
+from vehicle_sim.vehicle_types import (
+    FlightMode,
+    LandedState,
+    VehicleState,
+    VelocitySetpoint,
+    check_setpoint,
+)
 from vehicle_sim.world_contact import (
     CONTACT_CHECK_STEPS,
     DEFAULT_VEHICLE_RADIUS_M,
@@ -99,6 +106,17 @@ class Simulator:
         self._range_sensor = RangeSensorSpec()
         self.contacts: list[Contact] = []
 
+    def __deepcopy__(self, memo: dict[int, object]) -> Simulator:
+        """An independent copy (``copy.deepcopy``): it shares the config (immutable) and its
+        generator continues from this one's state (the same gust noise from here on)."""
+        memo[id(self.config)] = self.config
+        bit_generator = copy.copy(self._rng.bit_generator)
+        memo[id(self._rng)] = np.random.Generator(bit_generator)
+        clone = object.__new__(type(self))
+        memo[id(self)] = clone
+        clone.__dict__.update(copy.deepcopy(self.__dict__, memo))
+        return clone
+
     # --- the world ------------------------------------------------------------------------------
     def set_world(
         self,
@@ -151,30 +169,32 @@ class Simulator:
         loops that do not read it, e.g. a replay's anchored follower."""
         if not (math.isfinite(duration_s) and duration_s >= 0.0):
             raise ValueError(f"step duration {duration_s!r} s must be finite and >= 0")
-        remaining = round(duration_s / self.physics_dt_s)
         dt = self.physics_dt_s
-        plant = self._plant
+        remaining = round(duration_s / dt)
+        plant, commander, aux = self._plant, self._commander, self._plant.aux
         self._refresh_control_params()
         while remaining > 0:
-            self._release_setpoints()
-            contact = plant.aux[ph.AUX_CONTACT] > 0.5
-            self._commander.fill_setpoint(self._sp, contact, self._active)
+            if self._pending:
+                self._release_setpoints()
+            commander.fill_setpoint(self._sp, aux[ph.AUX_CONTACT] > 0.5, self._active)
             n = remaining
-            deadline = self._commander.next_deadline(self.t_s)
-            if deadline < math.inf:
-                n = min(n, max(1, math.ceil(round((deadline - self.t_s) / dt, 6))))
+            t_s = self._k * dt
+            steps_to_deadline = (commander.next_deadline(t_s) - t_s) / dt
+            if steps_to_deadline < n:  # (rounded to 1e-6, steps_to_deadline >= n cuts nothing)
+                n = min(n, max(1, math.ceil(round(steps_to_deadline, 6))))
             if self._pending:
                 n = min(n, max(1, self._pending[0][0] - self._k))
             if self._world is not None:
                 n = min(n, CONTACT_CHECK_STEPS)
                 before = plant.x[ph.POS : ph.POS + 3].copy()
-            noise = self._noise_rows(n)
+            noise = self._noise_rows(n) if self._gust_on else self._noise
             done = plant.advance(n, dt, self._sp, self._cs, self._cp, self._mix, noise)
             if not 0 < done <= n:
                 raise RuntimeError(f"physics backend did {done} of {n} steps; it must do 1..{n}")
             if self._world is not None:
                 self._check_contact(before, done)
-            self._noise_pos += done if self._gust_on else 0
+            if self._gust_on:
+                self._noise_pos += done
             self._k += done
             remaining -= done
             self._update_commander()
@@ -310,17 +330,16 @@ class Simulator:
                 f"anchor() needs the builtin backend; {type(self._plant).__name__} owns its state"
             )
         x, aux = self._plant.x, self._plant.aux
-        x[ph.POS : ph.POS + 3] = state.pos_ned_m
-        x[ph.VEL : ph.VEL + 3] = state.vel_ned_mps
-        x[ph.QUAT : ph.QUAT + 4] = state.q_wxyz
-        x[ph.RATES : ph.RATES + 3] = state.rates_frd_radps
-        v = self.config.vehicle
-        rotors = x[ph.MOTORS : ph.MOTORS + 4]
-        sim_thrust_n = v.max_rotor_thrust_n * float(np.sum(rotors * rotors))
-        if state.thrust_n and sim_thrust_n > 0.0:
-            rotors *= math.sqrt(state.thrust_n / sim_thrust_n)
-            np.clip(rotors, 0.0, 1.0, out=rotors)
-            aux[ph.AUX_THRUST_NOM] = v.max_rotor_thrust_n * float(np.sum(rotors * rotors))
+        x[ph.POS : ph.RATES + 3] = state.physics_state
+        if state.thrust_n:
+            t_max = self.config.vehicle.max_rotor_thrust_n
+            r0, r1, r2, r3 = x[ph.MOTORS : ph.MOTORS + 4].tolist()
+            sim_thrust_n = t_max * (r0 * r0 + r1 * r1 + r2 * r2 + r3 * r3)
+            if sim_thrust_n > 0.0:
+                scale = math.sqrt(state.thrust_n / sim_thrust_n)
+                r0, r1, r2, r3 = (min(max(r * scale, 0.0), 1.0) for r in (r0, r1, r2, r3))
+                x[ph.MOTORS : ph.MOTORS + 4] = (r0, r1, r2, r3)
+                aux[ph.AUX_THRUST_NOM] = t_max * (r0 * r0 + r1 * r1 + r2 * r2 + r3 * r3)
         if state.acc_ned_mps2 is not None:
             aux[ph.AUX_ACC : ph.AUX_ACC + 3] = state.acc_ned_mps2
         if integral == "reset":
@@ -351,6 +370,25 @@ class Simulator:
             raise ValueError(f"velocity integral {value_mps2!r} must be 3 finite numbers [m/s^2]")
         self._cs[fc.CS_VEL_INT : fc.CS_VEL_INT + 3] = value
 
+    # parts of :attr:`state` without building it, for loops that read only them (a replay)
+    @property
+    def vel_ned_mps(self) -> np.ndarray:
+        """(3,) the true velocity NED now [m/s] (a copy), as ``state.vel_ned_mps``."""
+        return self._plant.x[ph.VEL : ph.VEL + 3].copy()
+
+    @property
+    def thrust_n(self) -> float:
+        """The total rotor thrust now [N], as ``state.thrust_n``."""
+        return float(self._plant.aux[ph.AUX_THRUST_NOM])
+
+    @property
+    def landed_state(self) -> LandedState:
+        """The flight controller's landed state now, as ``state.landed_state``."""
+        x = self._plant.x
+        return self._commander.landed_state(
+            self._plant.aux[ph.AUX_CONTACT] > 0.5, x[ph.VEL + 2] < -0.1
+        )
+
     # --- state and logging ----------------------------------------------------------------------
     @property
     def state(self) -> VehicleState:
@@ -358,22 +396,21 @@ class Simulator:
         backend what the nominal rotor model gives for the current rotor speeds (what a vehicle
         with RPM telemetry would report), on "jsbsim" JSBSim's propeller thrust."""
         x, aux = self._plant.x, self._plant.aux
-        contact = aux[ph.AUX_CONTACT] > 0.5
         v = self.config.vehicle
         discharge = x[ph.DISCHARGE]
         return VehicleState(
             t_s=self.t_s,
             pos_ned_m=x[ph.POS : ph.POS + 3].copy(),
-            vel_ned_mps=x[ph.VEL : ph.VEL + 3].copy(),
+            vel_ned_mps=self.vel_ned_mps,
             acc_ned_mps2=aux[ph.AUX_ACC : ph.AUX_ACC + 3].copy(),
             q_wxyz=x[ph.QUAT : ph.QUAT + 4].copy(),
             rates_frd_radps=x[ph.RATES : ph.RATES + 3].copy(),
-            thrust_n=float(aux[ph.AUX_THRUST_NOM]),
+            thrust_n=self.thrust_n,
             motor_speeds_norm=x[ph.MOTORS : ph.MOTORS + 4].copy(),
             battery_v=v.battery_full_v - (v.battery_full_v - v.battery_empty_v) * discharge,
             armed=self._commander.armed,
             mode=self._commander.mode,
-            landed_state=self._commander.landed_state(contact, x[ph.VEL + 2] < -0.1),
+            landed_state=self.landed_state,
             home_ned_m=self._commander.home_ned_m,
         )
 
@@ -455,7 +492,7 @@ class Simulator:
             self._active = self._to_ned(self._pending.popleft()[1])
 
     def _to_ned(self, sp: VelocitySetpoint) -> ActiveSetpoint:
-        vx, vy, vz = (float(v) for v in sp.vel_mps)
+        vx, vy, vz = map(float, sp.vel_mps)
         if sp.frame == "body":
             yaw = fc.yaw_of(self._plant.x)
             c, s = math.cos(yaw), math.sin(yaw)
@@ -465,8 +502,7 @@ class Simulator:
         return ActiveSetpoint((vx, vy, vz), float(sp.yaw_rate_radps), yaw_rad, pos)
 
     def _noise_rows(self, n: int) -> np.ndarray:
-        if not self._gust_on:
-            return self._noise
+        """The next ``n`` rows (n, 3) of the gusts' white noise (gusts on)."""
         if self._noise_pos + n > len(self._noise):
             rest = self._noise[self._noise_pos :]
             block = self._rng.standard_normal((max(NOISE_BLOCK_ROWS, n), 3))

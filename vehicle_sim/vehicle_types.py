@@ -94,12 +94,15 @@ def check_setpoint(sp: VelocitySetpoint) -> None:
         yaw = None if sp.yaw_rad is None else float(sp.yaw_rad)
     except (TypeError, ValueError):
         raise ValueError(f"setpoint {sp!r} has non-numeric fields; give floats") from None
-    if len(vel) != 3 or not all(math.isfinite(v) and abs(v) <= MAX_SETPOINT_SPEED_MPS for v in vel):
+    limit = MAX_SETPOINT_SPEED_MPS  # (abs(NaN) <= limit and abs(inf) <= limit are False)
+    if len(vel) != 3 or not (
+        abs(vel[0]) <= limit and abs(vel[1]) <= limit and abs(vel[2]) <= limit
+    ):
         raise ValueError(
             f"invalid velocity setpoint {sp.vel_mps!r} rejected: need 3 finite values within "
             f"+-{MAX_SETPOINT_SPEED_MPS:g} m/s"
         )
-    if not (math.isfinite(yaw_rate) and abs(yaw_rate) <= MAX_SETPOINT_YAW_RATE_RADPS):
+    if not abs(yaw_rate) <= MAX_SETPOINT_YAW_RATE_RADPS:
         raise ValueError(
             f"invalid yaw rate setpoint {sp.yaw_rate_radps!r} rejected: need a finite value "
             f"within +-{MAX_SETPOINT_YAW_RATE_RADPS:g} rad/s"
