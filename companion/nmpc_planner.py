@@ -6,13 +6,14 @@ kinematic model (velocity and yaw-rate commands; the default), the first-order v
 companion keeps itself: 0 at the first plan (the settled hover before the reference: the
 model's integrator is relative to the value that holds it), then I += Ki (u - v) dt between
 plans, with the planner's last command and the measured velocity (mean over the interval).
-Without a learned residual the PI model plans offset-free ([Pannocchia03]): the integrator at
-the plan's start is taken to cancel a constant disturbance d (a loop at rest on its
-disturbance, I + d = 0), so d = -I(0) is held over the horizon, which is the model started from
-I(0) = 0; otherwise the model reads the integrator that holds a steady wind as an acceleration
-the vehicle does not have (measured: 1.2-2.0x worse tracking than the kinematic model through
-the wind field). With a learned residual the integrator enters as kept: the residual was fitted
-against it (gp.velocity_integrator) and carries the disturbance.
+When no learned residual flies (no model file, or one whose GP was refused) the PI model plans
+offset-free ([Pannocchia03]): the integrator at the plan's start is taken to cancel a constant
+disturbance d (a loop at rest on its disturbance, I + d = 0), so d = -I(0) is held over the
+horizon, which is the model started from I(0) = 0; otherwise the model reads the integrator
+that holds a steady wind as an acceleration the vehicle does not have (measured: 1.2-2.0x worse
+tracking than the kinematic model through the wind field). When a learned residual flies the
+integrator enters as kept: the residual was fitted against it (gp.velocity_integrator) and
+carries the disturbance.
 Augmented, a residual model file from ``fit-gp`` adds its mean g(z) [m/s^2] as in
 [Kulathunga23], eq. 1; the file names the nominal model and features it was trained on, and
 the planner is built for exactly those. The reference is
@@ -153,6 +154,7 @@ class CompanionNmpc:
         self._planner = NmpcPlanner(
             self.model, config, residual, compile_functions=settings.compile_functions
         )
+        self._gp_flies = residual is not None
         self._one_step = _one_step_function(self.model, residual, settings.period_s)
         self._latency_s = settings.latency_s
         self._advance = None
@@ -235,9 +237,10 @@ class CompanionNmpc:
         return PlannerState(state.pos_ned_m, vel, state.yaw_rad, self._planned_integrator())
 
     def _planned_integrator(self) -> np.ndarray:
-        """The integrator (3,) [m/s^2] the model starts from: as kept with a learned residual,
-        0 without one (offset-free: d = -I held, see the module docstring)."""
-        return self._vel_int.copy() if self.augmented else np.zeros(3)
+        """The integrator (3,) [m/s^2] the model starts from: as kept when a learned residual
+        flies, 0 when none does (no model file, or one whose GP was refused: offset-free,
+        d = -I held, see the module docstring)."""
+        return self._vel_int.copy() if self._gp_flies else np.zeros(3)
 
     def _previous_plan(self, t_s: float, solve_time_s: float) -> PlanResult | None:
         """The newest good plan's input for time ``t_s`` (its row floor((t - t_plan) / dt)),

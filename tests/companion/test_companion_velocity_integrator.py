@@ -1,7 +1,8 @@
 """The companion keeps the autopilot's velocity integrator itself (px4_velocity_pi): zero at
-the first plan, I += Ki (u_sent - v) dt after, restarted after a gap; with a learned residual
-the plan starts from it, without one from 0 (offset-free: the integrator's value is held as the
-disturbance it cancels); the gains come from the parameters the autopilot reports."""
+the first plan, I += Ki (u_sent - v) dt after, restarted after a gap; when a learned residual
+flies the plan starts from it, when none does (no model file, or one whose GP was refused) from
+0 (offset-free: the integrator's value is held as the disturbance it cancels); the gains come
+from the parameters the autopilot reports."""
 
 from __future__ import annotations
 
@@ -21,18 +22,24 @@ from planners.reference import PlannerState
 SEED = 20261123
 
 
-def _residual_on(params: dict[str, float], rng: np.random.Generator) -> ResidualModel:
+def _residual_on(
+    params: dict[str, float], rng: np.random.Generator, gp_refused: bool
+) -> ResidualModel:
     """A small GP residual on px4_velocity_pi with ``params``, on random data (its values do
-    not matter here, only that the planner is augmented)."""
+    not matter here, only whether the planner flies it); ``gp_refused``: its file records that
+    the GP did not beat the structure alone, so the structure flies without it."""
     features = feature_definition("velocity", "px4_velocity_pi", **params)
     x = rng.normal(0.0, 1.0, (30, features.n_features))
     y = 0.01 * rng.normal(0.0, 1.0, (30, len(features.outputs)))
     gp = ExactGP(noise_variance=1e-4, optimize=False).fit(x, y)
-    return ResidualModel.from_estimator(gp, features)
+    training = {"prediction_check_structure": {"passed": False}} if gp_refused else {}
+    return ResidualModel.from_estimator(gp, features, training=training)
 
 
-@pytest.mark.parametrize("learned", [False, True], ids=["offset_free", "learned"])
-def test_integrator_is_integrated_from_the_commands_and_measured_velocity(learned):
+@pytest.mark.parametrize(
+    "model_file", [None, "gp_flies", "gp_refused"], ids=["no_model", "learned", "structure_only"]
+)
+def test_integrator_is_integrated_from_the_commands_and_measured_velocity(model_file):
     rng = np.random.default_rng(SEED)
     ki_xy, ki_z = rng.uniform(0.2, 2.0), rng.uniform(0.2, 3.0)
     params = {"vel_p_xy": rng.uniform(1.2, 3.0), "vel_i_xy": ki_xy, "vel_i_z": ki_z}
@@ -40,7 +47,11 @@ def test_integrator_is_integrated_from_the_commands_and_measured_velocity(learne
         speed_limit_mps=3.0, time_budget_s=30.0, nominal_model="px4_velocity_pi",
         nominal_params=tuple(params.items()),
     )  # fmt: skip
-    planner = CompanionNmpc(settings, _residual_on(params, rng) if learned else None)
+    residual = None
+    if model_file is not None:
+        residual = _residual_on(params, rng, gp_refused=model_file == "gp_refused")
+    planner = CompanionNmpc(settings, residual)
+    learned = model_file == "gp_flies"
     ref = BSplineReference(
         np.array([[0.0, 0.0, -3.0], [4.0, 2.0, -3.0], [8.0, 0.0, -3.5], [12.0, -1.0, -3.0]]), 2.0
     )
