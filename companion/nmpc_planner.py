@@ -36,7 +36,7 @@ import numpy as np
 from gp.errors import ModelFileError
 from gp.features import feature_definition
 from gp.model_io import ResidualModel, load_model
-from gp.prediction_check import refusal
+from gp.prediction_check import refusal, structure_only
 from planners.model_vectors import state_vector
 from planners.nmpc import NmpcPlanner
 from planners.nmpc_formulation import NmpcConfig
@@ -116,7 +116,7 @@ class NmpcSettings:
 class CompanionNmpc:
     """:class:`NmpcPlanner` on a multirotor nominal model, with an optional residual model
     (flown without its GP when the file says the GP does not beat the structure alone, see
-    :func:`structure_only`).
+    gp.prediction_check.structure_only).
 
     Attributes:
         model: the nominal model the NMPC plans with.
@@ -325,19 +325,6 @@ def _one_step_function(
         pos = [model.state_names.index(n) for n in ("pos_n_m", "pos_e_m", "pos_d_m")]
         vel = (x_next[pos] - x[pos]) / period_s
     return ca.Function("one_step_velocity", [x, u], [vel])
-
-
-def structure_only(model: ResidualModel) -> bool:
-    """True when the model file records that its GP predicts worse over the horizon than its
-    own nominal model alone (the identified structure; gp.prediction_check), or that a
-    closed-loop check chose the structure alone (the study's experiments.study.closed_loop):
-    then the planner flies that structure without the GP, never worse than what was learned
-    without it."""
-    check = model.training.get("prediction_check_structure")
-    closed_loop = model.training.get("closed_loop_check")
-    return (isinstance(check, dict) and check.get("passed") is False) or (
-        isinstance(closed_loop, dict) and closed_loop.get("structure_flies") is True
-    )
 
 
 def check_residual_model(model: ResidualModel, period_s: float) -> None:

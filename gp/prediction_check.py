@@ -53,6 +53,14 @@ class Predictor:
         """The residual model on the nominal model it was trained against."""
         return cls(name, residual.features.nominal(), residual)
 
+    @classmethod
+    def as_flown(cls, residual: ResidualModel, name: str = "previous") -> Predictor:
+        """The model file as the companion flies it: its structure alone when its GP was
+        refused (:func:`structure_only`), else the residual on its structure."""
+        if structure_only(residual):
+            return cls(name, residual.features.nominal())
+        return cls.of_residual_model(residual, name)
+
     def start_states(self, x: np.ndarray) -> np.ndarray:
         """The states (nx, n) rollouts start from, given the states rebuilt from a log (nx, n):
         without a residual, an integrator state is 0 (offset-free, as the companion plans)."""
@@ -203,6 +211,18 @@ def split_logs(
         train.append(log.slice(0, cut))
         held.append(log.slice(cut, log.n_rows))
     return train, held
+
+
+def structure_only(model: ResidualModel) -> bool:
+    """True when the model file records that its GP predicts worse over the horizon than its
+    own nominal model alone (the identified structure), or that a closed-loop check chose the
+    structure alone (the study's experiments.study.closed_loop): then the planner flies that
+    structure without the GP, never worse than what was learned without it."""
+    check = model.training.get("prediction_check_structure")
+    closed_loop = model.training.get("closed_loop_check")
+    return (isinstance(check, dict) and check.get("passed") is False) or (
+        isinstance(closed_loop, dict) and closed_loop.get("structure_flies") is True
+    )
 
 
 def refusal(model: ResidualModel) -> str | None:

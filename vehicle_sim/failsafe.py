@@ -73,9 +73,9 @@ class FailsafeMonitor:
             self._link_lost = True
             trigger = Trigger(DATALINK_LOSS_ACTIONS[action], "data link lost")
         level = (
-            (battery_remaining < p("BAT_LOW_THR"))
-            + (battery_remaining < p("BAT_CRIT_THR"))
-            + (battery_remaining < p("BAT_EMERGEN_THR"))
+            int(battery_remaining < p("BAT_LOW_THR"))
+            + int(battery_remaining < p("BAT_CRIT_THR"))
+            + int(battery_remaining < p("BAT_EMERGEN_THR"))
         )
         if level > self._battery_level:
             self._battery_level = level

@@ -109,7 +109,7 @@ class ClosedLoopVerdict:
 
     def to_dict(self) -> dict[str, object]:
         """The record the model file keeps (``structure_flies``: the companion flies the
-        identified structure without the GP, companion.nmpc_planner.structure_only)."""
+        identified structure without the GP, gp.prediction_check.structure_only)."""
         return {
             "flies": self.flies_name,
             "structure_flies": self.flies is None,

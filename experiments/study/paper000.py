@@ -17,14 +17,14 @@ from collections.abc import Callable
 from concurrent.futures import Executor
 from dataclasses import dataclass, replace
 
-from companion.nmpc_planner import NmpcSettings, structure_only
+from companion.nmpc_planner import NmpcSettings
 from experiments.study.closed_loop import confirm_lineage
 from experiments.study.config import StudyConfig
 from experiments.study.fitting import FOLLOWING_MODES, fit_residual, regular_rows
 from experiments.study.jobs import FlightJob, FlightSummary, run_flight_job, warm_up_planner
 from flightlog.schema import FlightLog
 from gp.lag_identification import identify_velocity_lag
-from gp.prediction_check import Predictor, refusal
+from gp.prediction_check import Predictor, refusal, structure_only
 from gp.training import TrainingResult
 from planners.bspline import BSplineReference
 from planners.nominal_models import make_model
@@ -205,7 +205,7 @@ def _refit_on_augmented(
             features=config.features,
             m=config.m,
             restarts=config.gp_restarts,
-            incumbent=Predictor.of_residual_model(fits[sel].model, "previous"),
+            incumbent=Predictor.as_flown(fits[sel].model),
             structure_params=structure,
         )
         for sel in flown

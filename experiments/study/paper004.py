@@ -71,7 +71,7 @@ def run_trials(config: StudyConfig, progress: Callable[[str], None]) -> TrialsRe
                 features=config.features,
                 m=config.m,
                 restarts=config.gp_restarts,
-                incumbent=None if model is None else Predictor.of_residual_model(model, "previous"),
+                incumbent=None if model is None else Predictor.as_flown(model),
             )
             if fit.may_fly:
                 model = fit.model

@@ -7,11 +7,12 @@ from dataclasses import replace
 
 import pytest
 
-from companion.nmpc_planner import NmpcSettings, structure_only
+from companion.nmpc_planner import NmpcSettings
 from experiments.study.closed_loop import STRUCTURE, compare_tracking, confirm_lineage
 from experiments.study.jobs import FlightJob, FlightSummary, run_flight_job
 from experiments.study.metrics import pooled_rmse
 from gp.model_io import load_model
+from gp.prediction_check import structure_only
 from planners.trajectory_generator import TrajectorySpec, generate_trajectories
 from scripts.study import main as study_main
 

@@ -88,16 +88,19 @@ def test_the_companion_refuses_a_model_file_that_failed_its_check(hidden_plant_l
 def test_a_gp_that_does_not_beat_its_structure_flies_without_it(hidden_plant_logs):
     from dataclasses import replace
 
-    from companion.nmpc_planner import structure_only
+    from gp.prediction_check import structure_only
 
     config = TrainingConfig(features="state_input", nominal="first_order_lag", m=10, restarts=1)
     model = train_residual_model(hidden_plant_logs[:2], config).model
     assert not structure_only(model)
+    assert Predictor.as_flown(model).residual is model
     worse = {"candidate": "learned", "incumbent": "first_order_lag alone", "passed": False,
              "candidate_rmse_m": 0.2, "incumbent_rmse_m": 0.03, "horizon_s": 2.0}  # fmt: skip
-    assert structure_only(
-        replace(model, training={**model.training, "prediction_check_structure": worse})
-    )
+    refused = replace(model, training={**model.training, "prediction_check_structure": worse})
+    assert structure_only(refused)
+    # a refit is judged against what flew: the structure alone
+    flown = Predictor.as_flown(refused)
+    assert flown.residual is None and flown.model.name == "first_order_lag"
     # the study's closed-loop check chose the structure alone (experiments.study.closed_loop)
     for chosen in (True, False):
         record = {"flies": "x", "structure_flies": chosen, "comparisons": []}
