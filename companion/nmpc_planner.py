@@ -8,12 +8,13 @@ model's integrator is relative to the value that holds it), then I += Ki (u - v)
 plans, with the planner's last command and the measured velocity (mean over the interval).
 When no learned residual flies (no model file, or one whose GP was refused) the PI model plans
 offset-free ([Pannocchia03]): the integrator at the plan's start is taken to cancel a constant
-disturbance d (a loop at rest on its disturbance, I + d = 0), so d = -I(0) is held over the
-horizon, which is the model started from I(0) = 0; otherwise the model reads the integrator
-that holds a steady wind as an acceleration the vehicle does not have (measured: 1.2-2.0x worse
-tracking than the kinematic model through the wind field). When a learned residual flies the
-integrator enters as kept: the residual was fitted against it (gp.velocity_integrator) and
-carries the disturbance.
+disturbance d (a loop at rest on its disturbance, I + d = 0; with the model's drag terms at
+their default 0: with drag_*_per_s > 0 the rest is I + d = drag v, not used here), so d = -I(0)
+is held over the horizon, which is the model started from I(0) = 0; otherwise the model reads
+the integrator that holds a steady wind as an acceleration the vehicle does not have (measured:
+1.2-2.0x worse tracking than the kinematic model through the wind field). When a learned
+residual flies the integrator enters as kept: the residual was fitted against it
+(gp.velocity_integrator) and carries the disturbance.
 Augmented, a residual model file from ``fit-gp`` adds its mean g(z) [m/s^2] as in
 [Kulathunga23], eq. 1; the file names the nominal model and features it was trained on, and
 the planner is built for exactly those. The reference is
