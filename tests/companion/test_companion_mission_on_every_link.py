@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from companion.autopilot_gains import VELOCITY_LOOP_PARAMS
 from companion.control_loop import run_fixed_rate
 from companion.decision import Decision, HoverPolicy
 from companion.flight_recorder import FlightRecorder
@@ -114,6 +115,10 @@ def test_20m_mission_ends_within_half_a_metre_of_the_goal_and_lands(
     assert not final.armed
     assert final.landed_state == LandedState.ON_GROUND
     assert float(np.hypot(*(final.pos_ned_m[:2] - GOAL_NED_M[:2]))) < 0.5
+    # the velocity-loop gains a flight log keeps, read over this link (MAVLink: as float32)
+    reported = outcome.autopilot_metadata["velocity_loop_gains"]
+    expected = {k: vehicle.sim.params.get(p) for k, p in VELOCITY_LOOP_PARAMS.items()}
+    assert reported == pytest.approx(expected, rel=1e-6)
     log = read_flight_log(write_flight_log(tmp_path / "f.csv", recorder.to_log(link.metadata())))
     assert log.metadata["link"] == kind
     assert "OFFBOARD" in set(log["mode"])
@@ -199,6 +204,7 @@ def test_ctrl_c_or_sigterm_in_the_air_holds_then_lands_and_exits_128_plus_signal
     assert abs(float(final.pos_ned_m[0]) - north_at_interrupt_m) < 2.5
     log = read_flight_log(log_path)
     assert log.metadata["outcome"] == status
+    assert set(log.metadata["velocity_loop_gains"]) == set(VELOCITY_LOOP_PARAMS)
 
 
 class TurnInPlace:
