@@ -289,9 +289,9 @@ class CompanionNmpc:
         """Velocity [m/s] (3,) this planner's model (with its residual) predicts one control
         period after sending ``cmd_vel_ned_mps`` (3,) at velocity ``vel_ned_mps`` (3,) and
         position ``pos_ned_m`` (3,) [m] (a residual on position features is evaluated there;
-        None: the origin), with the velocity integrator the model plans from (0 without a
-        learned residual: offset-free); the yaw-rate command is taken as zero (the study's
-        references hold their yaw)."""
+        None: the origin), with the velocity integrator the model plans from (0 when no
+        learned residual flies: offset-free); the yaw-rate command is taken as zero (the
+        study's references hold their yaw)."""
         pos = np.zeros(3) if pos_ned_m is None else np.asarray(pos_ned_m, dtype=float)
         vel = np.asarray(vel_ned_mps, dtype=float)
         state = PlannerState(pos, vel, 0.0, self._planned_integrator())

@@ -24,7 +24,8 @@ import numpy as np
 from diagnosis.closed_loop import closed_loop
 from diagnosis.replay import replay, replay_sse, windows
 from diagnosis.thrust_response import track_thrust
-from flightlog.schema import FlightLog, FlightLogRecorder
+from flightlog.schema import FlightLog
+from tests.vehicle_sim.sim_flying import record_offboard
 from vehicle_sim import FlightMode, Simulator, VelocitySetpoint, load_sim_config
 from vehicle_sim.mission_plan import (
     DO_CHANGE_SPEED,
@@ -57,18 +58,12 @@ def excited_log(duration_s: float = 14.0) -> FlightLog:
     sim.set_velocity_setpoint(VelocitySetpoint((0.0, 0.0, 0.0)))
     sim.step(0.1)
     sim.set_mode(FlightMode.OFFBOARD)
-    recorder = FlightLogRecorder({**sim.log_metadata(), "rate_hz": RATE_HZ})
-    t0_s = sim.t_s
-    for k in range(round(duration_s * RATE_HZ)):
-        t = k / RATE_HZ
+
+    def command_at(t: float) -> VelocitySetpoint:
         step = 2.0 if (t // 3.0) % 2 else -1.0
-        cmd = VelocitySetpoint((step, 1.2 * np.sin(1.3 * t), 0.4 * np.cos(0.9 * t)), 0.3)
-        sim.set_velocity_setpoint(cmd)
-        row = sim.log_row(cmd)
-        row["t_s"] -= t0_s
-        recorder.append(row)
-        sim.step(1.0 / RATE_HZ)
-    return recorder.to_log()
+        return VelocitySetpoint((step, 1.2 * np.sin(1.3 * t), 0.4 * np.cos(0.9 * t)), 0.3)
+
+    return record_offboard(sim, command_at, duration_s, RATE_HZ)
 
 
 def flown_states() -> np.ndarray:

@@ -7,8 +7,8 @@ import numpy as np
 
 from diagnosis import sim_anchor
 from diagnosis.replay import replay, windows
-from flightlog.schema import FlightLog, FlightLogRecorder
-from tests.vehicle_sim.sim_flying import hovering
+from flightlog.schema import FlightLog
+from tests.vehicle_sim.sim_flying import hovering, record_offboard
 from vehicle_sim import AnchorState, VelocitySetpoint, load_sim_config
 from vehicle_sim.sensor_noise import SensorNoise, add_sensor_noise
 
@@ -25,17 +25,8 @@ ATTITUDE_ONLY = SensorNoise(
 
 def hover_log(duration_s: float = 9.0, rate_hz: float = 20.0) -> FlightLog:
     """An exact log of an Iris hovering in OFFBOARD on a zero velocity setpoint."""
-    sim = hovering(settle_s=2.0)
-    recorder = FlightLogRecorder({**sim.log_metadata(), "rate_hz": rate_hz})
     cmd = VelocitySetpoint((0.0, 0.0, 0.0))
-    t0_s = sim.t_s
-    for _ in range(round(duration_s * rate_hz)):
-        sim.set_velocity_setpoint(cmd)
-        row = sim.log_row(cmd)
-        row["t_s"] -= t0_s
-        recorder.append(row)
-        sim.step(1.0 / rate_hz)
-    return recorder.to_log()
+    return record_offboard(hovering(settle_s=2.0), lambda t: cmd, duration_s, rate_hz)
 
 
 def test_the_warm_up_integral_is_the_running_mean_of_the_rows_matched():

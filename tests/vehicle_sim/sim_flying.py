@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
+from flightlog.schema import FlightLog, FlightLogRecorder
 from vehicle_sim import FlightMode, Simulator, VelocitySetpoint, load_sim_config
 
 
@@ -30,3 +33,24 @@ def fly(sim: Simulator, vel_ned_mps, duration_s: float, period_s: float = 0.05, 
         sim.set_velocity_setpoint(VelocitySetpoint(tuple(vel_ned_mps), **kw))
         states.append(sim.step(period_s))
     return states
+
+
+def record_offboard(
+    sim: Simulator,
+    command_at: Callable[[float], VelocitySetpoint],
+    duration_s: float,
+    rate_hz: float,
+) -> FlightLog:
+    """Stream ``command_at(t)`` (t [s] from the first row) at ``rate_hz`` [Hz] for
+    ``duration_s`` and record the log a companion would: each row the state at the tick and
+    the command sent then, time from the first row."""
+    recorder = FlightLogRecorder({**sim.log_metadata(), "rate_hz": rate_hz})
+    t0_s = sim.t_s
+    for k in range(round(duration_s * rate_hz)):
+        cmd = command_at(k / rate_hz)
+        sim.set_velocity_setpoint(cmd)
+        row = sim.log_row(cmd)
+        row["t_s"] -= t0_s
+        recorder.append(row)
+        sim.step(1.0 / rate_hz)
+    return recorder.to_log()
