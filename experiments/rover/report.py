@@ -42,6 +42,7 @@ def summarise(records: list[TrialRecord]) -> dict:
         "travel_time_s": [r.travel_time_s for r in records],
         "mean_scheduled_speed_mps": [float(np.mean(r.schedule_mps)) for r in records],
         "completed": [r.completed for r in records],
+        "safety_trips": [r.safety_trips for r in records],
         "max_lateral_reduction": 1.0 - last.max_e_lat_m / first.max_e_lat_m,
         "max_heading_reduction": 1.0 - last.max_e_head_rad / first.max_e_head_rad,
         # as the localisation measures them, [Ostafew16]'s own measure (TrialRecord)

@@ -81,6 +81,9 @@ class RoverScenario:
         gp_jacobian: give the NMPC the local GP's derivatives (full [Ostafew16] eq. 6
             linearisation) instead of re-predicting the disturbance along each iterate.
         dt_s: control period [s] ([Ostafew16] section 5.1: about 10 Hz).
+        governor_trip_factor: on scheduled runs, the within-trial safety governor's trip
+            factor (planners.rover.speed_governor: past this times the scheduler's error
+            thresholds the robot drops to v_init until back under them); None turns it off.
         seed: seed of everything random.
     """
 
@@ -98,6 +101,7 @@ class RoverScenario:
     gp_jacobian: bool = False
     feedforward: bool = False
     dt_s: float = 0.1
+    governor_trip_factor: float | None = 2.0
     seed: int = 0
 
     def with_trials(self, trials: int) -> RoverScenario:

@@ -22,6 +22,7 @@ from experiments.rover.localisation import LocalisationError
 from experiments.rover.scenarios import RoverScenario
 from gp.local_gp import LocalGP
 from planners.rover.path import LocalisationQuality, project_arc_length
+from planners.rover.speed_governor import SpeedGovernor
 from planners.rover.speed_scheduler import initial_schedule, next_schedule
 from planners.rover.unicycle_nmpc import UnicycleNmpc
 from vehicle_sim.rover import RoverSim, rover_preset
@@ -50,6 +51,8 @@ class TrialRecord:
             VT&R; the robot has no other measure of them).
         travel_time_s: time to reach the end of the path.
         completed: reached the end before the time limit.
+        safety_trips: how often the safety governor dropped the speed to v_init in this pass
+            (planners.rover.speed_governor; 0 without a scheduler).
     """
 
     s_m: np.ndarray
@@ -70,6 +73,7 @@ class TrialRecord:
     completed: bool
     e_lat_est_m: np.ndarray
     e_head_est_rad: np.ndarray
+    safety_trips: int = 0
 
     @property
     def max_e_lat_est_m(self) -> float:
@@ -113,6 +117,11 @@ def run_trial(
     sim.arm()
     loc_error = LocalisationError(sc.localisation, sc.dt_s, rng)
     nmpc = UnicycleNmpc(cfg)
+    governor = (
+        SpeedGovernor(sc.scheduler, sc.governor_trip_factor)
+        if sc.scheduler is not None and sc.governor_trip_factor is not None
+        else None
+    )
     K, dt, N = cfg.horizon, sc.dt_s, len(path)
     curvature = path.curvature_1pm()
     rec = {k: [] for k in ("s", "el", "eh", "w", "v", "f", "n", "t", "cpu", "el_est", "eh_est")}
@@ -144,9 +153,10 @@ def run_trial(
             completed = True
             break
         t0, cpu0 = time.perf_counter(), time.thread_time()
-        v_now = float(schedule_mps[fix.vertex])
+        cap = np.inf if governor is None else governor.cap_mps(est_fix.e_lat_m, est_fix.e_head_rad)
+        v_now = min(float(schedule_mps[fix.vertex]), cap)
         s_ahead = fix.s_m + v_now * dt * np.arange(K)
-        v_h = np.interp(s_ahead, path.s_m, schedule_mps)
+        v_h = np.minimum(np.interp(s_ahead, path.s_m, schedule_mps), cap)
         model = (
             learner.LocalDisturbance(gp, fix.vertex, v_now, sc.gp_jacobian) if sc.learning else None
         )
@@ -196,7 +206,7 @@ def run_trial(
         arr["s"], arr["el"], arr["eh"], arr["w"], arr["v"], arr["f"], arr["n"].astype(int),
         arr["t"], arr["cpu"], np.asarray(schedule_mps, dtype=float).copy(), worst["el"],
         worst["eh"], worst["w"], worst["f"], float(sim.state.t_s), completed, arr["el_est"],
-        arr["eh_est"],
+        arr["eh_est"], 0 if governor is None else governor.trips,
     )  # fmt: skip
 
 
