@@ -107,7 +107,14 @@ def run_companion(config: CompanionConfig, progress: Callable[[str], None]) -> C
     outcome: FlightOutcome | None = None
     try:
         outcome = fly_mission(
-            link, planner, reference, mission, config.runner, recorder.record, progress
+            link,
+            planner,
+            reference,
+            mission,
+            config.runner,
+            recorder.record,
+            progress,
+            on_autopilot_metadata=live.add_metadata,
         )
     finally:
         link.close()
@@ -178,14 +185,18 @@ def _write_log(
     live: LiveFlightLog,
     progress: Callable[[str], None],
 ) -> Path | None:
-    """Replace the live log by the full one; None (and no files) when nothing was flown."""
+    """Replace the live log by the full one; None (and no files) when nothing was flown.
+
+    Its sidecar keeps the live one's entries (the autopilot's, read before arming, even when
+    the flight raised), updated with the run's as they are now (the link's contact count) and
+    the outcome's (none when the flight raised)."""
     if len(recorder) == 0:
         live.close()
         live.path.unlink(missing_ok=True)
         sidecar_path(live.path).unlink(missing_ok=True)
         progress("no control steps flown; no flight log written")
         return None
-    metadata = _log_metadata(config, mission, link)
+    metadata = live.metadata | _log_metadata(config, mission, link)
     if outcome is not None:
         metadata |= {
             "outcome": outcome.status,
@@ -193,7 +204,6 @@ def _write_log(
             "landed_error_m": outcome.landed_error_m,
             "loop_ticks": outcome.ticks,
             "loop_deadline_misses": outcome.deadline_misses,
-            **outcome.autopilot_metadata,
         }
     path = live.finish(recorder.to_log(metadata))
     progress(f"flight log: {path} ({len(recorder)} rows)")

@@ -1,10 +1,12 @@
 """The flight log as it is flown, so that no fault loses a row.
 
 Before take-off the sidecar is written (marked ``"complete": false``) and the CSV opened with
-the columns every row has: schema v1's required ones plus ``armed`` and ``mode``. Each control
-step appends one row and flushes it, so a SIGKILL, a lost link or a crash leaves a readable
-schema-v1 log of every row flown up to that moment. When the flight ends, the full log (with
-every optional column: acceleration, thrust, planner columns) replaces it atomically.
+the columns every row has: schema v1's required ones plus ``armed`` and ``mode``. What is
+learnt before arming (the autopilot's velocity-loop gains) is added to the sidecar at once.
+Each control step appends one row and flushes it, so a SIGKILL, a lost link or a crash leaves
+a readable schema-v1 log of every row flown up to that moment, with that metadata. When the
+flight ends, the full log (with every optional column: acceleration, thrust, planner columns)
+replaces it atomically.
 """
 
 from __future__ import annotations
@@ -29,6 +31,9 @@ STREAMED_COLUMNS: tuple[str, ...] = (*REQUIRED_COLUMNS, "armed", "mode")
 class LiveFlightLog:
     """A schema-v1 log written row by row (see the module docstring).
 
+    Attributes:
+        metadata: the sidecar's entries so far (without ``"complete"``).
+
     Raises:
         OutputError: the log cannot be written there (one line), at construction: before
             anything flies.
@@ -36,7 +41,8 @@ class LiveFlightLog:
 
     def __init__(self, path: str | Path, metadata: Mapping[str, object]) -> None:
         self.path = check_writable_file(path)
-        write_sidecar(self.path, {**metadata, "complete": False})
+        self.metadata: dict[str, object] = dict(metadata)
+        write_sidecar(self.path, {**self.metadata, "complete": False})
         try:
             self._fh: TextIO | None = self.path.open("w", newline="")
         except OSError as exc:
@@ -45,6 +51,12 @@ class LiveFlightLog:
         self._writer.writerow(STREAMED_COLUMNS)
         self._fh.flush()
         self.rows = 0
+
+    def add_metadata(self, metadata: Mapping[str, object]) -> None:
+        """Add ``metadata`` to :attr:`metadata` and rewrite the sidecar with it at once (still
+        marked incomplete)."""
+        self.metadata |= metadata
+        write_sidecar(self.path, {**self.metadata, "complete": False})
 
     def append(self, row: Mapping[str, float | str | None]) -> None:
         """Write one row's streamed columns and flush it to the file."""

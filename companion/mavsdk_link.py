@@ -30,7 +30,7 @@ from mavsdk import (
 )
 from mavsdk.plugins.action import Action, ActionError
 from mavsdk.plugins.offboard import Offboard, OffboardError, VelocityNedYaw
-from mavsdk.plugins.param import Param, ParamError
+from mavsdk.plugins.param import Param
 from mavsdk.plugins.telemetry import Telemetry, TelemetryError
 
 from companion.clocks import WallClock
@@ -166,7 +166,12 @@ class MavsdkLink:
         for getter in (param.get_param_float, param.get_param_int):
             try:
                 return float(getter(name))
-            except (ParamError, MavsdkError):
+            except Exception:
+                # A parameter is optional (PX4 limits, velocity-loop gains), so any failure of
+                # the param call reads as "not reported", as a pymavlink read that gets no
+                # answer does: ParamError (absent, or of the other type), MavsdkError, the
+                # RuntimeError of a destroyed plugin, a timeout. KeyboardInterrupt and
+                # SystemExit are no Exception: they still stop the flight.
                 continue
         return None
 

@@ -174,11 +174,19 @@ def fly_mission(
     config: RunnerConfig,
     on_tick: Callable[[Tick], None],
     progress: Callable[[str], None],
+    *,
+    on_autopilot_metadata: Callable[[Mapping[str, object]], None] | None = None,
 ) -> FlightOutcome:
-    """Fly ``mission`` over a connected-or-not ``link``; see the module docstring."""
+    """Fly ``mission`` over a connected-or-not ``link``; see the module docstring.
+
+    ``on_autopilot_metadata``, when given, receives FlightOutcome.autopilot_metadata as soon
+    as it is read (before arming), so that a log keeps it even if the flight then raises.
+    """
     priority = config.realtime_priority if link.clock.real_time else 0
     with realtime_section(priority, "control loop", progress):
-        return _fly(link, planner, reference, mission, config, on_tick, progress)
+        return _fly(
+            link, planner, reference, mission, config, on_tick, progress, on_autopilot_metadata
+        )
 
 
 def _fly(
@@ -189,6 +197,7 @@ def _fly(
     config: RunnerConfig,
     on_tick: Callable[[Tick], None],
     progress: Callable[[str], None],
+    on_autopilot_metadata: Callable[[Mapping[str, object]], None] | None,
 ) -> FlightOutcome:
     counters = LoopCounters()
     goal = np.asarray(mission.goal_ned_m, dtype=float)
@@ -206,6 +215,8 @@ def _fly(
             progress(f"refused: {problem}")
             return FlightOutcome("refused", problem, None, None, False, 0, 0)
         autopilot = velocity_loop_metadata(link)
+        if on_autopilot_metadata is not None:
+            on_autopilot_metadata(autopilot)
         command_until_accepted(link, link.arm, config.arm_timeout_s, "arm")
         airborne = True
         progress("armed; taking off")

@@ -18,8 +18,9 @@ sparse GP on what is left; ``--learned-model kinematic_4dof --features velocity`
 Flies every flight in process (lockstep, deterministic, seeded) on ``--workers`` local processes,
 or on the workers of a Dask cluster with ``--scheduler`` (same figures either way), and writes
 OUT/report.md with PNG plots and the fitted model files. Progress goes to stderr; the
-headline figures are printed on stdout. Exit code 0 on success, 2 with a one-line reason on
-bad input.
+headline figures are printed on stdout, then, when the learned model's structure flew alone,
+``structure_model = NAME``: the model its ``*identified_lag*`` figures flew (first_order_lag,
+px4_velocity_pi). Exit code 0 on success, 2 with a one-line reason on bad input.
 """
 
 from __future__ import annotations
@@ -152,6 +153,8 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     for name, value in result.headline.items():
         print(f"{name} = {value:.4f}")
+    if result.paper000.structure_model is not None:
+        print(f"structure_model = {result.paper000.structure_model}")
     print(f"report: {result.report_path}")
     return 0
 

@@ -65,14 +65,16 @@ def settled_tracking_rmse(flights: list[FlightSummary]) -> float:
 
 def headline_figures(result: Paper000Result) -> dict[str, float]:
     """The bench figures: residual RMSE nominal / per selection [m/s], tracking RMSE nominal
-    and augmented (the first selection, [Kulathunga23]'s low_speed) [m]; with the identified-lag
-    ablation also its residual and tracking RMSE (what the GP adds is the difference) and
-    gp_over_structure, the tracking RMSE of the structure alone divided by structure + GP
-    (low_speed): > 1 when the GP helps; the same after the first SETTLE_S s of following
-    (tracking_settled_<planner>_m, gp_over_structure_settled: without the first transient
-    from the start hover, the same for every planner); when the learned model's structure is
-    not the lag, the identified lag alone flies beside it (tracking_rmse_lag_structure_m) and
-    gp_over_lag_structure is its tracking RMSE divided by structure + GP's."""
+    and augmented (the first selection, [Kulathunga23]'s low_speed) [m]; with the ablation
+    flying the learned model's structure alone (keyed identified_lag whatever that structure
+    is, Paper000Result.structure_model) also its residual and tracking RMSE (what the GP adds
+    is the difference) and gp_over_structure, the tracking RMSE of the structure alone
+    divided by structure + GP (low_speed): > 1 when the GP helps; the same after the first
+    SETTLE_S s of following (tracking_settled_<planner>_m, gp_over_structure_settled: without
+    the first transient from the start hover, the same for every planner); when the learned
+    model's structure is not the lag, the identified lag alone flies beside it
+    (tracking_rmse_lag_structure_m) and gp_over_lag_structure is its tracking RMSE divided by
+    structure + GP's."""
     figs = all_planner_figures(result)
     selections = list(result.fits)
     out = {"residual_rmse_nominal": figs[NOMINAL].residual_rmse_mps}

@@ -35,6 +35,14 @@ IDENTIFIED_LAG = "identified_lag"  # the learned model's structure alone (the ab
 LAG_BESIDE = "lag_structure"  # the identified lag alone, beside another learned structure
 
 
+def planner_label(planner: str, structure_model: str | None) -> str:
+    """How the report and progress lines name ``planner``: the structure-alone arm, keyed
+    IDENTIFIED_LAG in the figures whatever the structure, as "structure alone (MODEL)"
+    (``structure_model``: the nominal model it flies, e.g. first_order_lag or
+    px4_velocity_pi); every other planner by its key."""
+    return f"structure alone ({structure_model})" if planner == IDENTIFIED_LAG else planner
+
+
 @dataclass(eq=False)
 class Learned:
     """One model a selection learned, and its flights on the training seeds once flown."""
@@ -47,11 +55,13 @@ class Learned:
 @dataclass(frozen=True, eq=False)
 class Paper000Result:
     """Flights per planner ("nominal", each selection, "identified_lag" if flown) and the
-    fitted models."""
+    fitted models; ``structure_model`` is the nominal model the structure-alone arm
+    ("identified_lag") flew (first_order_lag, px4_velocity_pi), None when it did not fly."""
 
     references: list[BSplineReference]
     flights: dict[str, list[FlightSummary]]
     fits: dict[str, TrainingResult]
+    structure_model: str | None = None
 
 
 def study_trajectories(config: StudyConfig) -> list[BSplineReference]:
@@ -164,7 +174,7 @@ def run_paper000(
         ]
     for summary in _fly_all(aug_jobs, pool, "augmented", progress):
         flights.setdefault(summary.planner, []).append(summary)
-    return Paper000Result(refs, flights, fits)
+    return Paper000Result(refs, flights, fits, None if lag is None else lag.nominal_model)
 
 
 def _refit_on_augmented(
@@ -376,9 +386,11 @@ def _fly_all(
     jobs: list[FlightJob], pool: Executor, what: str, progress: Callable[[str], None]
 ) -> list[FlightSummary]:
     out = []
-    for n, summary in enumerate(pool.map(run_flight_job, jobs), start=1):
+    summaries = pool.map(run_flight_job, jobs)
+    for n, (job, summary) in enumerate(zip(jobs, summaries, strict=True), start=1):
+        planner = planner_label(summary.planner, job.settings.nominal_model)
         progress(
-            f"{what} flight {n}/{len(jobs)}: trajectory {summary.trajectory} {summary.planner} "
+            f"{what} flight {n}/{len(jobs)}: trajectory {summary.trajectory} {planner} "
             f"seed {summary.seed}: {summary.status}, tracking {summary.tracking_rmse_m:.3f} m, "
             f"residual {summary.residual_rmse_mps:.4f} m/s"
         )

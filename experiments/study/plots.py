@@ -9,7 +9,7 @@ from matplotlib.figure import Figure
 
 from experiments.study.jobs import FlightSummary
 from experiments.study.metrics import following_rows
-from experiments.study.paper000 import Paper000Result
+from experiments.study.paper000 import Paper000Result, planner_label
 from experiments.study.paper004 import TrialsResult
 from gp.plots import plot_residuals
 
@@ -27,7 +27,7 @@ def plot_paths(result: Paper000Result, path: Path) -> Path:
         ax.plot(pos[:, 1], pos[:, 0], "k--", lw=1.2, label="reference")
         for planner, flights in result.flights.items():
             flight = next(f for f in flights if f.trajectory == i)
-            _plot_flight(ax, flight, planner)
+            _plot_flight(ax, flight, planner_label(planner, result.structure_model))
         ax.set(xlabel="east [m]", ylabel="north [m]", title=f"trajectory {i}", aspect="equal")
         ax.grid(alpha=0.3)
         ax.legend(fontsize="small")

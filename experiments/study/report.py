@@ -5,12 +5,19 @@ from __future__ import annotations
 from experiments.study.config import StudyConfig
 from experiments.study.figures import PlannerFigures
 from experiments.study.metrics import SETTLE_S
-from experiments.study.paper000 import IDENTIFIED_LAG, LAG_BESIDE, NOMINAL, Paper000Result
+from experiments.study.paper000 import (
+    IDENTIFIED_LAG,
+    LAG_BESIDE,
+    NOMINAL,
+    Paper000Result,
+    planner_label,
+)
 from experiments.study.paper004 import TrialsResult
 
 
-def figures_table(figs: dict[str, PlannerFigures]) -> str:
-    """One row per planner: residual, tracking, solve times, completed flights."""
+def figures_table(figs: dict[str, PlannerFigures], structure_model: str | None) -> str:
+    """One row per planner: residual, tracking, solve times, completed flights; the
+    structure-alone arm named by the model it flew (``structure_model``, planner_label)."""
     nominal = figs[NOMINAL]
     lines = [
         "| planner | flights (completed) | residual RMSE [m/s] | gain | tracking RMSE [m] | gain "
@@ -19,7 +26,8 @@ def figures_table(figs: dict[str, PlannerFigures]) -> str:
     ]
     for f in figs.values():
         lines.append(
-            f"| {f.planner} | {f.flights} ({f.completed}) | {f.residual_rmse_mps:.4f} "
+            f"| {planner_label(f.planner, structure_model)} | {f.flights} ({f.completed}) "
+            f"| {f.residual_rmse_mps:.4f} "
             f"| {nominal.residual_rmse_mps / f.residual_rmse_mps:.2f}x | {f.tracking_rmse_m:.4f} "
             f"| {nominal.tracking_rmse_m / f.tracking_rmse_m:.2f}x "
             f"| {f.tracking_settled_rmse_m:.4f} | {f.solve_median_ms:.2f} "
@@ -57,9 +65,9 @@ def render_report(
         "inducing selection fitted on all nominal flights; each trajectory flown "
         f"{config.repeats}x augmented per selection on other seeds (held-out flights)"
         + (
-            f"; `{IDENTIFIED_LAG}` flies the learned model's structure "
-            f"(`{config.learned_model}`) without the GP on the same seeds (what the GP adds is "
-            "the difference)."
+            f"; the row {planner_label(IDENTIFIED_LAG, result.structure_model)} flies the "
+            f"learned model's structure (`{result.structure_model}`) without the GP on the same "
+            f"seeds (what the GP adds is the difference; its figures are named `{IDENTIFIED_LAG}`)."
             if IDENTIFIED_LAG in figs
             else "."
         )
@@ -74,7 +82,7 @@ def render_report(
         "v_meas(t+dt) - pred_vel(t), RMSE over the three axes; tracking: distance to the "
         "reference position; both over the OFFBOARD (following) rows, pooled over flights.",
         "",
-        figures_table(figs),
+        figures_table(figs, result.structure_model),
         "",
         "Held-out rows of each fit (fit-gp's evaluation, per axis n/e/d, m/s):",
         "",

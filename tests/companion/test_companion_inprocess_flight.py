@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from companion.app import CompanionConfig, run_companion
 from companion.autopilot_gains import velocity_loop_gains
 from companion.flight_recorder import FlightRecorder
 from companion.inprocess_link import InProcessLink
@@ -126,6 +128,29 @@ def test_cli_flies_in_process_and_writes_a_readable_log(tmp_path: Path, capsys) 
     assert log.metadata["velocity_loop_gains"] == reported
     np.testing.assert_allclose(np.diff(log["t_s"]), 1.0 / 30.0, atol=0.003)
     assert "completed" in err
+
+
+def test_the_velocity_loop_gains_reach_the_sidecar_when_read_and_survive_a_raising_flight(
+    tmp_path: Path,
+) -> None:
+    log_path = tmp_path / "flight.csv"
+    config = CompanionConfig(mission_path=LINE, link="inprocess", log_path=log_path)
+    sidecar_when_armed: dict[str, object] = {}
+
+    def progress(message: str) -> None:
+        if message.startswith("armed;"):  # the gains are read just before arming
+            sidecar_when_armed.update(json.loads(sidecar_path(log_path).read_text()))
+        if message.startswith("offboard;"):  # after the setpoint stream's rows
+            raise RuntimeError("the caller's progress display broke")
+
+    with pytest.raises(RuntimeError, match="progress display broke"):
+        run_companion(config, progress)
+    reported = dict(velocity_loop_gains(InProcessLink.from_vehicle("iris", 0)))
+    assert sidecar_when_armed["complete"] is False
+    assert sidecar_when_armed["velocity_loop_gains"] == reported
+    log = read_flight_log(log_path)
+    assert log.n_rows > 0 and "outcome" not in log.metadata  # the flight raised
+    assert log.metadata["velocity_loop_gains"] == reported
 
 
 @pytest.mark.parametrize("mission", ["square", "s_curve"])

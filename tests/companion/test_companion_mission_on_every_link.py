@@ -326,6 +326,7 @@ def test_sigkill_mid_flight_leaves_a_readable_log_of_every_row_flown(
     log = read_flight_log(log_path)  # schema v1, validated: finite, strictly increasing time
     assert log.n_rows >= rows_seen > 100
     assert log.metadata["complete"] is False and log.metadata["source"] == "companion"
+    assert set(log.metadata["velocity_loop_gains"]) == set(VELOCITY_LOOP_PARAMS)  # read pre-arm
     steps = np.diff(log["t_s"])
     assert float(np.max(steps)) < 0.5  # no hole: every row flown up to the kill
     assert "OFFBOARD" in set(log["mode"])

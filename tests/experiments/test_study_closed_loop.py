@@ -112,7 +112,7 @@ def test_wind_study_checks_its_models_in_closed_loop_on_training_seeds_only(tmp_
     err = capsys.readouterr().err
     check_flights = [line for line in err.splitlines() if "closed-loop check flight" in line]
     assert check_flights and all(line.split(" seed ")[1].startswith("0:") for line in check_flights)
-    assert any(" identified_lag seed 0" in line for line in check_flights)
+    assert any(" structure alone (first_order_lag) seed 0" in line for line in check_flights)
     report = (out / "report.md").read_text()
     checked = 0
     for sel in ("low_speed", "cluster"):

@@ -72,7 +72,9 @@ def test_quick_study_runs_end_to_end_and_writes_report_and_plots(tmp_path, capsy
         assert f"{name} = " in stdout
     report = (out / "report.md").read_text()
     assert "| nominal |" in report and "| low_speed |" in report and "| cluster |" in report
-    assert "| identified_lag |" in report and "identified from the nominal flights" in report
+    assert "| structure alone (first_order_lag) |" in report
+    assert "identified from the nominal flights" in report
+    assert "structure_model = first_order_lag" in stdout
     assert "## Paper 004" in report
     pngs = {p.name for p in out.glob("*.png")}
     assert {"paths.png", "trials.png", "gp_low_speed_residual_n.png"} <= pngs

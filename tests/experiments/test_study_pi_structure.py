@@ -26,11 +26,15 @@ def test_wind_study_learns_on_the_pi_structure_beside_the_lag(tmp_path, capsys):
         gains = {k: v for k, v in features.nominal_params if k in reported}
         assert gains == pytest.approx(reported)
     report = (out / "report.md").read_text()
-    for arm in ("identified_lag", "lag_structure"):
+    # the structure-alone arm (figures keyed identified_lag) is named by what it flies
+    for arm in ("structure alone (px4_velocity_pi)", "lag_structure"):
         assert f"| {arm} | 2 (2) |" in report
+    assert "| identified_lag |" not in report
     assert "flies the learned model's structure (`px4_velocity_pi`)" in report
+    assert "trajectory 0 structure alone (px4_velocity_pi) seed " in captured.err
     assert "lag_structure: identified velocity lag tau_s=" in captured.err
     headline = dict(line.split(" = ") for line in captured.out.splitlines() if " = " in line)
+    assert headline["structure_model"] == "px4_velocity_pi"
     lag, augmented = (
         float(headline[k]) for k in ("tracking_rmse_lag_structure_m", "tracking_rmse_augmented_m")
     )
