@@ -189,7 +189,7 @@ def _write_log(
 
     Its sidecar keeps the live one's entries (the autopilot's, read before arming, even when
     the flight raised), updated with the run's as they are now (the link's contact count) and
-    the outcome's (none when the flight raised)."""
+    the outcome's; when the flight raised, the outcome is "companion_error"."""
     if len(recorder) == 0:
         live.close()
         live.path.unlink(missing_ok=True)
@@ -197,7 +197,9 @@ def _write_log(
         progress("no control steps flown; no flight log written")
         return None
     metadata = live.metadata | _log_metadata(config, mission, link)
-    if outcome is not None:
+    if outcome is None:  # the flight raised: the rows up to then are sound, the end is not
+        metadata["outcome"] = "companion_error"
+    else:
         metadata |= {
             "outcome": outcome.status,
             "goal_error_m": outcome.goal_error_m,

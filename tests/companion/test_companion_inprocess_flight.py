@@ -149,7 +149,7 @@ def test_the_velocity_loop_gains_reach_the_sidecar_when_read_and_survive_a_raisi
     assert sidecar_when_armed["complete"] is False
     assert sidecar_when_armed["velocity_loop_gains"] == reported
     log = read_flight_log(log_path)
-    assert log.n_rows > 0 and "outcome" not in log.metadata  # the flight raised
+    assert log.n_rows > 0 and log.metadata["outcome"] == "companion_error"  # the flight raised
     assert log.metadata["velocity_loop_gains"] == reported
 
 
