@@ -1,8 +1,9 @@
 """Run a rover regime and write its figures and summary (atomically) into a folder.
 
 Figures: max and RMS e_L / e_H per trial, scheduled speeds along the path per trial, travel
-time per trial; ``summary.json`` holds the per-trial numbers and the reductions
-1 - (last trial / trial 1) of the max errors. With a speed scheduler the last trial is driven
+time per trial; ``summary.json`` holds the per-trial numbers (with how often the safety
+governor slowed each pass, ``safety_trips``) and the reductions 1 - (last trial / trial 1) of
+the max errors. With a speed scheduler the last trial is driven
 again with learning disabled (:func:`learning_disabled_pass`), and the summary adds that pair.
 """
 
