@@ -95,3 +95,17 @@ def test_bad_real_logs_one_line_exit_2_nothing_written(name, tmp_path, capsys):
         assert len(err) == 1 and err[0].startswith(prog), err
         assert re.search(BAD[name], err[0]), err[0]
         assert not out.exists()
+
+
+@pytest.mark.parametrize("where", ["folder", "under_a_file"])
+def test_convert_to_an_unwritable_place_one_line_exit_2_nothing_left(where, tmp_path, capsys):
+    """An --out that is a folder, or lies under a file: one line naming it, no traceback, and
+    no sidecar or temporary file left beside it."""
+    (tmp_path / "taken").mkdir()
+    (tmp_path / "plain").write_text("")
+    out = tmp_path / ("taken" if where == "folder" else "plain/flight.csv")
+    before = sorted(p.name for p in tmp_path.rglob("*"))
+    assert flightlog_cli.main(["convert", str(AUTO), "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("flightlog: ") and str(out) in err[0], err
+    assert sorted(p.name for p in tmp_path.rglob("*")) == before
