@@ -31,6 +31,8 @@ from pathlib import Path
 from typing import Any
 
 from companion.realtime import MAX_RT_PRIORITY, raise_to_realtime
+from flightlog.atomic_output import OutputError, check_writable_file
+from flightlog.schema import sidecar_path
 from vehicle_sim import EFFECT_NAMES, SimConfigError, Simulator, load_sim_config
 from vehicle_sim.backends import BACKEND_NAMES
 from vehicle_sim.mavlink import (
@@ -285,6 +287,13 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _run(config: VehicleSimCliConfig, stop: threading.Event) -> int:
+    if config.log_path is not None:
+        try:  # found out now, not after a flight whose log would be lost
+            check_writable_file(config.log_path)
+            check_writable_file(sidecar_path(config.log_path))
+        except OutputError as exc:
+            print(f"{PROG}: error: --log {exc}", file=sys.stderr)
+            return 2
     try:
         endpoint = build_endpoint(config)
         endpoint.start()
@@ -298,7 +307,10 @@ def _run(config: VehicleSimCliConfig, stop: threading.Event) -> int:
         _announce(config, endpoint)
         serve(endpoint, stop, config.duration_s)
     finally:
-        failure = _stop(endpoint) or _write_onboard_log(endpoint, config.log_path)
+        stopped = _stop(endpoint)  # the log is written even when the loop died: rows kept
+        failure = "; ".join(
+            f for f in (stopped, _write_onboard_log(endpoint, config.log_path)) if f
+        )
     if failure:
         print(f"{PROG}: error: {failure}", file=sys.stderr)
         return 1

@@ -39,6 +39,19 @@ def test_bad_input_is_one_line_and_exit_2(capsys, argv, message):
     assert err.count("\n") == 1 and err.startswith("vehicle-sim: error:")
 
 
+@pytest.mark.parametrize("where", ["folder", "under_a_file"])
+def test_unwritable_log_refused_before_serving(capsys, tmp_path, where):
+    """An onboard log that could not be written at exit is refused at the start (one line, exit
+    2), not found out after a flight whose log is then lost."""
+    (tmp_path / "plain").write_text("")
+    log = tmp_path if where == "folder" else tmp_path / "plain" / "onboard.csv"
+    argv = ["--log", str(log), "--duration-s", "0.5", "--offboard-bind-port", "0"]
+    assert main([*argv, "--gcs-bind-port", "0"]) == 2
+    out = capsys.readouterr()
+    assert out.out == ""
+    assert out.err.count("\n") == 1 and out.err.startswith(f"vehicle-sim: error: --log {log}")
+
+
 def test_taken_port_is_reported(capsys):
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as taken:
         taken.bind(("127.0.0.1", 0))
