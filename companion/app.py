@@ -81,6 +81,8 @@ def run_companion(config: CompanionConfig, progress: Callable[[str], None]) -> C
         CompanionInputError: bad mission, planner or vehicle (before anything flies).
     """
     try:
+        if config.seed < 0:
+            raise ValueError(f"--seed must be >= 0, got {config.seed}")
         mission = load_mission(config.mission_path)
         world = _obstacle_world(config, mission)
         planner = make_planner(

@@ -115,6 +115,10 @@ def parse_args(argv: list[str] | None) -> FitGpConfig:
             parser.error(f"--nominal-param {item!r}: expected NAME=NUMBER")
     if args.m < 1:
         parser.error(f"--m must be >= 1, got {args.m}")
+    if args.seed < 0:
+        parser.error(f"--seed must be >= 0, got {args.seed}")
+    if args.restarts < 1:
+        parser.error(f"--restarts must be >= 1 starting point(s), got {args.restarts}")
     if not 0.0 < args.holdout_fraction < 1.0:
         parser.error(f"--holdout-fraction must be in (0, 1), got {args.holdout_fraction}")
     training = TrainingConfig(

@@ -175,6 +175,8 @@ def parse_args(argv: Sequence[str] | None) -> VehicleSimCliConfig:
         raise UsageError(f"--speed {args.speed}: must be within [0.01, 100]")
     if args.duration_s is not None and not (math.isfinite(args.duration_s) and args.duration_s > 0):
         raise UsageError(f"--duration-s {args.duration_s}: must be > 0")
+    if args.seed < 0:
+        raise UsageError(f"--seed {args.seed}: must be >= 0")
     if not 0 <= args.realtime_priority <= MAX_RT_PRIORITY:
         raise UsageError(
             f"--realtime-priority {args.realtime_priority}: must be 0 (off) or 1..{MAX_RT_PRIORITY}"

@@ -150,6 +150,7 @@ def test_cli_flies_the_demo_square_and_the_bspline_s_curve_to_their_goals(
     [
         (["--link", "inprocess", "--vehicle", "no_such_preset"], "no such config file or preset"),
         (["--link", "pymavlink", "--url", "serial:/dev/x"], "unsupported MAVLink URL"),
+        (["--link", "inprocess", "--seed", "-1"], "--seed must be >= 0, got -1"),
     ],
 )
 def test_cli_bad_vehicle_or_url_is_one_line_and_exit_2(

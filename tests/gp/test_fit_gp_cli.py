@@ -42,6 +42,8 @@ def test_fit_gp_writes_model_plots_and_reports_rmse(tmp_path, capsys):
         (["LOG", "--holdout-fraction", "1.5"], "--holdout-fraction must be in (0, 1)"),
         (["LOG", "--nominal-param", "tau_s"], "expected NAME=NUMBER"),
         (["LOG", "--nominal", "px4_velocity_pi"], "its sidecar has no velocity_loop_gains"),
+        (["LOG", "--seed", "-1"], "--seed must be >= 0, got -1"),
+        (["LOG", "--restarts", "-1"], "--restarts must be >= 1 starting point(s), got -1"),
     ],
 )
 def test_bad_input_exits_non_zero_with_one_line(tmp_path, capsys, args, message):

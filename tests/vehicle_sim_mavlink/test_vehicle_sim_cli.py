@@ -29,6 +29,7 @@ REPO = Path(__file__).resolve().parents[2]
         (["--effect", "rotor_drag.k_n_per_mps=[0.3,"], "not a TOML value"),
         (["--signing-key", "missing.key"], "cannot read signing key file"),
         (["--frobnicate"], "unrecognized arguments"),
+        (["--seed", "-1"], "--seed -1: must be >= 0"),
         (["--realtime-priority", "100"], "--realtime-priority 100: must be 0 (off) or 1..99"),
     ],
 )
