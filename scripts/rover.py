@@ -11,6 +11,9 @@ import argparse
 import json
 import os
 import sys
+from pathlib import Path
+
+from flightlog.atomic_output import OutputError, check_writable_dir, describe_os_error
 
 REGIMES = ("rover_exp1", "rover_exp2", "rover_exp3", "example")
 
@@ -29,7 +32,15 @@ def main(argv: list[str] | None = None) -> int:
     if args.trials is not None and args.trials < 1:
         print(f"--trials must be >= 1, got {args.trials}", file=sys.stderr)
         return 2
-    os.makedirs(args.out, exist_ok=True)
+    try:  # before any trial: a folder that cannot be made is found now
+        check_writable_dir(args.out)
+        os.makedirs(args.out, exist_ok=True)
+    except OutputError as exc:
+        print(f"rover: --out {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:
+        print(f"rover: --out {describe_os_error(Path(args.out), exc)}", file=sys.stderr)
+        return 2
     if args.regime == "example":
         from experiments.rover.illustrative import write_figure
 
