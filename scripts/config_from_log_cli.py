@@ -7,7 +7,6 @@ assumed (in the TOML's comments and on stderr). Exit codes: 0 done, 2 bad input.
 
 from __future__ import annotations
 
-import argparse
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -15,6 +14,7 @@ from pathlib import Path
 from flightlog.atomic_output import OutputError, check_writable_file, write_text_atomic
 from flightlog.reader import read_log
 from flightlog.schema import FlightLogError
+from scripts.one_line_parser import OneLineParser
 from vehicle_sim.config import PRESET_NAMES
 from vehicle_sim.config_from_log import config_from_log
 from vehicle_sim.effects.base import SimConfigError
@@ -29,13 +29,8 @@ class ConfigFromLogArgs:
     preset: str
 
 
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> None:  # type: ignore[override]
-        self.exit(2, f"{self.prog}: error: {message}; see --help\n")
-
-
 def parse_args(argv: list[str] | None) -> ConfigFromLogArgs:
-    parser = _Parser(prog="vehicle-sim config-from-log", description=__doc__.split("\n\n")[1])
+    parser = OneLineParser(prog="vehicle-sim config-from-log", description=__doc__.split("\n\n")[1])
     parser.add_argument("log", type=Path, help="PX4 ULog (or schema-v1 CSV with px4_params)")
     parser.add_argument("--out", required=True, type=Path, help="config TOML to write")
     parser.add_argument("--preset", default="iris", choices=PRESET_NAMES)

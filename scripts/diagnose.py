@@ -14,7 +14,6 @@ per log). Progress goes to stderr. Exit codes: 0 done, 2 bad input (one line say
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 import time
@@ -31,6 +30,7 @@ from experiments.executors import SchedulerError, check_scheduler_address, job_e
 from flightlog.atomic_output import OutputError, atomic_output_dir, check_writable_dir
 from flightlog.reader import read_log, require_rates
 from flightlog.schema import FlightLog, FlightLogError
+from scripts.one_line_parser import OneLineParser
 from vehicle_sim import SimConfig, SimConfigError, load_sim_config
 
 EXIT_OK = 0
@@ -54,7 +54,7 @@ class DiagnoseArgs:
 
 
 def parse_args(argv: list[str] | None) -> DiagnoseArgs:
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="diagnose",
         description="Compare a simulation config with measured flight logs, name what it gets "
         "wrong (effect vocabulary), fit it, write report and extended config.",

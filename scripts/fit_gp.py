@@ -23,7 +23,6 @@ one-line reason on bad input.
 
 from __future__ import annotations
 
-import argparse
 import sys
 import time
 from dataclasses import dataclass
@@ -41,6 +40,7 @@ from gp.plots import plot_residuals
 from gp.prediction_check import refusal
 from gp.training import TrainingConfig, train_residual_model
 from planners.nominal_models import MODELS
+from scripts.one_line_parser import OneLineParser
 
 
 @dataclass(frozen=True)
@@ -54,16 +54,11 @@ class FitGpConfig:
     force: bool = False
 
 
-class _Parser(argparse.ArgumentParser):
-    """ArgumentParser whose errors are one line (no usage dump)."""
-
-    def error(self, message: str) -> None:  # type: ignore[override]
-        self.exit(2, f"{self.prog}: error: {message}; see --help\n")
-
-
 def parse_args(argv: list[str] | None) -> FitGpConfig:
     """Parse the command line into a FitGpConfig (exits with code 2 on bad arguments)."""
-    parser = _Parser(prog="fit-gp", description="Fit a sparse-GP residual model from flight logs.")
+    parser = OneLineParser(
+        prog="fit-gp", description="Fit a sparse-GP residual model from flight logs."
+    )
     parser.add_argument(
         "logs", nargs="+", type=Path, help="flight logs: schema-v1 CSV or PX4 ULog (.ulg)"
     )

@@ -9,7 +9,6 @@ ULog that no command can use, and says why. Exit codes: 0 done, 2 bad input.
 
 from __future__ import annotations
 
-import argparse
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -19,6 +18,7 @@ from flightlog.info import describe_log, describe_unusable_ulog
 from flightlog.reader import read_log
 from flightlog.schema import FlightLogError, sidecar_path, write_flight_log
 from flightlog.ulog import is_ulog, summarise_ulog, truncated_at
+from scripts.one_line_parser import OneLineParser
 
 EXIT_BAD_INPUT = 2
 
@@ -32,13 +32,8 @@ class FlightlogArgs:
     out: Path | None
 
 
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> None:  # type: ignore[override]
-        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message}; see --help\n")
-
-
 def parse_args(argv: list[str] | None) -> FlightlogArgs:
-    parser = _Parser(prog="flightlog", description="Inspect and convert flight logs.")
+    parser = OneLineParser(prog="flightlog", description="Inspect and convert flight logs.")
     sub = parser.add_subparsers(dest="command", required=True)
     info = sub.add_parser("info", help="what a log holds and what each command can do with it")
     info.add_argument("log", type=Path)
