@@ -14,7 +14,7 @@ from pathlib import Path
 from flightlog.atomic_output import OutputError, check_writable_file, write_text_atomic
 from flightlog.reader import read_log
 from flightlog.schema import FlightLogError
-from scripts.one_line_parser import OneLineParser
+from scripts.one_line_parser import OneLineParser, output_path
 from vehicle_sim.config import PRESET_NAMES
 from vehicle_sim.config_from_log import config_from_log
 from vehicle_sim.effects.base import SimConfigError
@@ -32,7 +32,7 @@ class ConfigFromLogArgs:
 def parse_args(argv: list[str] | None) -> ConfigFromLogArgs:
     parser = OneLineParser(prog="vehicle-sim config-from-log", description=__doc__.split("\n\n")[1])
     parser.add_argument("log", type=Path, help="PX4 ULog (or schema-v1 CSV with px4_params)")
-    parser.add_argument("--out", required=True, type=Path, help="config TOML to write")
+    parser.add_argument("--out", required=True, type=output_path, help="config TOML to write")
     parser.add_argument("--preset", default="iris", choices=PRESET_NAMES)
     args = parser.parse_args(argv)
     return ConfigFromLogArgs(args.log, args.out, args.preset)

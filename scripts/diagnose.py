@@ -30,7 +30,7 @@ from experiments.executors import SchedulerError, check_scheduler_address, job_e
 from flightlog.atomic_output import OutputError, atomic_output_dir, check_writable_dir
 from flightlog.reader import read_log, require_rates
 from flightlog.schema import FlightLog, FlightLogError
-from scripts.one_line_parser import OneLineParser
+from scripts.one_line_parser import OneLineParser, output_path
 from vehicle_sim import SimConfig, SimConfigError, load_sim_config
 
 EXIT_OK = 0
@@ -66,7 +66,7 @@ def parse_args(argv: list[str] | None) -> DiagnoseArgs:
     parser.add_argument(
         "--sim-config", required=True, help="simulation config TOML file or preset name"
     )
-    parser.add_argument("--out", required=True, type=Path, help="output directory")
+    parser.add_argument("--out", required=True, type=output_path, help="output directory")
     parser.add_argument(
         "--batch", action="store_true", help="diagnose every log on its own (one report each)"
     )

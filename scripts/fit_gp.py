@@ -40,7 +40,7 @@ from gp.plots import plot_residuals
 from gp.prediction_check import refusal
 from gp.training import TrainingConfig, train_residual_model
 from planners.nominal_models import MODELS
-from scripts.one_line_parser import OneLineParser
+from scripts.one_line_parser import OneLineParser, output_path
 
 
 @dataclass(frozen=True)
@@ -62,7 +62,7 @@ def parse_args(argv: list[str] | None) -> FitGpConfig:
     parser.add_argument(
         "logs", nargs="+", type=Path, help="flight logs: schema-v1 CSV or PX4 ULog (.ulg)"
     )
-    parser.add_argument("--out", required=True, type=Path, help="model file (MODEL.npz)")
+    parser.add_argument("--out", required=True, type=output_path, help="model file (MODEL.npz)")
     parser.add_argument("--features", default="velocity", choices=list(FEATURE_SETS))
     parser.add_argument("--nominal", default="kinematic_4dof", choices=list(MODELS))
     parser.add_argument(

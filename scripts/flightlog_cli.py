@@ -18,7 +18,7 @@ from flightlog.info import describe_log, describe_unusable_ulog
 from flightlog.reader import read_log
 from flightlog.schema import FlightLogError, sidecar_path, write_flight_log
 from flightlog.ulog import is_ulog, summarise_ulog, truncated_at
-from scripts.one_line_parser import OneLineParser
+from scripts.one_line_parser import OneLineParser, output_path
 
 EXIT_BAD_INPUT = 2
 
@@ -39,7 +39,7 @@ def parse_args(argv: list[str] | None) -> FlightlogArgs:
     info.add_argument("log", type=Path)
     conv = sub.add_parser("convert", help="PX4 ULog -> schema-v1 CSV + JSON sidecar")
     conv.add_argument("log", type=Path)
-    conv.add_argument("--out", required=True, type=Path, help="CSV path to write")
+    conv.add_argument("--out", required=True, type=output_path, help="CSV path to write")
     args = parser.parse_args(argv)
     return FlightlogArgs(args.command, args.log, getattr(args, "out", None))
 

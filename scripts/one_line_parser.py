@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 EXIT_BAD_INPUT = 2
 
@@ -13,3 +14,11 @@ class OneLineParser(argparse.ArgumentParser):
 
     def error(self, message: str) -> None:  # type: ignore[override]
         self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message}; see --help\n")
+
+
+def output_path(text: str) -> Path:
+    """An output file or folder from the command line (argparse ``type``). An empty one, as
+    ``--out "$OUT"`` gives with OUT unset, is refused: it would mean the current folder."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("empty path; give a file or folder name")
+    return Path(text)

@@ -13,7 +13,7 @@ import sys
 from pathlib import Path
 
 from flightlog.atomic_output import OutputError, check_writable_dir, describe_os_error
-from scripts.one_line_parser import OneLineParser
+from scripts.one_line_parser import OneLineParser, output_path
 
 REGIMES = ("rover_exp1", "rover_exp2", "rover_exp3", "example")
 
@@ -21,7 +21,7 @@ REGIMES = ("rover_exp1", "rover_exp2", "rover_exp3", "example")
 def main(argv: list[str] | None = None) -> int:
     ap = OneLineParser(prog="rover", description=__doc__.splitlines()[0])
     ap.add_argument("--regime", required=True, help=f"one of {', '.join(REGIMES)}")
-    ap.add_argument("--out", default="rover_out", help="output folder")
+    ap.add_argument("--out", type=output_path, default="rover_out", help="output folder")
     ap.add_argument("--trials", type=int, default=None, help="override the number of trials")
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args(argv)

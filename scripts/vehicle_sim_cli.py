@@ -33,6 +33,7 @@ from typing import Any
 from companion.realtime import MAX_RT_PRIORITY, raise_to_realtime
 from flightlog.atomic_output import OutputError, check_writable_file
 from flightlog.schema import sidecar_path
+from scripts.one_line_parser import output_path
 from vehicle_sim import EFFECT_NAMES, SimConfigError, Simulator, load_sim_config
 from vehicle_sim.backends import BACKEND_NAMES
 from vehicle_sim.mavlink import (
@@ -159,6 +160,7 @@ def parse_args(argv: Sequence[str] | None) -> VehicleSimCliConfig:
     )
     parser.add_argument(
         "--log",
+        type=output_path,
         metavar="FILE.csv",
         help="write the vehicle's onboard flight log (with acceleration and thrust) here on exit",
     )
@@ -195,7 +197,7 @@ def parse_args(argv: Sequence[str] | None) -> VehicleSimCliConfig:
         signing_key_path=args.signing_key,
         duration_s=args.duration_s,
         world_path=args.world,
-        log_path=args.log,
+        log_path=None if args.log is None else str(args.log),
         realtime_priority=args.realtime_priority,
     )
 
