@@ -28,14 +28,14 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from flightlog.atomic_output import OutputError
+from flightlog.atomic_output import OutputError, check_writable_file
 from flightlog.reader import read_log, require_modes, require_rates
 from flightlog.schema import FlightLogError
 from gp.errors import DatasetError, GPInputError, ModelFileError
 from gp.features import FEATURE_SETS
 from gp.inducing import STRATEGIES
 from gp.lag_identification import TAU_BOUNDS_S
-from gp.model_io import save_model
+from gp.model_io import model_path, save_model
 from gp.plots import plot_residuals
 from gp.prediction_check import refusal
 from gp.training import TrainingConfig, train_residual_model
@@ -182,6 +182,7 @@ def main(argv: list[str] | None = None) -> int:
             require_rates(logs[-1], "fit-gp")
             progress(f"read {path} ({logs[-1].n_rows} rows)")
         require_modes(logs, config.training.modes)
+        check_writable_file(model_path(config.out))  # found now, not after the fit
         result = train_residual_model(logs, config.training, progress)
         if not result.may_fly:
             print(f"fit-gp: {refusal(result.model)}", file=sys.stderr)

@@ -79,3 +79,15 @@ def test_fit_gp_identifies_the_lag_when_flying_first_order_lag(tmp_path, capsys)
     assert "identified velocity lag tau_s=0.55" in capsys.readouterr().err
     params = dict(load_model(out).features.nominal_params)
     assert params["tau_s"] == pytest.approx(0.55, rel=0.03)
+
+
+def test_an_unwritable_out_is_refused_before_the_fit(tmp_path, capsys):
+    """A file where the model's folder should be: one line, exit 2, before any GP is fitted
+    (with --check-horizon-s or many logs the fit takes minutes)."""
+    log = write_flight_log(tmp_path / "f.csv", record_log(60))
+    (tmp_path / "plain").write_text("")
+    out = tmp_path / "plain" / "model.npz"
+    assert main([str(log), "--out", str(out), "--no-plots", "--force"]) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert not [line for line in err if "fitting" in line], err
+    assert err[-1].startswith(f"fit-gp: error: --out {out}"), err
