@@ -28,7 +28,7 @@ from diagnosis.report import write_report
 from experiments.batch_diagnose import DiagnosisJob, diagnose_each
 from experiments.executors import SchedulerError, check_scheduler_address, job_executor
 from flightlog.atomic_output import OutputError, atomic_output_dir, check_writable_dir
-from flightlog.reader import read_log, require_rates
+from flightlog.reader import read_log, require_distinct, require_rates
 from flightlog.schema import FlightLog, FlightLogError
 from scripts.one_line_parser import OneLineParser, output_path
 from vehicle_sim import SimConfig, SimConfigError, load_sim_config
@@ -102,6 +102,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         check_writable_dir(args.out_dir)  # before minutes of work, not after
         sim_config = load_sim_config(args.sim_config)
+        if not args.batch:  # one diagnosis of all logs: a flight given twice would count twice
+            require_distinct(args.logs)
         logs = [read_log(p) for p in args.logs]
         for log in logs:
             require_rates(log, "diagnose")

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from flightlog.atomic_output import OutputError, check_writable_file
-from flightlog.reader import read_log, require_modes, require_rates
+from flightlog.reader import read_log, require_distinct, require_modes, require_rates
 from flightlog.schema import FlightLogError
 from gp.errors import DatasetError, GPInputError, ModelFileError
 from gp.features import FEATURE_SETS
@@ -176,6 +176,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"fit-gp [{time.perf_counter() - start:6.1f} s] {message}", file=sys.stderr)
 
     try:
+        require_distinct(config.logs)
         logs = []
         for path in config.logs:
             logs.append(read_log(path))

@@ -91,3 +91,22 @@ def test_an_unwritable_out_is_refused_before_the_fit(tmp_path, capsys):
     err = capsys.readouterr().err.splitlines()
     assert not [line for line in err if "fitting" in line], err
     assert err[-1].startswith(f"fit-gp: error: --out {out}"), err
+
+
+def test_the_same_flight_given_twice_is_refused(tmp_path, capsys):
+    """A log and a copy of it: its held-out rows would be training rows too, so the held-out
+    check would test the model on what it learned. One line naming both, exit 2; also for
+    diagnose."""
+    from scripts import diagnose
+
+    log = write_flight_log(tmp_path / "f.csv", record_log(60))
+    copy = tmp_path / "copy.csv"
+    copy.write_bytes(log.read_bytes())
+    assert main([str(log), str(copy), "--out", str(tmp_path / "m"), "--no-plots"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"{copy}: the same flight as {log}" in err[0], err
+    argv = [str(log), str(log), "--sim-config", "iris", "--out", str(tmp_path / "d")]
+    assert diagnose.main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "the same flight as" in err[0], err
+    assert not (tmp_path / "m.npz").exists() and not (tmp_path / "d").exists()
