@@ -185,4 +185,5 @@ def test_a_closed_loop_that_scores_no_row_says_so_in_the_headline(tmp_path):
     assert cl.segments > 0 and cl.scored.sum() == 0
     said = [w for w in d.warnings if w.startswith("closed-loop tracking not examined")]
     assert len(said) == 1 and f"{cl.reanchored} of {cl.segments}" in said[0], d.warnings
-    assert report_document(d)["closed_loop"]["gain"] is None
+    doc = report_document(d)["closed_loop"]
+    assert doc["gain"] is None and doc["ground_hold_gain"] is None  # no row: no ratio
