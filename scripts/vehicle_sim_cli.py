@@ -123,7 +123,12 @@ def _effect_overrides(specs: Sequence[str]) -> tuple[tuple[str, tuple[tuple[str,
 
 
 def parse_args(argv: Sequence[str] | None) -> VehicleSimCliConfig:
-    parser = _Parser(prog=PROG, description=__doc__.splitlines()[0])
+    parser = _Parser(
+        prog=PROG,
+        description=__doc__.splitlines()[0],
+        epilog="Also: vehicle-sim config-from-log LOG --out my_vehicle.toml (a config with a "
+        "PX4 log's tuning and hover thrust; --help there).",
+    )
     parser.add_argument("--vehicle", default="iris", help="preset name or config TOML path")
     parser.add_argument(
         "--effect",

@@ -131,3 +131,10 @@ def test_serves_mavlink_and_stops_cleanly_on_signal(sig):
             proc.kill()
             proc.wait(5.0)
         gcs.close()
+
+
+def test_help_names_the_config_from_log_command(capsys):
+    with pytest.raises(SystemExit) as exc:
+        parse_args(["--help"])
+    assert exc.value.code == 0
+    assert "vehicle-sim config-from-log LOG --out my_vehicle.toml" in capsys.readouterr().out
