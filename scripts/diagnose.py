@@ -154,7 +154,7 @@ def _run_batch(
                 write_report(result, tmp / name, [path.name], args.sim_config, final)
                 summary.append(
                     {
-                        "log": path.name,
+                        "log": str(path),  # as given: two logs may share a file name
                         "report": f"{name}/report.json",
                         "verdict": list(result.verdict),
                         "gain": result.gain,
