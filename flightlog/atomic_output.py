@@ -49,6 +49,17 @@ def check_writable_file(path: str | Path) -> Path:
     return path
 
 
+def check_not_an_input(path: str | Path, inputs: list[Path]) -> None:
+    """OutputError in one line when the output ``path`` is one of the ``inputs`` being read:
+    writing there would replace it (a converted log over the only copy of the flight)."""
+    out = Path(path)
+    for source in inputs:
+        if out.exists() and source.exists() and os.path.samefile(out, source):
+            raise OutputError(
+                f"{out}: is the log being read; writing there would replace it: choose another path"
+            )
+
+
 def check_writable_dir(path: str | Path) -> Path:
     """Prove an output folder can be put at ``path`` (before any long computation): no file in
     the way, and its parent writable. OutputError in one line otherwise."""

@@ -11,7 +11,12 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from flightlog.atomic_output import OutputError, check_writable_file, write_text_atomic
+from flightlog.atomic_output import (
+    OutputError,
+    check_not_an_input,
+    check_writable_file,
+    write_text_atomic,
+)
 from flightlog.reader import read_log
 from flightlog.schema import FlightLogError
 from scripts.one_line_parser import OneLineParser, output_path
@@ -45,6 +50,7 @@ def main(argv: list[str] | None = None) -> int:
         return int(exc.code or 0)
     try:
         built = config_from_log(read_log(args.log), args.preset)
+        check_not_an_input(args.out, [args.log])
         check_writable_file(args.out)
         write_text_atomic(args.out, built.toml)
     except OutputError as exc:

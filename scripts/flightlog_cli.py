@@ -13,7 +13,7 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from flightlog.atomic_output import OutputError, check_writable_file
+from flightlog.atomic_output import OutputError, check_not_an_input, check_writable_file
 from flightlog.info import describe_log, describe_unusable_ulog
 from flightlog.reader import read_log
 from flightlog.schema import FlightLogError, sidecar_path, write_flight_log
@@ -49,6 +49,7 @@ def convert(log_path: Path, out: Path) -> Path:
     rename). The output place is checked before writing (OutputError in one line), so a folder
     or a file in the way leaves nothing behind, not even the sidecar."""
     log = read_log(log_path)
+    check_not_an_input(out, [log_path])
     check_writable_file(out)
     check_writable_file(sidecar_path(out))
     return write_flight_log(out, log)

@@ -129,3 +129,14 @@ def test_a_ulog_with_corrupt_definitions_shows_only_our_lines(tmp_path, capsys):
     captured = capsys.readouterr()
     assert "Warning" not in captured.out + captured.err, captured.out[:300]
     assert "cannot use this log: ULog is corrupt" in captured.out
+
+
+def test_convert_onto_its_own_input_is_refused_and_the_ulog_kept(tmp_path, capsys):
+    """--out naming the ULog being converted would replace the only copy of the flight."""
+    ulog = tmp_path / "flight.ulg"
+    shutil.copy(AUTO, ulog)
+    assert flightlog_cli.main(["convert", str(ulog), "--out", str(ulog)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "is the log being read" in err[0], err
+    assert ulog.read_bytes() == AUTO.read_bytes()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["flight.ulg"]

@@ -116,3 +116,12 @@ def test_help_describes_the_whole_command(capsys):
     assert vehicle_sim_cli.main(["config-from-log", "--help"]) == 0
     help_text = " ".join(capsys.readouterr().out.split())
     assert "whose mass agrees with its hover thrust" in help_text
+
+
+def test_out_onto_the_log_is_refused_and_the_log_kept(tmp_path, capsys):
+    log = tmp_path / "flight.ulg"
+    log.write_bytes(AUTO.read_bytes())
+    assert vehicle_sim_cli.main(["config-from-log", str(log), "--out", str(log)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "is the log being read" in err[0], err
+    assert log.read_bytes() == AUTO.read_bytes()
