@@ -51,12 +51,14 @@ def check_writable_file(path: str | Path) -> Path:
 
 def check_not_an_input(path: str | Path, inputs: list[Path]) -> None:
     """OutputError in one line when the output ``path`` is one of the ``inputs`` being read:
-    writing there would replace it (a converted log over the only copy of the flight)."""
+    writing there would replace it (a converted log over the only copy of the flight, a flight
+    log over its mission)."""
     out = Path(path)
     for source in inputs:
         if out.exists() and source.exists() and os.path.samefile(out, source):
             raise OutputError(
-                f"{out}: is the log being read; writing there would replace it: choose another path"
+                f"{out}: is an input being read; writing there would replace it: choose "
+                "another path"
             )
 
 

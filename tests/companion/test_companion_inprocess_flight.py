@@ -199,3 +199,14 @@ def test_refused_offboard_fails_the_flight_safely_and_lands() -> None:
     assert outcome.disarmed and not sim.state.armed
     assert -sim.state.pos_ned_m[2] < 0.05
     assert messages[-1].startswith("safe stop: landed and disarmed")
+
+
+def test_cli_log_onto_the_mission_file_is_refused_and_the_mission_kept(
+    tmp_path: Path, capsys
+) -> None:
+    mission = tmp_path / "line.toml"
+    mission.write_text(LINE.read_text())
+    code = main([str(mission), "--link", "inprocess", "--log", str(mission)])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and "is an input being read" in err, err
+    assert mission.read_text() == LINE.read_text()

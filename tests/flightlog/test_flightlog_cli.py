@@ -137,6 +137,6 @@ def test_convert_onto_its_own_input_is_refused_and_the_ulog_kept(tmp_path, capsy
     shutil.copy(AUTO, ulog)
     assert flightlog_cli.main(["convert", str(ulog), "--out", str(ulog)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "is the log being read" in err[0], err
+    assert len(err) == 1 and "is an input being read" in err[0], err
     assert ulog.read_bytes() == AUTO.read_bytes()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["flight.ulg"]

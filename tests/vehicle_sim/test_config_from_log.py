@@ -123,5 +123,5 @@ def test_out_onto_the_log_is_refused_and_the_log_kept(tmp_path, capsys):
     log.write_bytes(AUTO.read_bytes())
     assert vehicle_sim_cli.main(["config-from-log", str(log), "--out", str(log)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "is the log being read" in err[0], err
+    assert len(err) == 1 and "is an input being read" in err[0], err
     assert log.read_bytes() == AUTO.read_bytes()
