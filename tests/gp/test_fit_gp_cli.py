@@ -41,7 +41,10 @@ def test_fit_gp_writes_model_plots_and_reports_rmse(tmp_path, capsys):
         (["LOG", "--inducing", "kmeans"], "invalid choice: 'kmeans'"),
         (["LOG", "--holdout-fraction", "1.5"], "--holdout-fraction must be in (0, 1)"),
         (["LOG", "--nominal-param", "tau_s"], "expected NAME=NUMBER"),
-        (["LOG", "--nominal", "px4_velocity_pi"], "its sidecar has no velocity_loop_gains"),
+        (
+            ["LOG", "--nominal", "px4_velocity_pi"],
+            "neither its sidecar's velocity_loop_gains nor its PX4 parameters",
+        ),
         (["LOG", "--seed", "-1"], "--seed must be >= 0, got -1"),
         (["LOG", "--restarts", "-1"], "--restarts must be >= 1 starting point(s), got -1"),
     ],
