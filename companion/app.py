@@ -18,7 +18,7 @@ from companion.mission import Mission, load_mission
 from companion.mission_reference import reference_of
 from companion.planner_registry import OBSTACLE_PLANNERS, honours_obstacles, make_planner
 from companion.runner import FlightOutcome, RunnerConfig, fly_mission
-from flightlog.atomic_output import OutputError
+from flightlog.atomic_output import OutputError, check_not_an_input
 from flightlog.schema import sidecar_path
 
 LinkKind = Literal["mavsdk", "pymavlink", "inprocess"]
@@ -81,6 +81,8 @@ def run_companion(config: CompanionConfig, progress: Callable[[str], None]) -> C
         CompanionInputError: bad mission, planner or vehicle (before anything flies).
     """
     try:
+        if config.seed < 0:
+            raise ValueError(f"--seed must be >= 0, got {config.seed}")
         mission = load_mission(config.mission_path)
         world = _obstacle_world(config, mission)
         planner = make_planner(
@@ -95,6 +97,7 @@ def run_companion(config: CompanionConfig, progress: Callable[[str], None]) -> C
     except ValueError as exc:  # MissionError, SimConfigError, unknown planner or URL
         raise CompanionInputError(str(exc)) from None
     try:
+        check_not_an_input(config.log_path, [config.mission_path])
         live = LiveFlightLog(config.log_path, _log_metadata(config, mission, link))
     except OutputError as exc:  # refused before take-off, not after landing
         link.close()

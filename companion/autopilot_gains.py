@@ -4,17 +4,7 @@ velocity loop (planners.nominal_models.px4_velocity_pi)."""
 from __future__ import annotations
 
 from companion.link import Link
-from gp.velocity_integrator import GAINS_METADATA_KEY
-
-# px4_velocity_pi's parameter -> PX4's parameter ([PX4-params] MPC_XY_VEL_*_ACC, MPC_Z_VEL_*_ACC)
-VELOCITY_LOOP_PARAMS: dict[str, str] = {
-    "vel_p_xy": "MPC_XY_VEL_P_ACC",
-    "vel_i_xy": "MPC_XY_VEL_I_ACC",
-    "vel_d_xy": "MPC_XY_VEL_D_ACC",
-    "vel_p_z": "MPC_Z_VEL_P_ACC",
-    "vel_i_z": "MPC_Z_VEL_I_ACC",
-    "vel_d_z": "MPC_Z_VEL_D_ACC",
-}
+from gp.velocity_integrator import GAINS_METADATA_KEY, VELOCITY_LOOP_PARAMS
 
 
 def velocity_loop_gains(link: Link) -> tuple[tuple[str, float], ...]:

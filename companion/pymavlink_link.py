@@ -224,11 +224,16 @@ class PymavlinkLink:
             self._service(now_s)
             if now_s >= t_s or (stop is not None and stop()):
                 return
-            next_service_s = min(
-                self._setpoint_sent_s + self._setpoint_period_s
-                if self._setpoint is not None
-                else math.inf,
-                self._heartbeat_sent_s + 1.0,
+            # nothing is sent before the autopilot is known (_service): wait for it in the socket
+            next_service_s = (
+                math.inf
+                if self._target is None
+                else min(
+                    self._setpoint_sent_s + self._setpoint_period_s
+                    if self._setpoint is not None
+                    else math.inf,
+                    self._heartbeat_sent_s + 1.0,
+                )
             )
             wait_s = max(0.0, min(t_s, next_service_s) - now_s)
             msg = mav.recv_match(blocking=True, timeout=wait_s)

@@ -23,7 +23,7 @@ from scipy.ndimage import uniform_filter1d
 
 from diagnosis.candidates import FORCE_CAUSES
 from diagnosis.cause import Cause, flatten_params
-from diagnosis.closed_loop import ClosedLoopResult, closed_loop
+from diagnosis.closed_loop import NEAR_GROUND_ALT_M, ClosedLoopResult, closed_loop
 from diagnosis.command_path import (
     COMMAND_CAUSES,
     FLIGHT_CONTROL,
@@ -284,6 +284,16 @@ def diagnose(
             f"replay not examined: no airborne run of more than {config.window_s + LEAD_IN_S:g} s "
             "in which the logged command drives the vehicle (OFFBOARD, or a position-controlled "
             "PX4 mode); fly longer position-controlled segments"
+        )
+    if test and tracking.segments and not tracking.scored.any():
+        why = (
+            f"{tracking.reanchored} of {tracking.segments} segments re-anchored: the config's "
+            "vehicle touched down where the real one flew; check its mass and thrust"
+            if tracking.reanchored
+            else f"the held-out rows are all ground holds below {NEAR_GROUND_ALT_M} m"
+        )
+        warnings.append(
+            f"closed-loop tracking not examined: no held-out row of a whole flight segment ({why})"
         )
     if not_ident:
         warnings.append(

@@ -61,8 +61,12 @@ def report_document(diagnosis: Diagnosis) -> dict[str, Any]:
         "closed_loop": {
             "baseline_vel_rmse_mps": _num(cl.baseline_rmse_mps()),
             "extended_vel_rmse_mps": _num(cl.extended_rmse_mps()),
-            "gain": _num(cl.gain() if diagnosis.added_effects else 1.0),
-            "ground_hold_gain": _num(cl.ground_hold_gain() if diagnosis.added_effects else 1.0),
+            "gain": _num(cl.gain() if diagnosis.added_effects or not cl.scored.any() else 1.0),
+            "ground_hold_gain": _num(
+                cl.ground_hold_gain()
+                if diagnosis.added_effects or not (cl.whole & cl.near_ground).any()
+                else 1.0
+            ),
             "segments": cl.segments,
             "segments_reanchored": cl.reanchored,
             "segments_reanchored_baseline": cl.reanchored_baseline,

@@ -4,7 +4,8 @@ A file is written to a temporary sibling and renamed over the target (``os.repla
 on one filesystem); a folder of outputs (a report with its plots, a model with its figures) is
 filled in a temporary sibling folder and renamed into place as a whole, replacing an earlier
 one. Errors on the output side become :class:`OutputError` with one line naming the path and
-the fix, never a traceback.
+the fix, never a traceback. The temporaries are private (0600 / 0700) while filled; what
+appears gets the mode the user's umask gives any new file or folder.
 """
 
 from __future__ import annotations
@@ -48,6 +49,19 @@ def check_writable_file(path: str | Path) -> Path:
     return path
 
 
+def check_not_an_input(path: str | Path, inputs: list[Path]) -> None:
+    """OutputError in one line when the output ``path`` is one of the ``inputs`` being read:
+    writing there would replace it (a converted log over the only copy of the flight, a flight
+    log over its mission)."""
+    out = Path(path)
+    for source in inputs:
+        if out.exists() and source.exists() and os.path.samefile(out, source):
+            raise OutputError(
+                f"{out}: is an input being read; writing there would replace it: choose "
+                "another path"
+            )
+
+
 def check_writable_dir(path: str | Path) -> Path:
     """Prove an output folder can be put at ``path`` (before any long computation): no file in
     the way, and its parent writable. OutputError in one line otherwise."""
@@ -63,6 +77,13 @@ def check_writable_dir(path: str | Path) -> Path:
     return path
 
 
+def _umask_mode(full: int) -> int:
+    """``full`` (0o666 for a file, 0o777 for a folder) less the process's umask."""
+    umask = os.umask(0)
+    os.umask(umask)
+    return full & ~umask
+
+
 def write_text_atomic(path: str | Path, text: str) -> Path:
     """Write ``text`` to ``path`` atomically (temporary sibling, then rename)."""
     return write_bytes_atomic(path, text.encode())
@@ -75,6 +96,7 @@ def write_bytes_atomic(path: str | Path, data: bytes) -> Path:
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
         try:
+            os.fchmod(fd, _umask_mode(0o666))
             with os.fdopen(fd, "wb") as fh:
                 fh.write(data)
             os.replace(tmp, path)
@@ -98,6 +120,7 @@ def atomic_output_dir(path: str | Path) -> Iterator[Path]:
             raise NotADirectoryError(20, "Not a directory")
         path.parent.mkdir(parents=True, exist_ok=True)
         tmp = Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}."))
+        tmp.chmod(_umask_mode(0o777))
     except OSError as exc:
         raise OutputError(describe_os_error(path, exc)) from None
     try:

@@ -6,6 +6,7 @@ without them is refused (it is not a ULog); anything else is read as schema-v1 C
 
 from __future__ import annotations
 
+import hashlib
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
@@ -33,6 +34,25 @@ def read_log(path: str | Path) -> FlightLog:
             "copy the log again from the vehicle (or pass a schema-v1 CSV)"
         )
     return read_flight_log(path)
+
+
+def require_distinct(paths: Sequence[Path]) -> None:
+    """Raise FlightLogError when one flight is given twice (the same file, or a copy of it):
+    counted twice, its held-out rows would also be training rows, and a check on them would
+    test the model on what it learned. Compared by content (sha256); unreadable paths are left
+    to the reader."""
+    seen: dict[str, Path] = {}
+    for path in paths:
+        try:
+            digest = hashlib.sha256(Path(path).read_bytes()).hexdigest()
+        except OSError:
+            continue
+        if digest in seen:
+            raise FlightLogError(
+                f"{path}: the same flight as {seen[digest]} (given twice); pass each log once, "
+                "or held-out rows would also be training rows"
+            )
+        seen[digest] = path
 
 
 def log_rates_hz(log: FlightLog) -> dict[str, float]:

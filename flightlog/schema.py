@@ -189,8 +189,15 @@ def read_flight_log(path: str | Path, max_gap_s: float | None = None) -> FlightL
         FlightLogError: one line naming the file, row (1-based data row) and column.
     """
     path = Path(path)
+    if path.is_dir():
+        raise FlightLogError(
+            f"{path}: a folder, not a flight log; pass the log files in it (schema-v1 CSV or "
+            "PX4 .ulg), e.g. DIR/*.csv"
+        )
     if not path.is_file():
-        raise FlightLogError(f"{path}: no such flight log; pass the path of a schema-v1 CSV file")
+        raise FlightLogError(
+            f"{path}: no such flight log; pass the path of a schema-v1 CSV file or a PX4 .ulg"
+        )
     try:
         with path.open(newline="") as fh:
             reader = csv.reader(fh)

@@ -31,6 +31,8 @@ Continuous signals are interpolated onto the local-position times, setpoints and
 
 from __future__ import annotations
 
+import contextlib
+import io
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -64,6 +66,16 @@ def is_ulog(path: str | Path) -> bool:
         return False
 
 
+def _parse(path: Path):
+    """pyulog's ULog of ``path`` read for :data:`TOPICS`, with what pyulog prints about a
+    corrupt file (a line per unknown message id, on stdout) kept off the user's terminal: the
+    caller says what is wrong in one line."""
+    from pyulog import ULog  # imported here: the CSV path needs no pyulog
+
+    with contextlib.redirect_stdout(io.StringIO()):
+        return ULog(str(path), message_name_filter_list=list(TOPICS))
+
+
 def truncated_at(path: str | Path) -> int | None:
     """Byte offset of an incomplete last message (a truncated ULog), else None.
 
@@ -89,8 +101,6 @@ def read_ulog(path: str | Path) -> FlightLog:
         FlightLogError: unreadable or truncated file, not a multirotor, no valid motion (one
             line naming what is wrong and what to fly or log instead).
     """
-    from pyulog import ULog  # imported here: the CSV path needs no pyulog
-
     path = Path(path)
     if not path.is_file():
         raise FlightLogError(f"{path}: no such file; pass a PX4 .ulg or a schema-v1 CSV")
@@ -106,7 +116,7 @@ def read_ulog(path: str | Path) -> FlightLog:
             f"{path.stat().st_size}); copy the complete .ulg from the vehicle's SD card"
         )
     try:
-        ulog = ULog(str(path), message_name_filter_list=list(TOPICS))
+        ulog = _parse(path)
     except Exception as exc:  # pyulog raises several types for corrupt files
         raise FlightLogError(
             f"{path}: not a readable ULog file ({type(exc).__name__}: {exc}); "
@@ -142,13 +152,11 @@ def summarise_ulog(path: str | Path) -> dict[str, object]:
     Raises:
         FlightLogError: not a ULog, or pyulog cannot read even its header.
     """
-    from pyulog import ULog
-
     path = Path(path)
     if not is_ulog(path):
         raise FlightLogError(f"{path}: not a ULog file (no ULog magic bytes)")
     try:
-        ulog = ULog(str(path), message_name_filter_list=list(TOPICS))
+        ulog = _parse(path)
     except Exception as exc:  # pyulog raises several types for corrupt files
         raise FlightLogError(f"{path}: not a readable ULog file ({type(exc).__name__})") from None
     t0, t1 = ulog.start_timestamp, ulog.last_timestamp

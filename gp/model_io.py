@@ -180,6 +180,12 @@ def read_model_header(path: str | Path) -> dict[str, object]:
 
 
 def _read(path: Path) -> tuple[dict[str, object], dict[str, np.ndarray]]:
+    given = path.with_suffix("")  # what was passed, when model_path added the suffix
+    if not path.is_file() and given.is_file():
+        raise ModelFileError(
+            f"{given}: not a model file (a model is the {MODEL_SUFFIX} file fit-gp writes); "
+            "pass that file, or fit one with fit-gp"
+        )
     if not path.is_file():
         old = path.with_suffix(".json")
         hint = (

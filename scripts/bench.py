@@ -12,13 +12,14 @@ Usage:
 
 from __future__ import annotations
 
-import argparse
 import importlib
 import json
 import sys
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+
+from scripts.one_line_parser import OneLineParser
 
 PARTS: dict[str, str] = {
     "sim": "experiments.bench.sim",
@@ -43,7 +44,7 @@ class BenchConfig:
 
 
 def parse_args(argv: Sequence[str] | None) -> BenchConfig:
-    parser = argparse.ArgumentParser(prog="bench", description=__doc__.splitlines()[0])
+    parser = OneLineParser(prog="bench", description=__doc__.splitlines()[0])
     parser.add_argument(
         "--only",
         action="append",

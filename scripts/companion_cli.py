@@ -15,7 +15,6 @@ HOLD and LAND, and the companion waited for it to disarm).
 
 from __future__ import annotations
 
-import argparse
 import signal
 import sys
 from pathlib import Path
@@ -30,6 +29,7 @@ from companion.app import (
 )
 from companion.planner_registry import PLANNER_NAMES
 from companion.runner import COMPANION_RT_PRIORITY, RunnerConfig, Terminated
+from scripts.one_line_parser import OneLineParser, output_path
 
 EXIT_COMPLETED = 0
 EXIT_FAILED = 1
@@ -41,7 +41,7 @@ EXIT_TERMINATED = 143  # 128 + SIGTERM, as shells report it
 
 def parse_args(argv: list[str] | None) -> CompanionConfig:
     """Command line -> config; argparse exits with code 2 on bad options."""
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="companion",
         description="Fly a mission file over MAVLink (MAVSDK or pymavlink) or in process.",
         epilog="Exit codes: 0 completed, 1 failed or goal not reached, 2 bad input, "
@@ -60,7 +60,9 @@ def parse_args(argv: list[str] | None) -> CompanionConfig:
         "nmpc_clutter)",
     )
     parser.add_argument("--rate-hz", type=float, default=50.0, help="control loop rate [Hz]")
-    parser.add_argument("--log", type=Path, default=Path("out/flight.csv"), help="flight log")
+    parser.add_argument(
+        "--log", type=output_path, default=Path("out/flight.csv"), help="flight log"
+    )
     parser.add_argument("--seed", type=int, default=0, help="simulator seed (inprocess)")
     parser.add_argument("--vehicle", default="iris", help="simulator preset or config (inprocess)")
     parser.add_argument(

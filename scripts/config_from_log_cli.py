@@ -7,15 +7,19 @@ assumed (in the TOML's comments and on stderr). Exit codes: 0 done, 2 bad input.
 
 from __future__ import annotations
 
-import argparse
-import os
 import sys
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
+from flightlog.atomic_output import (
+    OutputError,
+    check_not_an_input,
+    check_writable_file,
+    write_text_atomic,
+)
 from flightlog.reader import read_log
 from flightlog.schema import FlightLogError
+from scripts.one_line_parser import OneLineParser, output_path
 from vehicle_sim.config import PRESET_NAMES
 from vehicle_sim.config_from_log import config_from_log
 from vehicle_sim.effects.base import SimConfigError
@@ -30,15 +34,10 @@ class ConfigFromLogArgs:
     preset: str
 
 
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> None:  # type: ignore[override]
-        self.exit(2, f"{self.prog}: error: {message}; see --help\n")
-
-
 def parse_args(argv: list[str] | None) -> ConfigFromLogArgs:
-    parser = _Parser(prog="vehicle-sim config-from-log", description=__doc__.splitlines()[2])
+    parser = OneLineParser(prog="vehicle-sim config-from-log", description=__doc__.split("\n\n")[1])
     parser.add_argument("log", type=Path, help="PX4 ULog (or schema-v1 CSV with px4_params)")
-    parser.add_argument("--out", required=True, type=Path, help="config TOML to write")
+    parser.add_argument("--out", required=True, type=output_path, help="config TOML to write")
     parser.add_argument("--preset", default="iris", choices=PRESET_NAMES)
     args = parser.parse_args(argv)
     return ConfigFromLogArgs(args.log, args.out, args.preset)
@@ -51,14 +50,15 @@ def main(argv: list[str] | None = None) -> int:
         return int(exc.code or 0)
     try:
         built = config_from_log(read_log(args.log), args.preset)
+        check_not_an_input(args.out, [args.log])
+        check_writable_file(args.out)
+        write_text_atomic(args.out, built.toml)
+    except OutputError as exc:
+        print(f"vehicle-sim config-from-log: --out {exc}", file=sys.stderr)
+        return 2
     except (FlightLogError, SimConfigError, ValueError) as exc:
         print(f"vehicle-sim config-from-log: {exc}", file=sys.stderr)
         return 2
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{args.out.name}.", dir=args.out.parent)
-    with os.fdopen(fd, "w") as fh:
-        fh.write(built.toml)
-    os.replace(tmp, args.out)
     for line in built.from_log:
         print(f"from the log: {line}", file=sys.stderr)
     for line in built.assumed:

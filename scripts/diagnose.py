@@ -14,7 +14,6 @@ per log). Progress goes to stderr. Exit codes: 0 done, 2 bad input (one line say
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 import time
@@ -29,8 +28,9 @@ from diagnosis.report import write_report
 from experiments.batch_diagnose import DiagnosisJob, diagnose_each
 from experiments.executors import SchedulerError, check_scheduler_address, job_executor
 from flightlog.atomic_output import OutputError, atomic_output_dir, check_writable_dir
-from flightlog.reader import read_log, require_rates
+from flightlog.reader import read_log, require_distinct, require_rates
 from flightlog.schema import FlightLog, FlightLogError
+from scripts.one_line_parser import OneLineParser, output_path
 from vehicle_sim import SimConfig, SimConfigError, load_sim_config
 
 EXIT_OK = 0
@@ -54,7 +54,7 @@ class DiagnoseArgs:
 
 
 def parse_args(argv: list[str] | None) -> DiagnoseArgs:
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="diagnose",
         description="Compare a simulation config with measured flight logs, name what it gets "
         "wrong (effect vocabulary), fit it, write report and extended config.",
@@ -66,7 +66,7 @@ def parse_args(argv: list[str] | None) -> DiagnoseArgs:
     parser.add_argument(
         "--sim-config", required=True, help="simulation config TOML file or preset name"
     )
-    parser.add_argument("--out", required=True, type=Path, help="output directory")
+    parser.add_argument("--out", required=True, type=output_path, help="output directory")
     parser.add_argument(
         "--batch", action="store_true", help="diagnose every log on its own (one report each)"
     )
@@ -102,6 +102,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         check_writable_dir(args.out_dir)  # before minutes of work, not after
         sim_config = load_sim_config(args.sim_config)
+        if not args.batch:  # one diagnosis of all logs: a flight given twice would count twice
+            require_distinct(args.logs)
         logs = [read_log(p) for p in args.logs]
         for log in logs:
             require_rates(log, "diagnose")
@@ -152,7 +154,7 @@ def _run_batch(
                 write_report(result, tmp / name, [path.name], args.sim_config, final)
                 summary.append(
                     {
-                        "log": path.name,
+                        "log": str(path),  # as given: two logs may share a file name
                         "report": f"{name}/report.json",
                         "verdict": list(result.verdict),
                         "gain": result.gain,

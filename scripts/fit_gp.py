@@ -23,24 +23,24 @@ one-line reason on bad input.
 
 from __future__ import annotations
 
-import argparse
 import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from flightlog.atomic_output import OutputError
-from flightlog.reader import read_log, require_modes, require_rates
+from flightlog.atomic_output import OutputError, check_writable_file
+from flightlog.reader import read_log, require_distinct, require_modes, require_rates
 from flightlog.schema import FlightLogError
 from gp.errors import DatasetError, GPInputError, ModelFileError
 from gp.features import FEATURE_SETS
 from gp.inducing import STRATEGIES
 from gp.lag_identification import TAU_BOUNDS_S
-from gp.model_io import save_model
+from gp.model_io import model_path, save_model
 from gp.plots import plot_residuals
 from gp.prediction_check import refusal
 from gp.training import TrainingConfig, train_residual_model
 from planners.nominal_models import MODELS
+from scripts.one_line_parser import OneLineParser, output_path
 
 
 @dataclass(frozen=True)
@@ -54,20 +54,15 @@ class FitGpConfig:
     force: bool = False
 
 
-class _Parser(argparse.ArgumentParser):
-    """ArgumentParser whose errors are one line (no usage dump)."""
-
-    def error(self, message: str) -> None:  # type: ignore[override]
-        self.exit(2, f"{self.prog}: error: {message}; see --help\n")
-
-
 def parse_args(argv: list[str] | None) -> FitGpConfig:
     """Parse the command line into a FitGpConfig (exits with code 2 on bad arguments)."""
-    parser = _Parser(prog="fit-gp", description="Fit a sparse-GP residual model from flight logs.")
+    parser = OneLineParser(
+        prog="fit-gp", description="Fit a sparse-GP residual model from flight logs."
+    )
     parser.add_argument(
         "logs", nargs="+", type=Path, help="flight logs: schema-v1 CSV or PX4 ULog (.ulg)"
     )
-    parser.add_argument("--out", required=True, type=Path, help="model file (MODEL.npz)")
+    parser.add_argument("--out", required=True, type=output_path, help="model file (MODEL.npz)")
     parser.add_argument("--features", default="velocity", choices=list(FEATURE_SETS))
     parser.add_argument("--nominal", default="kinematic_4dof", choices=list(MODELS))
     parser.add_argument(
@@ -115,6 +110,10 @@ def parse_args(argv: list[str] | None) -> FitGpConfig:
             parser.error(f"--nominal-param {item!r}: expected NAME=NUMBER")
     if args.m < 1:
         parser.error(f"--m must be >= 1, got {args.m}")
+    if args.seed < 0:
+        parser.error(f"--seed must be >= 0, got {args.seed}")
+    if args.restarts < 1:
+        parser.error(f"--restarts must be >= 1 starting point(s), got {args.restarts}")
     if not 0.0 < args.holdout_fraction < 1.0:
         parser.error(f"--holdout-fraction must be in (0, 1), got {args.holdout_fraction}")
     training = TrainingConfig(
@@ -177,12 +176,14 @@ def main(argv: list[str] | None = None) -> int:
         print(f"fit-gp [{time.perf_counter() - start:6.1f} s] {message}", file=sys.stderr)
 
     try:
+        require_distinct(config.logs)
         logs = []
         for path in config.logs:
             logs.append(read_log(path))
             require_rates(logs[-1], "fit-gp")
             progress(f"read {path} ({logs[-1].n_rows} rows)")
         require_modes(logs, config.training.modes)
+        check_writable_file(model_path(config.out))  # found now, not after the fit
         result = train_residual_model(logs, config.training, progress)
         if not result.may_fly:
             print(f"fit-gp: {refusal(result.model)}", file=sys.stderr)

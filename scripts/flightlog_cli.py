@@ -9,17 +9,16 @@ ULog that no command can use, and says why. Exit codes: 0 done, 2 bad input.
 
 from __future__ import annotations
 
-import argparse
-import os
 import sys
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
+from flightlog.atomic_output import OutputError, check_not_an_input, check_writable_file
 from flightlog.info import describe_log, describe_unusable_ulog
 from flightlog.reader import read_log
 from flightlog.schema import FlightLogError, sidecar_path, write_flight_log
 from flightlog.ulog import is_ulog, summarise_ulog, truncated_at
+from scripts.one_line_parser import OneLineParser, output_path
 
 EXIT_BAD_INPUT = 2
 
@@ -33,38 +32,27 @@ class FlightlogArgs:
     out: Path | None
 
 
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> None:  # type: ignore[override]
-        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message}; see --help\n")
-
-
 def parse_args(argv: list[str] | None) -> FlightlogArgs:
-    parser = _Parser(prog="flightlog", description="Inspect and convert flight logs.")
+    parser = OneLineParser(prog="flightlog", description="Inspect and convert flight logs.")
     sub = parser.add_subparsers(dest="command", required=True)
     info = sub.add_parser("info", help="what a log holds and what each command can do with it")
     info.add_argument("log", type=Path)
     conv = sub.add_parser("convert", help="PX4 ULog -> schema-v1 CSV + JSON sidecar")
     conv.add_argument("log", type=Path)
-    conv.add_argument("--out", required=True, type=Path, help="CSV path to write")
+    conv.add_argument("--out", required=True, type=output_path, help="CSV path to write")
     args = parser.parse_args(argv)
     return FlightlogArgs(args.command, args.log, getattr(args, "out", None))
 
 
 def convert(log_path: Path, out: Path) -> Path:
-    """Read any log and write it as schema-v1 CSV + sidecar, atomically (temp, then rename)."""
+    """Read any log and write it as schema-v1 CSV + sidecar, each atomically (temp, then
+    rename). The output place is checked before writing (OutputError in one line), so a folder
+    or a file in the way leaves nothing behind, not even the sidecar."""
     log = read_log(log_path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
-    os.close(fd)
-    tmp_path = Path(tmp)
-    try:
-        write_flight_log(tmp_path, log)
-        os.replace(sidecar_path(tmp_path), sidecar_path(out))
-        os.replace(tmp_path, out)
-    finally:
-        for p in (tmp_path, sidecar_path(tmp_path)):
-            p.unlink(missing_ok=True)
-    return out
+    check_not_an_input(out, [log_path])
+    check_writable_file(out)
+    check_writable_file(sidecar_path(out))
+    return write_flight_log(out, log)
 
 
 def _info_lines(path: Path) -> list[str]:
@@ -91,6 +79,9 @@ def main(argv: list[str] | None = None) -> int:
             assert args.out is not None
             out = convert(args.log, args.out)
             print(f"wrote {out} and {sidecar_path(out)}", file=sys.stderr)
+    except OutputError as exc:
+        print(f"flightlog: --out {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     except FlightLogError as exc:
         print(f"flightlog: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT

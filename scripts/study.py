@@ -25,7 +25,6 @@ px4_velocity_pi). Exit code 0 on success, 2 with a one-line reason on bad input.
 
 from __future__ import annotations
 
-import argparse
 import sys
 import time
 from dataclasses import replace
@@ -37,14 +36,15 @@ from experiments.study.regimes import REGIMES, with_regime
 from experiments.study.run import run_study
 from flightlog.atomic_output import OutputError, check_writable_dir
 from gp.features import FEATURE_SETS
+from scripts.one_line_parser import OneLineParser, output_path
 from scripts.rover import REGIMES as ROVER_REGIMES
 from vehicle_sim.effects.base import SimConfigError
 
 
 def parse_args(argv: list[str] | None) -> StudyConfig:
     """Command line -> StudyConfig (argparse exits with code 2 on bad options)."""
-    parser = argparse.ArgumentParser(prog="study", description=__doc__.splitlines()[0])
-    parser.add_argument("--out", type=Path, default=Path("out/study"), help="output folder")
+    parser = OneLineParser(prog="study", description=__doc__.splitlines()[0])
+    parser.add_argument("--out", type=output_path, default=Path("out/study"), help="output folder")
     parser.add_argument("--trajectories", type=int, default=20, help="random trajectories")
     parser.add_argument("--repeats", type=int, default=3, help="flights per trajectory")
     parser.add_argument("--trials", type=int, default=6, help="trials on the repeated path")

@@ -31,6 +31,9 @@ from pathlib import Path
 from typing import Any
 
 from companion.realtime import MAX_RT_PRIORITY, raise_to_realtime
+from flightlog.atomic_output import OutputError, check_writable_file
+from flightlog.schema import sidecar_path
+from scripts.one_line_parser import output_path
 from vehicle_sim import EFFECT_NAMES, SimConfigError, Simulator, load_sim_config
 from vehicle_sim.backends import BACKEND_NAMES
 from vehicle_sim.mavlink import (
@@ -120,7 +123,12 @@ def _effect_overrides(specs: Sequence[str]) -> tuple[tuple[str, tuple[tuple[str,
 
 
 def parse_args(argv: Sequence[str] | None) -> VehicleSimCliConfig:
-    parser = _Parser(prog=PROG, description=__doc__.splitlines()[0])
+    parser = _Parser(
+        prog=PROG,
+        description=__doc__.splitlines()[0],
+        epilog="Also: vehicle-sim config-from-log LOG --out my_vehicle.toml (a config with a "
+        "PX4 log's tuning and hover thrust; --help there).",
+    )
     parser.add_argument("--vehicle", default="iris", help="preset name or config TOML path")
     parser.add_argument(
         "--effect",
@@ -157,6 +165,7 @@ def parse_args(argv: Sequence[str] | None) -> VehicleSimCliConfig:
     )
     parser.add_argument(
         "--log",
+        type=output_path,
         metavar="FILE.csv",
         help="write the vehicle's onboard flight log (with acceleration and thrust) here on exit",
     )
@@ -173,6 +182,8 @@ def parse_args(argv: Sequence[str] | None) -> VehicleSimCliConfig:
         raise UsageError(f"--speed {args.speed}: must be within [0.01, 100]")
     if args.duration_s is not None and not (math.isfinite(args.duration_s) and args.duration_s > 0):
         raise UsageError(f"--duration-s {args.duration_s}: must be > 0")
+    if args.seed < 0:
+        raise UsageError(f"--seed {args.seed}: must be >= 0")
     if not 0 <= args.realtime_priority <= MAX_RT_PRIORITY:
         raise UsageError(
             f"--realtime-priority {args.realtime_priority}: must be 0 (off) or 1..{MAX_RT_PRIORITY}"
@@ -191,7 +202,7 @@ def parse_args(argv: Sequence[str] | None) -> VehicleSimCliConfig:
         signing_key_path=args.signing_key,
         duration_s=args.duration_s,
         world_path=args.world,
-        log_path=args.log,
+        log_path=None if args.log is None else str(args.log),
         realtime_priority=args.realtime_priority,
     )
 
@@ -285,6 +296,13 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _run(config: VehicleSimCliConfig, stop: threading.Event) -> int:
+    if config.log_path is not None:
+        try:  # found out now, not after a flight whose log would be lost
+            check_writable_file(config.log_path)
+            check_writable_file(sidecar_path(config.log_path))
+        except OutputError as exc:
+            print(f"{PROG}: error: --log {exc}", file=sys.stderr)
+            return 2
     try:
         endpoint = build_endpoint(config)
         endpoint.start()
@@ -298,7 +316,10 @@ def _run(config: VehicleSimCliConfig, stop: threading.Event) -> int:
         _announce(config, endpoint)
         serve(endpoint, stop, config.duration_s)
     finally:
-        failure = _stop(endpoint) or _write_onboard_log(endpoint, config.log_path)
+        stopped = _stop(endpoint)  # the log is written even when the loop died: rows kept
+        failure = "; ".join(
+            f for f in (stopped, _write_onboard_log(endpoint, config.log_path)) if f
+        )
     if failure:
         print(f"{PROG}: error: {failure}", file=sys.stderr)
         return 1

@@ -92,6 +92,10 @@ class StudyConfig:
                 "need n_trajectories >= 1, repeats >= 1 and n_trials >= 2, got "
                 f"{self.n_trajectories}, {self.repeats}, {self.n_trials}"
             )
+        if self.m < 1:
+            raise ValueError(f"m must be >= 1 (inducing points per output), got {self.m}")
+        if self.trajectory_seed < 0:
+            raise ValueError(f"seed must be >= 0, got {self.trajectory_seed}")
         if self.refit_rounds < 0:
             raise ValueError(f"refit_rounds must be >= 0, got {self.refit_rounds}")
         if self.workers < 1:

@@ -175,6 +175,7 @@ def test_cli_flies_the_demo_square_and_the_bspline_s_curve_to_their_goals(
     [
         (["--link", "inprocess", "--vehicle", "no_such_preset"], "no such config file or preset"),
         (["--link", "pymavlink", "--url", "serial:/dev/x"], "unsupported MAVLink URL"),
+        (["--link", "inprocess", "--seed", "-1"], "--seed must be >= 0, got -1"),
     ],
 )
 def test_cli_bad_vehicle_or_url_is_one_line_and_exit_2(
@@ -223,3 +224,14 @@ def test_refused_offboard_fails_the_flight_safely_and_lands() -> None:
     assert outcome.disarmed and not sim.state.armed
     assert -sim.state.pos_ned_m[2] < 0.05
     assert messages[-1].startswith("safe stop: landed and disarmed")
+
+
+def test_cli_log_onto_the_mission_file_is_refused_and_the_mission_kept(
+    tmp_path: Path, capsys
+) -> None:
+    mission = tmp_path / "line.toml"
+    mission.write_text(LINE.read_text())
+    code = main([str(mission), "--link", "inprocess", "--log", str(mission)])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and "is an input being read" in err, err
+    assert mission.read_text() == LINE.read_text()

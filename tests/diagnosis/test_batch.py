@@ -51,3 +51,23 @@ def test_scheduler_without_batch_or_malformed_exits_2(tmp_path, capsys):
     with pytest.raises(SystemExit) as exc:
         main([*base, "--batch", "--scheduler", "h:8786"])
     assert exc.value.code == 2 and "tcp://HOST:PORT" in capsys.readouterr().err
+
+
+def test_batch_summary_names_each_log_by_the_path_given(tmp_path):
+    """Two logs of the same file name from two vehicles: batch.json tells which report is
+    whose (it gave both as flight_0.csv)."""
+    from flightlog.schema import write_flight_log
+    from tests.vehicle_sim.sim_flying import hovering, record_offboard
+    from vehicle_sim import VelocitySetpoint
+
+    logs = []
+    for i in range(2):
+        sim = hovering(settle_s=2.0, seed=i)
+        log = record_offboard(sim, lambda t: VelocitySetpoint((0.0, 0.0, 0.0)), 8.0, 25.0)
+        logs.append(str(write_flight_log(tmp_path / f"vehicle{i}" / "flight_0.csv", log)))
+    out = tmp_path / "out"
+    assert (
+        main([*logs, "--sim-config", "iris", "--batch", "--workers", "1", "--out", str(out)]) == 0
+    )
+    summary = json.loads((out / "batch.json").read_text())["logs"]
+    assert [e["log"] for e in summary] == logs

@@ -111,6 +111,18 @@ def test_multirotor_regimes_stay_with_the_study_cli(tmp_path):
     assert (config.regime, config.n_trajectories) == ("wind_field", 2)
 
 
+@pytest.mark.parametrize(
+    ("option", "message"),
+    [(["--m", "0"], "m must be >= 1"), (["--seed", "-1"], "seed must be >= 0")],
+)
+def test_bad_inducing_count_or_seed_refused_before_any_flight(option, message, tmp_path, capsys):
+    """Found when the command line is read (one line, exit 2), not after minutes of flights."""
+    code = study_main(["--quick", "--out", str(tmp_path / "s"), *option])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and message in err[-1], err
+    assert not (tmp_path / "s").exists()
+
+
 def test_agile_regime_leads_the_input_and_learns_velocity_from_the_structure():
     """The agile regime's settings reach the planner of both arms of its ablation."""
     from experiments.study.config import StudyConfig

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import os
+import stat
+
 import pytest
 
 from flightlog.atomic_output import (
@@ -53,3 +56,18 @@ def test_a_file_is_replaced_atomically(tmp_path) -> None:
     path = write_text_atomic(tmp_path / "sub" / "f.txt", "one")
     write_text_atomic(path, "two")
     assert path.read_text() == "two" and [p.name for p in path.parent.iterdir()] == ["f.txt"]
+
+
+def test_outputs_get_the_permissions_of_any_new_file_or_folder(tmp_path) -> None:
+    """Written through a temporary sibling, an output still gets the mode the user's umask gives
+    a new file (not the temporary's private 0600 / 0700): a log or model another user of the
+    companion computer must read."""
+    umask = os.umask(0o022)
+    try:
+        file = write_text_atomic(tmp_path / "flight.csv", "t_s\n")
+        with atomic_output_dir(tmp_path / "report") as tmp:
+            (tmp / "report.md").write_text("done")
+    finally:
+        os.umask(umask)
+    assert stat.S_IMODE(file.stat().st_mode) == 0o644
+    assert stat.S_IMODE((tmp_path / "report").stat().st_mode) == 0o755

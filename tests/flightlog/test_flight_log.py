@@ -7,6 +7,7 @@ import json
 import numpy as np
 import pytest
 
+from flightlog.reader import read_log
 from flightlog.schema import (
     REQUIRED_COLUMNS,
     FlightLogError,
@@ -85,6 +86,16 @@ def test_truncated_row_and_non_number(tmp_path):
     path.write_text(good.replace("0.1,", "abc,", 1))
     with pytest.raises(FlightLogError, match=r"row 2, column t_s: 'abc' is not a number"):
         read_flight_log(path)
+
+
+def test_a_folder_given_as_log_is_named_a_folder(tmp_path):
+    """A folder of logs passed where a log is expected: say it is a folder and what to pass
+    (it was called missing), naming the ULog too."""
+    (tmp_path / "logs").mkdir()
+    with pytest.raises(FlightLogError) as info:
+        read_log(tmp_path / "logs")
+    assert str(info.value).startswith(f"{tmp_path / 'logs'}: a folder, not a flight log")
+    assert ".ulg" in str(info.value)
 
 
 def test_missing_file_binary_file_and_bad_sidecar(tmp_path):

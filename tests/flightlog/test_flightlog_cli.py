@@ -95,3 +95,48 @@ def test_bad_real_logs_one_line_exit_2_nothing_written(name, tmp_path, capsys):
         assert len(err) == 1 and err[0].startswith(prog), err
         assert re.search(BAD[name], err[0]), err[0]
         assert not out.exists()
+
+
+@pytest.mark.parametrize("where", ["folder", "under_a_file"])
+def test_convert_to_an_unwritable_place_one_line_exit_2_nothing_left(where, tmp_path, capsys):
+    """An --out that is a folder, or lies under a file: one line naming it, no traceback, and
+    no sidecar or temporary file left beside it."""
+    (tmp_path / "taken").mkdir()
+    (tmp_path / "plain").write_text("")
+    out = tmp_path / ("taken" if where == "folder" else "plain/flight.csv")
+    before = sorted(p.name for p in tmp_path.rglob("*"))
+    assert flightlog_cli.main(["convert", str(AUTO), "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("flightlog: ") and str(out) in err[0], err
+    assert sorted(p.name for p in tmp_path.rglob("*")) == before
+
+
+def test_a_ulog_with_corrupt_definitions_shows_only_our_lines(tmp_path, capsys):
+    """Message definitions zeroed in a real log: pyulog's own warnings (one per message id,
+    printed to stdout) are not shown; diagnose says one line, info says why no command can
+    use the log."""
+    data = bytearray((FIXTURES / "quad_posctl_v1_15.ulg").read_bytes())
+    data[3000:3200] = bytes(200)
+    corrupt = tmp_path / "corrupt.ulg"
+    corrupt.write_bytes(bytes(data))
+    out = tmp_path / "out"
+    assert diagnose_cli.main([str(corrupt), "--sim-config", "iris", "--out", str(out)]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "", captured.out[:300]
+    err = captured.err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("diagnose") and "corrupt" in err[0], err
+    assert flightlog_cli.main(["info", str(corrupt)]) == 0
+    captured = capsys.readouterr()
+    assert "Warning" not in captured.out + captured.err, captured.out[:300]
+    assert "cannot use this log: ULog is corrupt" in captured.out
+
+
+def test_convert_onto_its_own_input_is_refused_and_the_ulog_kept(tmp_path, capsys):
+    """--out naming the ULog being converted would replace the only copy of the flight."""
+    ulog = tmp_path / "flight.ulg"
+    shutil.copy(AUTO, ulog)
+    assert flightlog_cli.main(["convert", str(ulog), "--out", str(ulog)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "is an input being read" in err[0], err
+    assert ulog.read_bytes() == AUTO.read_bytes()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["flight.ulg"]

@@ -170,3 +170,20 @@ def test_fit_gp_on_a_real_flight_refuses_a_model_worse_than_nominal_unless_force
         assert "the model is worse than nominal" in err and not out.exists()
         code = fit_gp_cli.main([str(FIXTURES / name), "--out", str(out), "--no-plots", "--force"])
     assert code == 0 and out.exists()
+
+
+def test_a_closed_loop_that_scores_no_row_says_so_in_the_headline(tmp_path):
+    """The real OFFBOARD hover on the iris preset: iris touches down in every flight segment the
+    vehicle flew, so closed-loop tracking scores no row. The headline says it was not examined,
+    and the report gives no gain for it."""
+    from diagnosis.diagnosis import diagnose
+    from diagnosis.report import report_document
+    from vehicle_sim import load_sim_config
+
+    d = diagnose([read_log(FIXTURES / "quad_offboard_v1_16.ulg")], load_sim_config("iris"))
+    cl = d.closed_loop
+    assert cl.segments > 0 and cl.scored.sum() == 0
+    said = [w for w in d.warnings if w.startswith("closed-loop tracking not examined")]
+    assert len(said) == 1 and f"{cl.reanchored} of {cl.segments}" in said[0], d.warnings
+    doc = report_document(d)["closed_loop"]
+    assert doc["gain"] is None and doc["ground_hold_gain"] is None  # no row: no ratio

@@ -41,7 +41,12 @@ def test_fit_gp_writes_model_plots_and_reports_rmse(tmp_path, capsys):
         (["LOG", "--inducing", "kmeans"], "invalid choice: 'kmeans'"),
         (["LOG", "--holdout-fraction", "1.5"], "--holdout-fraction must be in (0, 1)"),
         (["LOG", "--nominal-param", "tau_s"], "expected NAME=NUMBER"),
-        (["LOG", "--nominal", "px4_velocity_pi"], "its sidecar has no velocity_loop_gains"),
+        (
+            ["LOG", "--nominal", "px4_velocity_pi"],
+            "neither its sidecar's velocity_loop_gains nor its PX4 parameters",
+        ),
+        (["LOG", "--seed", "-1"], "--seed must be >= 0, got -1"),
+        (["LOG", "--restarts", "-1"], "--restarts must be >= 1 starting point(s), got -1"),
     ],
 )
 def test_bad_input_exits_non_zero_with_one_line(tmp_path, capsys, args, message):
@@ -77,3 +82,34 @@ def test_fit_gp_identifies_the_lag_when_flying_first_order_lag(tmp_path, capsys)
     assert "identified velocity lag tau_s=0.55" in capsys.readouterr().err
     params = dict(load_model(out).features.nominal_params)
     assert params["tau_s"] == pytest.approx(0.55, rel=0.03)
+
+
+def test_an_unwritable_out_is_refused_before_the_fit(tmp_path, capsys):
+    """A file where the model's folder should be: one line, exit 2, before any GP is fitted
+    (with --check-horizon-s or many logs the fit takes minutes)."""
+    log = write_flight_log(tmp_path / "f.csv", record_log(60))
+    (tmp_path / "plain").write_text("")
+    out = tmp_path / "plain" / "model.npz"
+    assert main([str(log), "--out", str(out), "--no-plots", "--force"]) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert not [line for line in err if "fitting" in line], err
+    assert err[-1].startswith(f"fit-gp: error: --out {out}"), err
+
+
+def test_the_same_flight_given_twice_is_refused(tmp_path, capsys):
+    """A log and a copy of it: its held-out rows would be training rows too, so the held-out
+    check would test the model on what it learned. One line naming both, exit 2; also for
+    diagnose."""
+    from scripts import diagnose
+
+    log = write_flight_log(tmp_path / "f.csv", record_log(60))
+    copy = tmp_path / "copy.csv"
+    copy.write_bytes(log.read_bytes())
+    assert main([str(log), str(copy), "--out", str(tmp_path / "m"), "--no-plots"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"{copy}: the same flight as {log}" in err[0], err
+    argv = [str(log), str(log), "--sim-config", "iris", "--out", str(tmp_path / "d")]
+    assert diagnose.main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "the same flight as" in err[0], err
+    assert not (tmp_path / "m.npz").exists() and not (tmp_path / "d").exists()

@@ -78,3 +78,16 @@ def test_two_hz_log_refused_with_the_rate_needed(tmp_path, capsys):
         "velocity_command at 2 Hz (needs >= 5 Hz)" in line and "log vehicle_local_position" in line
     )
     assert not (tmp_path / "m.npz").exists()
+
+
+def test_px4_velocity_pi_takes_its_gains_from_the_ulog_parameters(tmp_path, capsys):
+    """A PX4 ULog records MPC_*_VEL_*_ACC among its parameters: px4_velocity_pi fits on it
+    with those gains (it asked for a sidecar a ULog never has)."""
+    out = tmp_path / "pi"
+    argv = [str(POSCTL), "--nominal", "px4_velocity_pi", "--out", str(out), *FAST]
+    assert fit_gp_cli.main(argv) == 0, capsys.readouterr().err
+    header = read_model_header(out)
+    params = read_log(POSCTL).metadata["px4_params"]
+    nominal = header["feature_definition"]["nominal_model"]["params"]
+    assert nominal["vel_p_xy"] == pytest.approx(params["MPC_XY_VEL_P_ACC"])
+    assert nominal["vel_i_z"] == pytest.approx(params["MPC_Z_VEL_I_ACC"])

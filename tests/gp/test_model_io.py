@@ -101,3 +101,15 @@ def test_an_older_two_file_model_gets_the_fix(tmp_path):
     (tmp_path / "old.json").write_text("{}")
     with pytest.raises(ModelFileError, match="older two-file model: refit it with fit-gp"):
         load_model(tmp_path / "old")
+
+
+def test_a_flight_log_given_as_model_is_named_as_not_a_model(tmp_path):
+    """``--gp-model flight.csv`` (a log, with its sidecar flight.csv.json beside it): the
+    message names the file given and what a model is, not an "older two-file model"."""
+    (tmp_path / "flight.csv").write_text("t_s\n0\n")
+    (tmp_path / "flight.csv.json").write_text("{}")
+    with pytest.raises(ModelFileError) as info:
+        load_model(tmp_path / "flight.csv")
+    message = str(info.value)
+    assert message.startswith(f"{tmp_path / 'flight.csv'}: not a model file")
+    assert "two-file" not in message and "fit-gp" in message and "\n" not in message

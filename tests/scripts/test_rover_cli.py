@@ -19,3 +19,13 @@ def test_example_regime_writes_the_figure(tmp_path: Path) -> None:
     png = tmp_path / "fig4_illustrative.png"
     assert png.stat().st_size > 10_000
     assert not [p for p in tmp_path.iterdir() if p.name.startswith("tmp")]
+
+
+def test_an_out_folder_that_cannot_be_made_is_one_line_exit_2(tmp_path: Path, capsys) -> None:
+    """A file where the output folder should go: one line naming --out, before any trial."""
+    blocker = tmp_path / "blocker"
+    blocker.write_text("")
+    for regime in ("example", "rover_exp1"):
+        assert rover.main(["--regime", regime, "--out", str(blocker / "out")]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith(f"rover: --out {blocker}"), err

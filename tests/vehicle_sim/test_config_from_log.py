@@ -96,3 +96,32 @@ def test_log_without_thrust_or_parameters_refused(tmp_path, capsys):
         and "log actuator_motors" in line
     )
     assert not out.exists()
+
+
+@pytest.mark.parametrize("where", ["folder", "under_a_file"])
+def test_unwritable_out_one_line_exit_2_nothing_left(where, tmp_path, capsys):
+    """An --out that is a folder, or lies under a file: one line naming it, exit 2, no
+    traceback and no temporary file left beside it."""
+    (tmp_path / "taken").mkdir()
+    (tmp_path / "plain").write_text("")
+    out = tmp_path / ("taken" if where == "folder" else "plain/my.toml")
+    before = sorted(p.name for p in tmp_path.rglob("*"))
+    assert vehicle_sim_cli.main(["config-from-log", str(AUTO), "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and str(out) in err[0], err
+    assert sorted(p.name for p in tmp_path.rglob("*")) == before
+
+
+def test_help_describes_the_whole_command(capsys):
+    assert vehicle_sim_cli.main(["config-from-log", "--help"]) == 0
+    help_text = " ".join(capsys.readouterr().out.split())
+    assert "whose mass agrees with its hover thrust" in help_text
+
+
+def test_out_onto_the_log_is_refused_and_the_log_kept(tmp_path, capsys):
+    log = tmp_path / "flight.ulg"
+    log.write_bytes(AUTO.read_bytes())
+    assert vehicle_sim_cli.main(["config-from-log", str(log), "--out", str(log)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "is an input being read" in err[0], err
+    assert log.read_bytes() == AUTO.read_bytes()

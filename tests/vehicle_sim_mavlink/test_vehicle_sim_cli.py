@@ -29,6 +29,7 @@ REPO = Path(__file__).resolve().parents[2]
         (["--effect", "rotor_drag.k_n_per_mps=[0.3,"], "not a TOML value"),
         (["--signing-key", "missing.key"], "cannot read signing key file"),
         (["--frobnicate"], "unrecognized arguments"),
+        (["--seed", "-1"], "--seed -1: must be >= 0"),
         (["--realtime-priority", "100"], "--realtime-priority 100: must be 0 (off) or 1..99"),
     ],
 )
@@ -37,6 +38,19 @@ def test_bad_input_is_one_line_and_exit_2(capsys, argv, message):
     err = capsys.readouterr().err
     assert message in err
     assert err.count("\n") == 1 and err.startswith("vehicle-sim: error:")
+
+
+@pytest.mark.parametrize("where", ["folder", "under_a_file"])
+def test_unwritable_log_refused_before_serving(capsys, tmp_path, where):
+    """An onboard log that could not be written at exit is refused at the start (one line, exit
+    2), not found out after a flight whose log is then lost."""
+    (tmp_path / "plain").write_text("")
+    log = tmp_path if where == "folder" else tmp_path / "plain" / "onboard.csv"
+    argv = ["--log", str(log), "--duration-s", "0.5", "--offboard-bind-port", "0"]
+    assert main([*argv, "--gcs-bind-port", "0"]) == 2
+    out = capsys.readouterr()
+    assert out.out == ""
+    assert out.err.count("\n") == 1 and out.err.startswith(f"vehicle-sim: error: --log {log}")
 
 
 def test_taken_port_is_reported(capsys):
@@ -117,3 +131,10 @@ def test_serves_mavlink_and_stops_cleanly_on_signal(sig):
             proc.kill()
             proc.wait(5.0)
         gcs.close()
+
+
+def test_help_names_the_config_from_log_command(capsys):
+    with pytest.raises(SystemExit) as exc:
+        parse_args(["--help"])
+    assert exc.value.code == 0
+    assert "vehicle-sim config-from-log LOG --out my_vehicle.toml" in capsys.readouterr().out
