@@ -79,9 +79,22 @@ def check_writable_dir(path: str | Path) -> Path:
 
 def _umask_mode(full: int) -> int:
     """``full`` (0o666 for a file, 0o777 for a folder) less the process's umask."""
+    return full & ~_process_umask()
+
+
+def _process_umask() -> int:
+    """The umask, read without changing it where the kernel reports it (Linux: the Umask line
+    of /proc/self/status): setting and restoring it would, for an instant, give every file
+    another thread of the companion creates mode 0666."""
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("Umask:"):
+                return int(line.split()[1], 8)
+    except (OSError, ValueError, IndexError):
+        pass
     umask = os.umask(0)
     os.umask(umask)
-    return full & ~umask
+    return umask
 
 
 def write_text_atomic(path: str | Path, text: str) -> Path:
