@@ -40,7 +40,7 @@ from diagnosis.force_model import (
 from diagnosis.forces import GRAVITY_MPS2, ForceData, force_data, with_thrust_n
 from diagnosis.identifiability import FLIGHT_FOR, NotIdentifiable, check_identifiability
 from diagnosis.noise_floor import white_noise_std
-from diagnosis.replay import LEAD_IN_S, ReplayResult, replay, windows
+from diagnosis.replay import ReplayResult, replay, windows
 from diagnosis.selection import (
     ForceSelection,
     SelectionConfig,
@@ -52,6 +52,7 @@ from diagnosis.thrust_response import (
     produced_thrust,
     select_thrust_response,
 )
+from diagnosis.warm_up import LEAD_IN_S
 from flightlog.schema import FlightLog
 from vehicle_sim import SimConfig
 from vehicle_sim.effects import EFFECT_CLASSES, BatterySag

@@ -3,10 +3,11 @@
 A simulated vehicle of the config (a copy of a hovering template) follows each log: at every
 row it is put into the measured state (``Simulator.anchor``) while its flight control runs on the
 logged setpoint, so its controller state (velocity integral, delayed setpoints in flight, rotor
-speeds, yaw setpoint) builds up as the measured vehicle's did; during the first ``LEAD_IN_S`` of
-each airborne run the integral is restored from the measured thrust at every row, averaged over
-those rows (:func:`.sim_anchor.anchor_matching_thrust`: one noisy row's integral would stay in
-every window of the run), and windows start after that. At each window's anchor row a copy
+speeds, yaw setpoint) builds up as the measured vehicle's did; over the first ``LEAD_IN_S`` of
+each airborne run (the warm-up) the integral is read off the measured thrust at every row, and
+at its end the integral is set from all of them, past the attitude lag (:mod:`.warm_up`: one
+noisy row's integral would stay in every window of the run, and a vehicle already accelerating
+shows its lag as an integral); windows start after that. At each window's anchor row a copy
 of it flies free for ``window_s`` on the logged setpoints; the error is simulated minus measured
 velocity.
 """
@@ -22,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from diagnosis import sim_anchor
+from diagnosis.warm_up import LEAD_IN_S, integral_offset, smoothed_jerk
 from flightlog.schema import FlightLog
 from vehicle_sim import AnchorState, SimConfig, VelocitySetpoint
 
@@ -33,7 +35,6 @@ RATE_COLUMNS = ("rate_x_radps", "rate_y_radps", "rate_z_radps")
 CMD_COLUMNS = ("cmd_vel_n_mps", "cmd_vel_e_mps", "cmd_vel_d_mps")
 ACC_COLUMNS = ("acc_n_mps2", "acc_e_mps2", "acc_d_mps2")
 MIN_REPLAY_ALT_M = 0.02
-LEAD_IN_S = 1.0
 MAX_ROW_GAP_S = 0.5  # rows further apart than this (dropped rows between) end a replay run
 
 
@@ -166,13 +167,17 @@ def _flown_windows(
             follower.anchor(a.anchor(run_start, lead=False), integral="reset")
             lead_end = a.t[run_start] + LEAD_IN_S
             last = max(w.stop for w in wins if w.log_index == i and w.anchor < run_stop)
-            matched = 0
+            diffs, jerks = [], []
             for j in range(run_start, last):
                 lead = a.t[j] < lead_end
+                if not lead and diffs:  # the warm-up's end: its integral, past the lag
+                    offset, _ = integral_offset(np.array(diffs), np.array(jerks))
+                    follower.set_velocity_integral(follower.velocity_integral_mps2 + offset)
+                    diffs = []
                 follower.set_velocity_setpoint(a.setpoint[j])
                 if lead and a.thrust[j] > 0.0:
-                    matched += 1
-                    sim_anchor.anchor_matching_thrust(follower, a.anchor(j, lead), matched)
+                    diffs.append(sim_anchor.matched_minus_carried(follower, a.anchor(j, lead)))
+                    jerks.append(a.jerk[j])
                 else:
                     follower.anchor(a.anchor(j, lead), integral="keep")
                 if j in mine:
@@ -212,6 +217,7 @@ class LogArrays:
         ]
         self.thrust = log["thrust_n"] if log.has("thrust_n") else np.zeros(n)
         self.acc = log.stack(*ACC_COLUMNS) if log.has(*ACC_COLUMNS) else np.zeros((n, 3))
+        self.jerk = smoothed_jerk(self.t, self.acc)
         self._anchors: dict[tuple[int, bool], AnchorState] = {}
         self._noisy: dict[tuple[float, ...], LogArrays] = {}
 

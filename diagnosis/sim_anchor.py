@@ -3,14 +3,16 @@
 A hovering OFFBOARD template of the config is copied for each airborne run and each replay
 window; the copies are put into measured states with the simulator's public
 ``Simulator.anchor`` (position, velocity, attitude, rates, rotor thrust and, while the
-controller warms up, the velocity-loop integral that reproduces the measured thrust vector,
-averaged over the rows of the warm-up: :func:`anchor_matching_thrust`).
+controller warms up, the velocity-loop integral that reproduces the measured thrust vector:
+:func:`matched_minus_carried`, fitted over the warm-up by :mod:`.warm_up`).
 """
 
 from __future__ import annotations
 
 import copy
 from functools import lru_cache
+
+import numpy as np
 
 from vehicle_sim import AnchorState, FlightMode, SimConfig, Simulator, VelocitySetpoint
 
@@ -45,23 +47,12 @@ def fresh_copy(template: Simulator) -> Simulator:
     return copy.deepcopy(template)
 
 
-def anchor_matching_thrust(sim: Simulator, state: AnchorState, rows_matched: int) -> None:
-    """Anchor ``sim`` at ``state``, the ``rows_matched``-th row (from 1) of a warm-up, and set its
-    velocity-loop integral to the mean over those rows of the integral each row's measured thrust
-    vector implies (``Simulator.anchor``'s ``integral="match_thrust"``), each carried forward to
-    now by the loop's own integration (the running mean of the integral carried from the row
-    before and the one matched at this row).
-
-    Why the mean: the integral matched at one row inverts that row's attitude, thrust, velocity
-    and acceleration, noise included (horizontally about g x the attitude noise plus the
-    velocity P gain x the velocity noise: 0.2 m/s^2 for 1 deg and 0.07 m/s), and after the
-    warm-up the integral is kept for the whole airborne run. A vehicle re-anchored at every row
-    never feels an integral error (its velocity is reset to the measured one), so that one
-    row's noise stays a constant acceleration bias in every replay window started from it. Seen
-    on a noisy log: a hover window drifted 0.26 m/s from a 0.39 m/s^2 integral, and a command
-    delay was fitted 21 % short. The mean of n rows has 1/sqrt(n) of that noise."""
-    carried = sim.velocity_integral_mps2
+def matched_minus_carried(sim: Simulator, state: AnchorState) -> np.ndarray:
+    """(3,) [m/s^2] the velocity-loop integral the measured thrust vector of ``state`` implies
+    (``Simulator.anchor``'s ``integral="match_thrust"``) minus the one ``sim`` carries; ``sim``
+    is left anchored at ``state`` with its carried integral (:mod:`.warm_up` fits these)."""
+    carried = np.array(sim.velocity_integral_mps2, dtype=float)
     sim.anchor(state, integral="match_thrust")
-    if rows_matched > 1:
-        matched = sim.velocity_integral_mps2
-        sim.set_velocity_integral(carried + (matched - carried) / rows_matched)
+    matched = np.array(sim.velocity_integral_mps2, dtype=float)
+    sim.set_velocity_integral(carried)
+    return matched - carried

@@ -92,8 +92,9 @@ from diagnosis.cause import Cause
 from diagnosis.command_path import grid_order, search_grid, with_cause
 from diagnosis.forces import GRAVITY_MPS2
 from diagnosis.noise_floor import NOISE_VAR_REL_SE_SQRT_N, block_bootstrap, white_noise_std
-from diagnosis.replay import LEAD_IN_S, LogArrays, Window, airborne_runs
+from diagnosis.replay import LogArrays, Window, airborne_runs
 from diagnosis.selection import SelectionConfig
+from diagnosis.warm_up import LEAD_IN_S
 from flightlog.schema import FlightLog
 from vehicle_sim import SimConfig
 

@@ -33,3 +33,15 @@ def test_on_an_ordinary_mission_only_the_hidden_cause_is_named(mission, noisy, t
     if name not in named and "unexplained" not in result.verdict:
         ranked = {c.name: c.evidence for c in result.causes}
         assert "not" in ranked[name] and "fly:" in ranked[name], (name, ranked[name])
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("mission", ORDINARY_MISSIONS)
+def test_an_ordinary_mission_diagnosed_against_the_config_that_flew_it_names_nothing(
+    mission, tmp_path
+):
+    # each of them was called "unexplained" (replay 0.1-0.3 m/s) while the warm-up read the
+    # attitude lag of a vehicle already accelerating as an integral (diagnosis.warm_up)
+    log = fly_ordinary_mission(mission, {}, tmp_path, 0)
+    result = diagnose([log], load_sim_config("iris"))
+    assert result.verdict == (), result.verdict
