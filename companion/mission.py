@@ -109,6 +109,13 @@ def parse_mission(text: str, source: Path | str = "<mission>") -> Mission:
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise MissionError(f"{where}: not valid TOML ({exc})") from None
+    if "segment" in raw and "reference" not in raw:
+        raise MissionError(
+            f"{where}: an excitation schedule ([[segment]] tables), not a companion mission: the "
+            "diagnosis flies it (diagnosis.fly_schedule in process, experiments."
+            "mavlink_excitation over MAVLink); on a real vehicle fly its shapes in OFFBOARD "
+            "(diagnosis/README.md)"
+        )
     _no_unknown_keys(raw, _TOP_KEYS, where, "")
     ref = raw.get("reference")
     if not isinstance(ref, dict):

@@ -95,3 +95,10 @@ def test_a_mission_with_obstacles_is_refused_before_take_off(tmp_path: Path) -> 
     with pytest.raises(CompanionInputError, match="would fly through them") as info:
         run_companion(config, lambda _m: None)
     assert "\n" not in str(info.value) and not log.exists()
+
+
+def test_an_excitation_schedule_is_named_as_such_not_as_a_bad_mission() -> None:
+    schedule = Path(__file__).resolve().parents[2] / "missions" / "excite_full.toml"
+    with pytest.raises(MissionError, match="excitation schedule.*not a companion mission") as err:
+        load_mission(schedule)
+    assert "\n" not in str(err.value)
