@@ -94,12 +94,27 @@ def truncated_at(path: str | Path) -> int | None:
     return offset if offset != len(data) else None
 
 
+def truncation_note(log: FlightLog) -> str | None:
+    """One sentence for a report's headline when ``log`` was read from a truncated ULog."""
+    cut = log.metadata.get("truncated_at_byte")
+    if not cut:
+        return None
+    name = log.metadata.get("ulog", "the ULog")
+    return (
+        f"{name} is truncated (last message incomplete at byte {cut[0]} of {cut[1]}: logging "
+        f"stopped mid-message, as a crash or power loss leaves it); its complete part, "
+        f"{log.metadata.get('duration_s', float('nan')):.1f} s, was read"
+    )
+
+
 def read_ulog(path: str | Path) -> FlightLog:
     """Read a PX4 ULog file as a schema-v1 log.
 
     Raises:
-        FlightLogError: unreadable or truncated file, not a multirotor, no valid motion (one
-            line naming what is wrong and what to fly or log instead).
+        FlightLogError: unreadable file, not a multirotor, no valid motion (one line naming
+            what is wrong and what to fly or log instead). A truncated file (the vehicle stopped
+            logging mid-message: a crash, a power loss) is read up to its last complete message
+            and says so in ``truncated_at_byte`` (:func:`truncation_note`).
     """
     path = Path(path)
     if not path.is_file():
@@ -109,12 +124,7 @@ def read_ulog(path: str | Path) -> FlightLog:
             f"{path}: not a ULog file (it does not start with the ULog magic bytes); "
             "copy the .ulg again from the vehicle, or pass a schema-v1 CSV"
         )
-    cut = truncated_at(path)
-    if cut is not None:
-        raise FlightLogError(
-            f"{path}: ULog is truncated (last message incomplete at byte {cut} of "
-            f"{path.stat().st_size}); copy the complete .ulg from the vehicle's SD card"
-        )
+    cut = truncated_at(path)  # a crash or power loss leaves such a file: its complete part
     try:
         ulog = _parse(path)
     except Exception as exc:  # pyulog raises several types for corrupt files
@@ -134,13 +144,23 @@ def read_ulog(path: str | Path) -> FlightLog:
         "hardware": info.get("ver_hw"),
         "duration_s": round((ulog.last_timestamp - ulog.start_timestamp) * 1e-6, 3),
     }
+    if cut is not None:
+        meta["truncated_at_byte"] = [cut, path.stat().st_size]
     where = str(path)
     if not topics:
         raise FlightLogError(
             f"{path}: ULog holds no data messages (truncated after its header?); "
             "copy the complete .ulg from the vehicle"
         )
-    log = flight_log_from_topics(topics, where, params, meta["firmware"])
+    try:
+        log = flight_log_from_topics(topics, where, params, meta["firmware"])
+    except FlightLogError as exc:
+        if cut is None:
+            raise
+        raise FlightLogError(
+            f"{exc}; the file is truncated (at byte {cut} of {path.stat().st_size}): only its "
+            f"first {meta['duration_s']:.1f} s could be read"
+        ) from None
     return FlightLog(log.columns, {**log.metadata, **meta}, path)
 
 

@@ -17,7 +17,7 @@ from flightlog.atomic_output import OutputError, check_not_an_input, check_writa
 from flightlog.info import describe_log, describe_unusable_ulog
 from flightlog.reader import read_log
 from flightlog.schema import FlightLogError, sidecar_path, write_flight_log
-from flightlog.ulog import is_ulog, summarise_ulog, truncated_at
+from flightlog.ulog import is_ulog, summarise_ulog
 from scripts.one_line_parser import OneLineParser, output_path
 
 EXIT_BAD_INPUT = 2
@@ -61,7 +61,7 @@ def _info_lines(path: Path) -> list[str]:
     try:
         return describe_log(read_log(path))
     except FlightLogError as exc:
-        if not is_ulog(path) or truncated_at(path) is not None:
+        if not is_ulog(path):
             raise
         reason = str(exc).removeprefix(f"{path}: ")
         return [f"file: {path}", *describe_unusable_ulog(summarise_ulog(path), reason)]

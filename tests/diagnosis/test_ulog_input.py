@@ -1,6 +1,9 @@
-"""PX4 ULog topics mapped onto schema v1, and normalised thrust turned into force."""
+"""PX4 ULog topics mapped onto schema v1, normalised thrust turned into force, and a truncated
+ULog's diagnosis saying so."""
 
 from __future__ import annotations
+
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -12,6 +15,7 @@ from flightlog.schema import FlightLog, FlightLogError
 from flightlog.ulog import flight_log_from_topics, read_ulog
 from vehicle_sim import load_sim_config
 
+FIXTURES_ULOG = Path(__file__).resolve().parents[1] / "fixtures" / "ulog"
 HOVER = schedule_from_mapping(
     {
         "segment": [
@@ -73,3 +77,10 @@ def test_payload_is_found_from_normalised_thrust():
     result = diagnose([FlightLog(cols, log.metadata)], load_sim_config("iris"))
     assert result.verdict == ("payload",)
     assert result.causes[0].params["mass_ratio"] == pytest.approx(1.2, rel=0.01)
+
+
+def test_a_diagnosis_of_a_truncated_ulog_says_so_in_its_headline(tmp_path):
+    whole = (FIXTURES_ULOG / "quad_posctl_v1_15.ulg").read_bytes()
+    (tmp_path / "crashed.ulg").write_bytes(whole[: len(whole) // 2])
+    result = diagnose([read_ulog(tmp_path / "crashed.ulg")], load_sim_config("iris"))
+    assert any(w.startswith("crashed.ulg is truncated") for w in result.warnings), result.warnings

@@ -19,7 +19,7 @@ FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "ulog"
 AUTO = FIXTURES / "quad_sitl_v1_15_auto.ulg"
 
 BAD = {
-    "truncated.ulg": "ULog is truncated .* copy the complete .ulg",
+    "truncated.ulg": r"no valid motion.*truncated \(at byte 199955 of 200000\): only its first 2.3",
     "vtol_manual_v1_11.ulg": "no velocity command; flown in MANUAL.*position-controlled mode",
     "quad_manual_v1_6.ulg": "no velocity command; flown in MANUAL.*position-controlled mode",
 }
