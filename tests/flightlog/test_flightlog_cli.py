@@ -140,3 +140,11 @@ def test_convert_onto_its_own_input_is_refused_and_the_ulog_kept(tmp_path, capsy
     assert len(err) == 1 and "is an input being read" in err[0], err
     assert ulog.read_bytes() == AUTO.read_bytes()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["flight.ulg"]
+
+
+def test_fit_gp_says_a_ulog_was_truncated(tmp_path, capsys):
+    whole = (FIXTURES / "quad_posctl_v1_15.ulg").read_bytes()
+    (tmp_path / "crashed.ulg").write_bytes(whole[: len(whole) // 2])
+    fit_gp_cli.main([str(tmp_path / "crashed.ulg"), "--out", str(tmp_path / "model")])
+    err = capsys.readouterr().err
+    assert "fit-gp: warning: crashed.ulg is truncated" in err, err
