@@ -13,12 +13,12 @@ from typing import Literal, get_args
 
 from companion.flight_recorder import FlightRecorder
 from companion.link import Link
-from companion.live_flight_log import LiveFlightLog
 from companion.mission import Mission, load_mission
 from companion.mission_reference import reference_of
 from companion.planner_registry import OBSTACLE_PLANNERS, honours_obstacles, make_planner
 from companion.runner import FlightOutcome, RunnerConfig, fly_mission
 from flightlog.atomic_output import OutputError, check_not_an_input
+from flightlog.live_log import LiveFlightLog
 from flightlog.schema import sidecar_path
 
 LinkKind = Literal["mavsdk", "pymavlink", "inprocess"]

@@ -167,7 +167,8 @@ def parse_args(argv: Sequence[str] | None) -> VehicleSimCliConfig:
         "--log",
         type=output_path,
         metavar="FILE.csv",
-        help="write the vehicle's onboard flight log (with acceleration and thrust) here on exit",
+        help="write the vehicle's onboard flight log (with acceleration and thrust) here, row "
+        "by row as it flies (complete on exit)",
     )
     parser.add_argument(
         "--realtime-priority",
@@ -226,7 +227,7 @@ def build_endpoint(config: VehicleSimCliConfig) -> MavlinkEndpoint:
         offboard_bind_port=config.offboard_bind_port,
         gcs_bind_port=config.gcs_bind_port,
     )
-    stepped = OnboardLogger(sim) if config.log_path is not None else sim
+    stepped = OnboardLogger(sim, stream_path=config.log_path) if config.log_path else sim
     return MavlinkEndpoint(stepped, EndpointConfig(links=links, speed=config.speed))
 
 

@@ -7,7 +7,9 @@ it stands in for the :class:`~vehicle_sim.Simulator` (every attribute is the sim
 records one schema-v1 row (:func:`vehicle_sim.truth_log.truth_row`) per logging period of
 simulated time as the endpoint steps it. The command in a row is the last velocity setpoint
 the vehicle received (what PX4 logs as it arrives), not the one it acts on after a command
-delay. Rows fall on the endpoint's steps, so their spacing jitters by up to one step.
+delay. Rows fall on the endpoint's steps, so their spacing jitters by up to one step. Given a
+``stream_path``, every row is also appended to the file at once (flightlog.live_log), as PX4
+writes its log while it flies: a killed simulator leaves every row logged up to then.
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from flightlog.live_log import LiveFlightLog
 from flightlog.schema import FlightLog, FlightLogRecorder, write_flight_log
 from vehicle_sim.simulator import Simulator
 from vehicle_sim.vehicle_types import VehicleState, VelocitySetpoint
@@ -28,14 +31,25 @@ class OnboardLogger:
     Owned by whoever steps ``sim`` (the endpoint's thread); :meth:`write` after it stopped.
     """
 
-    def __init__(self, sim: Simulator, rate_hz: float = DEFAULT_LOG_RATE_HZ) -> None:
+    def __init__(
+        self,
+        sim: Simulator,
+        rate_hz: float = DEFAULT_LOG_RATE_HZ,
+        stream_path: str | Path | None = None,
+    ) -> None:
         if not (math.isfinite(rate_hz) and rate_hz > 0.0):
             raise ValueError(f"onboard log rate {rate_hz!r} Hz: must be a positive number")
         self._sim = sim
         self._period_s = 1.0 / rate_hz
         self._next_s = -math.inf
         self._received: VelocitySetpoint | None = None
-        self._recorder = FlightLogRecorder({**sim.log_metadata(), "rate_hz": rate_hz})
+        metadata = {**sim.log_metadata(), "rate_hz": rate_hz}
+        self._recorder = FlightLogRecorder(metadata)
+        self._live = (
+            None
+            if stream_path is None
+            else LiveFlightLog(stream_path, metadata, columns=tuple(sim.log_row(None)))
+        )
 
     def __getattr__(self, name: str) -> object:
         return getattr(self._sim, name)
@@ -49,7 +63,10 @@ class OnboardLogger:
         """The simulator's step; then a row if a logging period has passed."""
         state = self._sim.step(duration_s)
         if state.t_s >= self._next_s:
-            self._recorder.append(self._sim.log_row(self._received))
+            row = self._sim.log_row(self._received)
+            self._recorder.append(row)
+            if self._live is not None:
+                self._live.append(row)
             due_s = self._next_s + self._period_s
             self._next_s = due_s if due_s > state.t_s else state.t_s + self._period_s
         return state
@@ -59,5 +76,8 @@ class OnboardLogger:
         return self._recorder.to_log()
 
     def write(self, path: Path) -> Path:
-        """Write the log (CSV and metadata sidecar, atomically); returns the CSV path."""
+        """Write the log (CSV and metadata sidecar, atomically; over the streamed rows when
+        ``path`` is the stream's); returns the CSV path."""
+        if self._live is not None and Path(path) == self._live.path:
+            return self._live.finish(self.to_log())
         return write_flight_log(path, self.to_log())

@@ -12,9 +12,11 @@ import threading
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 from mavlink_test_client import Client, free_udp_port
 
+from flightlog.schema import read_flight_log
 from scripts.vehicle_sim_cli import main, parse_args
 
 REPO = Path(__file__).resolve().parents[2]
@@ -138,3 +140,34 @@ def test_help_names_the_config_from_log_command(capsys):
         parse_args(["--help"])
     assert exc.value.code == 0
     assert "vehicle-sim config-from-log LOG --out my_vehicle.toml" in capsys.readouterr().out
+
+
+@pytest.mark.slow
+def test_a_killed_simulator_leaves_its_onboard_log_up_to_then(tmp_path):
+    """--log streams the onboard log row by row, as PX4 writes its SD-card log while it flies:
+    a SIGKILL (no exit handler runs) leaves a readable log of every row, acceleration and
+    thrust included, marked incomplete; it was kept in memory until exit and lost."""
+    log_path = tmp_path / "onboard.csv"
+    proc = subprocess.Popen(
+        [
+            sys.executable, "-m", "scripts.vehicle_sim_cli", "--speed", "2",
+            "--offboard-port", str(free_udp_port()), "--gcs-port", str(free_udp_port()),
+            "--offboard-bind-port", "0", "--gcs-bind-port", "0", "--log", str(log_path),
+        ],
+        cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        deadline = time.monotonic() + 30.0
+        while time.monotonic() < deadline and (
+            not log_path.exists() or len(log_path.read_text().splitlines()) < 101
+        ):
+            time.sleep(0.2)
+        proc.kill()
+        proc.wait(10.0)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(5.0)
+    log = read_flight_log(log_path)
+    assert log.n_rows >= 100 and log.metadata["complete"] is False
+    assert log.has("thrust_n", "acc_n_mps2") and float(np.min(log["thrust_n"])) >= 0.0

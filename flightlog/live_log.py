@@ -1,18 +1,18 @@
-"""The flight log as it is flown, so that no fault loses a row.
+"""A flight log as it is flown, so that no fault loses a row.
 
 Before take-off the sidecar is written (marked ``"complete": false``) and the CSV opened with
-the columns every row has: schema v1's required ones plus ``armed`` and ``mode``. What is
-learnt before arming (the autopilot's velocity-loop gains) is added to the sidecar at once.
-Each control step appends one row and flushes it, so a SIGKILL, a lost link or a crash leaves
-a readable schema-v1 log of every row flown up to that moment, with that metadata. When the
-flight ends, the full log (with every optional column: acceleration, thrust, planner columns)
-replaces it atomically.
+the columns every row has (by default schema v1's required ones plus ``armed`` and ``mode``,
+the companion's; the simulator's onboard log streams all of its own). What is learnt later
+(the autopilot's velocity-loop gains, read before arming) is added to the sidecar at once.
+Each row is appended and flushed, so a SIGKILL, a lost link or a crash leaves a readable
+schema-v1 log of every row up to that moment, with that metadata. At the end the full log
+(with every optional column: acceleration, thrust, planner columns) replaces it atomically.
 """
 
 from __future__ import annotations
 
 import csv
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TextIO
 
@@ -33,14 +33,21 @@ class LiveFlightLog:
 
     Attributes:
         metadata: the sidecar's entries so far (without ``"complete"``).
+        columns: the streamed columns, in file order (every row must hold them).
 
     Raises:
         OutputError: the log cannot be written there (one line), at construction: before
             anything flies.
     """
 
-    def __init__(self, path: str | Path, metadata: Mapping[str, object]) -> None:
+    def __init__(
+        self,
+        path: str | Path,
+        metadata: Mapping[str, object],
+        columns: Sequence[str] = STREAMED_COLUMNS,
+    ) -> None:
         self.path = check_writable_file(path)
+        self.columns = tuple(columns)
         self.metadata: dict[str, object] = dict(metadata)
         write_sidecar(self.path, {**self.metadata, "complete": False})
         try:
@@ -48,7 +55,7 @@ class LiveFlightLog:
         except OSError as exc:
             raise OutputError(describe_os_error(self.path, exc)) from None
         self._writer = csv.writer(self._fh)
-        self._writer.writerow(STREAMED_COLUMNS)
+        self._writer.writerow(self.columns)
         self._fh.flush()
         self.rows = 0
 
@@ -62,7 +69,7 @@ class LiveFlightLog:
         """Write one row's streamed columns and flush it to the file."""
         if self._fh is None:
             return
-        self._writer.writerow([format_cell(row[c]) for c in STREAMED_COLUMNS])
+        self._writer.writerow([format_cell(row[c]) for c in self.columns])
         self._fh.flush()
         self.rows += 1
 
