@@ -65,7 +65,9 @@ def parse_args(argv: list[str] | None) -> FitGpConfig:
     )
     parser.add_argument("--out", required=True, type=output_path, help="model file (MODEL.npz)")
     parser.add_argument("--features", default="velocity", choices=list(FEATURE_SETS))
-    parser.add_argument("--nominal", default="kinematic_4dof", choices=list(MODELS))
+    parser.add_argument(  # the unicycle is the ground robots' model, learned by experiments.rover
+        "--nominal", default="kinematic_4dof", choices=[m for m in MODELS if m != "unicycle"]
+    )
     parser.add_argument(
         "--nominal-param",
         action="append",

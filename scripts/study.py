@@ -45,10 +45,12 @@ def parse_args(argv: list[str] | None) -> StudyConfig:
     """Command line -> StudyConfig (argparse exits with code 2 on bad options)."""
     parser = OneLineParser(prog="study", description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=output_path, default=Path("out/study"), help="output folder")
-    parser.add_argument("--trajectories", type=int, default=20, help="random trajectories")
-    parser.add_argument("--repeats", type=int, default=3, help="flights per trajectory")
-    parser.add_argument("--trials", type=int, default=6, help="trials on the repeated path")
-    parser.add_argument("--m", type=int, default=30, help="inducing points per output")
+    parser.add_argument("--trajectories", type=int, help="random trajectories (default 20)")
+    parser.add_argument("--repeats", type=int, help="flights per trajectory (default 3)")
+    parser.add_argument("--trials", type=int, help="trials on the repeated path (default 6)")
+    parser.add_argument(
+        "--m", type=int, help="inducing points per output (default 30, or the regime's)"
+    )
     parser.add_argument("--workers", type=int, default=2, help="processes flying in parallel")
     parser.add_argument(
         "--scheduler",
@@ -88,10 +90,6 @@ def parse_args(argv: list[str] | None) -> StudyConfig:
     try:
         config = StudyConfig(
             out_dir=args.out,
-            n_trajectories=args.trajectories,
-            repeats=args.repeats,
-            n_trials=args.trials,
-            m=args.m,
             workers=args.workers,
             scheduler=args.scheduler,
             trajectory_seed=args.seed,
@@ -107,9 +105,24 @@ def parse_args(argv: list[str] | None) -> StudyConfig:
             config = replace(config, refit_rounds=args.refit_rounds)
         if args.closed_loop_check:
             config = replace(config, closed_loop_check=True)
+        sizes = {field: getattr(args, opt) for opt, field in _SIZE_OPTIONS.items()}
+        given = {field: value for field, value in sizes.items() if value is not None}
+        config = replace(config, **given)  # after the regime: an explicit --m wins over its m
+        if args.quick and given:
+            named = ", ".join(f"--{o}" for o, f in _SIZE_OPTIONS.items() if f in given)
+            parser.error(f"--quick sets the study's sizes itself; drop --quick or {named}")
     except ValueError as exc:
         parser.error(str(exc))
     return config.quick() if args.quick else config
+
+
+# the study's sizes on the command line: option -> StudyConfig field
+_SIZE_OPTIONS = {
+    "trajectories": "n_trajectories",
+    "repeats": "repeats",
+    "trials": "n_trials",
+    "m": "m",
+}
 
 
 def _rover_regime(args: list[str]) -> bool:

@@ -109,6 +109,15 @@ def test_multirotor_regimes_stay_with_the_study_cli(tmp_path):
     assert _rover_regime(["--out", str(tmp_path), "--regime=rover_exp1"])
     config = parse_args(["--regime", "wind_field", "--trajectories", "2", "--out", str(tmp_path)])
     assert (config.regime, config.n_trajectories) == ("wind_field", 2)
+    assert config.m == 60  # the regime's
+    assert parse_args(["--regime", "wind_field", "--m", "20"]).m == 20  # was the regime's 60
+
+
+def test_quick_refuses_sizes_it_would_override(capsys):
+    assert study_main(["--quick", "--m", "50", "--trials", "4"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--quick sets the study's sizes itself" in err[0], err
+    assert "--trials, --m" in err[0]
 
 
 @pytest.mark.parametrize(

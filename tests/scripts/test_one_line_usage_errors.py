@@ -34,6 +34,9 @@ def _exit_code(main, argv: list[str]) -> int:
         ("bench", bench.main, ["--only", "nope"], "unknown part 'nope'"),
         ("rover", rover.main, ["--regime", "example", "--frobnicate"], "unrecognized arguments"),
         ("fit-gp", fit_gp.main, ["f.csv", "--out", "m", "--m", "0"], "--m must be >= 1"),
+        ("fit-gp", fit_gp.main, ["f.csv", "--out", "m", "--nominal", "unicycle"],
+         "invalid choice: 'unicycle'"),
+        ("study", study.main, ["--quick", "--repeats", "2"], "drop --quick or --repeats"),
         ("flightlog convert", flightlog_cli.main, ["convert", "f.ulg"], "required: --out"),
     ],
 )  # fmt: skip
