@@ -45,10 +45,9 @@ def smoothed_jerk(t_s: np.ndarray, acc_mps2: np.ndarray) -> np.ndarray:
     hi = np.searchsorted(t_s, t_s + 0.5 * SMOOTH_S, side="right")
     csum = np.vstack([np.zeros((1, 3)), np.cumsum(acc_mps2, axis=0)])
     smooth = (csum[hi] - csum[lo]) / np.maximum(hi - lo, 1)[:, None]
-    back = np.searchsorted(t_s, t_s - 0.5 * SMOOTH_S)
     ahead = np.minimum(np.searchsorted(t_s, t_s + 0.5 * SMOOTH_S), n - 1)
-    span = np.maximum(t_s[ahead] - t_s[back], 1e-9)[:, None]
-    return (smooth[ahead] - smooth[back]) / span
+    span = np.maximum(t_s[ahead] - t_s[lo], 1e-9)[:, None]
+    return (smooth[ahead] - smooth[lo]) / span
 
 
 def integral_offset(diffs: np.ndarray, jerks: np.ndarray) -> tuple[np.ndarray, float]:
