@@ -92,8 +92,6 @@ def run_demo(config: DemoConfig, progress: Callable[[str], None]) -> list[Flight
     model_path = save_model(out / f"gp_{SELECTION}", fit.model)
     progress(f"wrote {model_path}; the augmented planner compiles its solver before take-off")
     flying = model_path
-    if fit.structure_check is not None:
-        progress(fit.structure_check.describe())
     if fit.may_fly and not fit.gp_earns_its_place:
         progress("the augmented flight flies the identified lag without the GP")
     if not fit.may_fly:
