@@ -31,7 +31,7 @@ from pathlib import Path
 from flightlog.atomic_output import OutputError, check_writable_file
 from flightlog.reader import read_log, require_distinct, require_modes, require_rates
 from flightlog.schema import FlightLogError
-from flightlog.ulog import truncation_note
+from flightlog.ulog import damage_note
 from gp.errors import DatasetError, GPInputError, ModelFileError
 from gp.features import FEATURE_SETS
 from gp.inducing import STRATEGIES
@@ -185,9 +185,9 @@ def main(argv: list[str] | None = None) -> int:
             logs.append(read_log(path))
             require_rates(logs[-1], "fit-gp")
             progress(f"read {path} ({logs[-1].n_rows} rows)")
-            truncated = truncation_note(logs[-1])
-            if truncated:
-                print(f"fit-gp: warning: {truncated}", file=sys.stderr)
+            damaged = damage_note(logs[-1])
+            if damaged:
+                print(f"fit-gp: warning: {damaged}", file=sys.stderr)
         require_modes(logs, config.training.modes)
         check_writable_file(model_path(config.out))  # found now, not after the fit
         result = train_residual_model(logs, config.training, progress)
