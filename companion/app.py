@@ -15,6 +15,7 @@ from companion.flight_recorder import FlightRecorder
 from companion.link import Link
 from companion.mission import Mission, load_mission
 from companion.mission_reference import reference_of
+from companion.new_log_path import claim_new_log_path
 from companion.planner_registry import OBSTACLE_PLANNERS, honours_obstacles, make_planner
 from companion.runner import FlightOutcome, RunnerConfig, fly_mission
 from flightlog.atomic_output import OutputError, check_not_an_input
@@ -43,7 +44,9 @@ class CompanionConfig:
         url: MAVLink connection URL (ignored in process).
         planner: planner name (see companion.planner_registry).
         gp_model: residual model file (from fit-gp) for the NMPC, or None for nominal.
-        log_path: where the schema-v1 CSV log goes (sidecar beside it).
+        log_path: where the schema-v1 CSV log goes (sidecar beside it), replacing a file there;
+            None: a new file in ``out/flights/`` named by the time (companion.new_log_path),
+            never an earlier flight's log.
         seed: simulator seed (in process).
         vehicle: simulator preset or config file (in process).
         runner: timing of the mission sequence (loop rate, deadlines).
@@ -55,7 +58,7 @@ class CompanionConfig:
     url: str = DEFAULT_URL
     planner: str = "pd"
     gp_model: Path | None = None
-    log_path: Path = Path("out/flight.csv")
+    log_path: Path | None = None
     seed: int = 0
     vehicle: str = "iris"
     runner: RunnerConfig = field(default_factory=RunnerConfig)
@@ -96,11 +99,20 @@ def run_companion(config: CompanionConfig, progress: Callable[[str], None]) -> C
         link = open_link(config, world)
     except ValueError as exc:  # MissionError, SimConfigError, unknown planner or URL
         raise CompanionInputError(str(exc)) from None
+    claimed: Path | None = None
     try:
-        check_not_an_input(config.log_path, [config.mission_path])
-        live = LiveFlightLog(config.log_path, _log_metadata(config, mission, link))
+        if config.log_path is None:
+            claimed = claim_new_log_path()
+            progress(f"flight log: {claimed} (a new file; --log PATH chooses another)")
+        else:
+            check_not_an_input(config.log_path, [config.mission_path])
+            if config.log_path.is_file():
+                progress(f"flight log: {config.log_path} exists; this flight replaces it")
+        live = LiveFlightLog(claimed or config.log_path, _log_metadata(config, mission, link))
     except OutputError as exc:  # refused before take-off, not after landing
         link.close()
+        if claimed is not None:
+            claimed.unlink(missing_ok=True)
         raise CompanionInputError(f"--log {exc}") from None
     recorder = FlightRecorder(
         period_s=1.0 / config.runner.rate_hz,
