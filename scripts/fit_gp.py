@@ -15,6 +15,10 @@ With ``--nominal first_order_lag`` and no ``--nominal-param tau_s=...``, the vel
 time constants are identified from the logs first (least squares, gp.lag_identification) and
 the GP learns what the identified lag leaves; the model file records them.
 
+Logs of different vehicles or configs (their metadata disagree on the simulator preset,
+mass, PX4 airframe, board or velocity-loop gains: flightlog.vehicle_identity) are pooled as
+given, with a one-line warning naming the logs and the field.
+
 Writes MODEL.npz (one self-describing file) and MODEL_residual_{n,e,d}.png, prints the
 held-out nominal and augmented RMSE per axis ([Kulathunga23], Table 2) on stdout; progress goes
 to stderr. Exit code 0 on success, 1 when the prediction check refuses the model, 2 with a
@@ -32,6 +36,7 @@ from flightlog.atomic_output import OutputError, check_writable_file
 from flightlog.reader import read_log, require_distinct, require_modes, require_rates
 from flightlog.schema import FlightLogError
 from flightlog.ulog import damage_note
+from flightlog.vehicle_identity import mixed_vehicle_fields
 from gp.errors import DatasetError, GPInputError, ModelFileError
 from gp.features import FEATURE_SETS
 from gp.inducing import STRATEGIES
@@ -188,6 +193,14 @@ def main(argv: list[str] | None = None) -> int:
             damaged = damage_note(logs[-1])
             if damaged:
                 print(f"fit-gp: warning: {damaged}", file=sys.stderr)
+        mixed = mixed_vehicle_fields(logs)
+        if mixed:
+            print(
+                f"fit-gp: warning: the logs are from different vehicles or configs "
+                f"({'; '.join(mixed)}); one model learns their mix, which fits each of them "
+                "less well: fit each vehicle's logs on their own unless they fly alike",
+                file=sys.stderr,
+            )
         require_modes(logs, config.training.modes)
         check_writable_file(model_path(config.out))  # found now, not after the fit
         result = train_residual_model(logs, config.training, progress)
