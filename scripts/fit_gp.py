@@ -204,6 +204,8 @@ def main(argv: list[str] | None = None) -> int:
         require_modes(logs, config.training.modes)
         check_writable_file(model_path(config.out))  # found now, not after the fit
         result = train_residual_model(logs, config.training, progress)
+        if result.all_noise is not None:
+            print(f"fit-gp: warning: {result.all_noise}", file=sys.stderr)
         if not result.may_fly:
             print(f"fit-gp: {refusal(result.model)}", file=sys.stderr)
             return 1
