@@ -11,11 +11,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal, get_args
 
+from companion.flight_log_files import claim_new_log_path, keep_earlier_log, restore_earlier_log
 from companion.flight_recorder import FlightRecorder
 from companion.link import Link
 from companion.mission import Mission, load_mission
 from companion.mission_reference import reference_of
-from companion.new_log_path import claim_new_log_path
 from companion.planner_registry import OBSTACLE_PLANNERS, honours_obstacles, make_planner
 from companion.runner import FlightOutcome, RunnerConfig, fly_mission
 from flightlog.atomic_output import OutputError, check_not_an_input
@@ -44,9 +44,9 @@ class CompanionConfig:
         url: MAVLink connection URL (ignored in process).
         planner: planner name (see companion.planner_registry).
         gp_model: residual model file (from fit-gp) for the NMPC, or None for nominal.
-        log_path: where the schema-v1 CSV log goes (sidecar beside it), replacing a file there;
-            None: a new file in ``out/flights/`` named by the time (companion.new_log_path),
-            never an earlier flight's log.
+        log_path: where the schema-v1 CSV log goes (sidecar beside it); a log already there is
+            kept under a numbered name; None: a new file in ``out/flights/`` named by the time
+            (companion.flight_log_files), never an earlier flight's log.
         seed: simulator seed (in process).
         vehicle: simulator preset or config file (in process).
         runner: timing of the mission sequence (loop rate, deadlines).
@@ -99,20 +99,10 @@ def run_companion(config: CompanionConfig, progress: Callable[[str], None]) -> C
         link = open_link(config, world)
     except ValueError as exc:  # MissionError, SimConfigError, unknown planner or URL
         raise CompanionInputError(str(exc)) from None
-    claimed: Path | None = None
     try:
-        if config.log_path is None:
-            claimed = claim_new_log_path()
-            progress(f"flight log: {claimed} (a new file; --log PATH chooses another)")
-        else:
-            check_not_an_input(config.log_path, [config.mission_path])
-            if config.log_path.is_file():
-                progress(f"flight log: {config.log_path} exists; this flight replaces it")
-        live = LiveFlightLog(claimed or config.log_path, _log_metadata(config, mission, link))
+        live, kept = _open_log(config, mission, link, progress)
     except OutputError as exc:  # refused before take-off, not after landing
         link.close()
-        if claimed is not None:
-            claimed.unlink(missing_ok=True)
         raise CompanionInputError(f"--log {exc}") from None
     recorder = FlightRecorder(
         period_s=1.0 / config.runner.rate_hz,
@@ -134,7 +124,39 @@ def run_companion(config: CompanionConfig, progress: Callable[[str], None]) -> C
     finally:
         link.close()
         log_path = _write_log(config, mission, link, recorder, outcome, live, progress)
+        if log_path is None and kept is not None:
+            restore_earlier_log(kept, live.path)
+            progress(f"the earlier log is back at {live.path}")
     return CompanionResult(outcome, log_path)
+
+
+def _open_log(
+    config: CompanionConfig, mission: Mission, link: Link, progress: Callable[[str], None]
+) -> tuple[LiveFlightLog, Path | None]:
+    """The live log, before take-off: a new file without ``--log``; at ``--log`` otherwise,
+    where a log already there is first kept under a numbered name (returned, else None).
+    Undoes both on an OutputError (one line), so nothing is lost or left behind."""
+    metadata = _log_metadata(config, mission, link)
+    if config.log_path is None:
+        path = claim_new_log_path()
+        try:
+            live = LiveFlightLog(path, metadata)
+        except OutputError:
+            path.unlink(missing_ok=True)
+            raise
+        progress(f"flight log: {path} (a new file; --log PATH chooses another)")
+        return live, None
+    check_not_an_input(config.log_path, [config.mission_path])
+    kept = keep_earlier_log(config.log_path)
+    try:
+        live = LiveFlightLog(config.log_path, metadata)
+    except OutputError:
+        if kept is not None:
+            restore_earlier_log(kept, config.log_path)
+        raise
+    if kept is not None:
+        progress(f"flight log: {config.log_path} (the log there before is kept as {kept})")
+    return live, kept
 
 
 def _obstacle_world(config: CompanionConfig, mission: Mission) -> object | None:

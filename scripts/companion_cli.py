@@ -5,8 +5,8 @@
               [--log FLIGHT.csv] [--seed 0] [--vehicle iris]
 
 Without ``--log`` each flight's log is a new file, out/flights/flight_<UTC date_time>.csv, as
-PX4 never writes a log over an earlier one; ``--log PATH`` writes there, replacing a file there,
-as every other command's output option does.
+PX4 never writes a log over an earlier one; ``--log PATH`` writes there, as every command's
+output option does, and a log already there is kept as PATH-stem.1.csv (the first free number).
 
 Progress goes to stderr. Exit codes: 0 mission completed (goal reached, landed, disarmed);
 1 flight failed or goal not reached (the vehicle was brought to HOLD and LAND); 2 bad input
@@ -68,8 +68,8 @@ def parse_args(argv: list[str] | None) -> CompanionConfig:
         "--log",
         type=output_path,
         default=None,
-        help="flight log (schema-v1 CSV) to write, replacing a file there (default: a new file "
-        "out/flights/flight_<UTC date_time>.csv, never an earlier flight's log)",
+        help="flight log (schema-v1 CSV) to write; a log already there is kept as "
+        "PATH-stem.1.csv (default: a new file out/flights/flight_<UTC date_time>.csv)",
     )
     parser.add_argument("--seed", type=int, default=0, help="simulator seed (inprocess)")
     parser.add_argument("--vehicle", default="iris", help="simulator preset or config (inprocess)")
