@@ -18,6 +18,8 @@ the GP learns what the identified lag leaves; the model file records them.
 Logs of different vehicles or configs (their metadata disagree on the simulator preset,
 mass, PX4 airframe, board or velocity-loop gains: flightlog.vehicle_identity) are pooled as
 given, with a one-line warning naming the logs and the field.
+A GP that explains nothing but noise on some axis (signal variance under 1 % of the noise
+variance: it predicts about 0 there; gp.noise_optimum) is said in a one-line warning too.
 
 Writes MODEL.npz (one self-describing file) and MODEL_residual_{n,e,d}.png, prints the
 held-out nominal and augmented RMSE per axis ([Kulathunga23], Table 2) on stdout; progress goes
