@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal, get_args
 
+from companion.flight_log_files import claim_new_log_path, keep_earlier_log, restore_earlier_log
 from companion.flight_recorder import FlightRecorder
 from companion.link import Link
 from companion.mission import Mission, load_mission
@@ -43,7 +44,9 @@ class CompanionConfig:
         url: MAVLink connection URL (ignored in process).
         planner: planner name (see companion.planner_registry).
         gp_model: residual model file (from fit-gp) for the NMPC, or None for nominal.
-        log_path: where the schema-v1 CSV log goes (sidecar beside it).
+        log_path: where the schema-v1 CSV log goes (sidecar beside it); a log already there is
+            kept under a numbered name; None: a new file in ``out/flights/`` named by the time
+            (companion.flight_log_files), never an earlier flight's log.
         seed: simulator seed (in process).
         vehicle: simulator preset or config file (in process).
         runner: timing of the mission sequence (loop rate, deadlines).
@@ -55,7 +58,7 @@ class CompanionConfig:
     url: str = DEFAULT_URL
     planner: str = "pd"
     gp_model: Path | None = None
-    log_path: Path = Path("out/flight.csv")
+    log_path: Path | None = None
     seed: int = 0
     vehicle: str = "iris"
     runner: RunnerConfig = field(default_factory=RunnerConfig)
@@ -97,8 +100,7 @@ def run_companion(config: CompanionConfig, progress: Callable[[str], None]) -> C
     except ValueError as exc:  # MissionError, SimConfigError, unknown planner or URL
         raise CompanionInputError(str(exc)) from None
     try:
-        check_not_an_input(config.log_path, [config.mission_path])
-        live = LiveFlightLog(config.log_path, _log_metadata(config, mission, link))
+        live, kept = _open_log(config, mission, link, progress)
     except OutputError as exc:  # refused before take-off, not after landing
         link.close()
         raise CompanionInputError(f"--log {exc}") from None
@@ -122,7 +124,39 @@ def run_companion(config: CompanionConfig, progress: Callable[[str], None]) -> C
     finally:
         link.close()
         log_path = _write_log(config, mission, link, recorder, outcome, live, progress)
+        if log_path is None and kept is not None:
+            restore_earlier_log(kept, live.path)
+            progress(f"the earlier log is back at {live.path}")
     return CompanionResult(outcome, log_path)
+
+
+def _open_log(
+    config: CompanionConfig, mission: Mission, link: Link, progress: Callable[[str], None]
+) -> tuple[LiveFlightLog, Path | None]:
+    """The live log, before take-off: a new file without ``--log``; at ``--log`` otherwise,
+    where a log already there is first kept under a numbered name (returned, else None).
+    Undoes both on an OutputError (one line), so nothing is lost or left behind."""
+    metadata = _log_metadata(config, mission, link)
+    if config.log_path is None:
+        path = claim_new_log_path()
+        try:
+            live = LiveFlightLog(path, metadata)
+        except OutputError:
+            path.unlink(missing_ok=True)
+            raise
+        progress(f"flight log: {path} (a new file; --log PATH chooses another)")
+        return live, None
+    check_not_an_input(config.log_path, [config.mission_path])
+    kept = keep_earlier_log(config.log_path)
+    try:
+        live = LiveFlightLog(config.log_path, metadata)
+    except OutputError:
+        if kept is not None:
+            restore_earlier_log(kept, config.log_path)
+        raise
+    if kept is not None:
+        progress(f"flight log: {config.log_path} (the log there before is kept as {kept})")
+    return live, kept
 
 
 def _obstacle_world(config: CompanionConfig, mission: Mission) -> object | None:

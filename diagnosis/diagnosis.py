@@ -54,7 +54,7 @@ from diagnosis.thrust_response import (
 )
 from diagnosis.warm_up import LEAD_IN_S
 from flightlog.schema import FlightLog
-from flightlog.ulog import truncation_note
+from flightlog.ulog import damage_note
 from vehicle_sim import SimConfig
 from vehicle_sim.effects import EFFECT_CLASSES, BatterySag
 from vehicle_sim.effects.base import effect_as_mapping
@@ -297,7 +297,7 @@ def diagnose(
         warnings.append(
             f"closed-loop tracking not examined: no held-out row of a whole flight segment ({why})"
         )
-    warnings += [note for note in map(truncation_note, logs) if note]
+    warnings += [note for note in map(damage_note, logs) if note]
     if not_ident:
         warnings.append(
             "not examined (the logs cannot identify them): " + ", ".join(n.name for n in not_ident)

@@ -6,7 +6,7 @@ import numpy as np
 
 from flightlog.reader import NEEDS_HZ, log_rates_hz, rate_shortfalls
 from flightlog.schema import FlightLog
-from flightlog.ulog import truncation_note
+from flightlog.ulog import damage_note
 
 
 def mode_spans(log: FlightLog) -> list[tuple[str, float, float]]:
@@ -35,9 +35,10 @@ def describe_log(log: FlightLog) -> list[str]:
         lines.append(f"firmware: PX4 {meta['firmware']} on {meta.get('hardware')}")
     if "duration_s" in meta:
         lines.append(f"log duration: {meta['duration_s']:.1f} s")
-    truncated = truncation_note(log)
-    if truncated:
-        lines.append(f"truncated: {truncated}")
+    damaged = damage_note(log)
+    if damaged:
+        kind = "truncated" if meta.get("truncated_at_byte") else "corrupt"
+        lines.append(f"{kind}: {damaged}")
     lines.append(f"usable rows: {log.n_rows} over {t[-1] - t[0]:.1f} s")
     for name, hz in log_rates_hz(log).items():
         lines.append(f"rate {name}: {hz:g} Hz")

@@ -40,6 +40,7 @@ import numpy as np
 
 from flightlog import px4
 from flightlog.schema import FlightLog, FlightLogError, validate_flight_log
+from flightlog.ulog_integrity import ULogDamage, find_damage
 
 Topics = Mapping[str, Mapping[str, np.ndarray]]
 ULOG_MAGIC = b"ULog\x01\x12\x35"
@@ -76,35 +77,36 @@ def _parse(path: Path):
         return ULog(str(path), message_name_filter_list=list(TOPICS))
 
 
-def truncated_at(path: str | Path) -> int | None:
-    """Byte offset of an incomplete last message (a truncated ULog), else None.
-
-    ULog ([ULog-format]): a 16-byte header, then messages of (uint16 size, uint8 type, size
-    bytes). A file cut mid-message leaves a last message longer than the bytes remaining.
-    """
-    data = Path(path).read_bytes()
-    if len(data) < 16:
-        return len(data)
-    offset = 16
-    while offset + 3 <= len(data):
-        size = int.from_bytes(data[offset : offset + 2], "little")
-        if offset + 3 + size > len(data):
-            return offset
-        offset += 3 + size
-    return offset if offset != len(data) else None
-
-
-def truncation_note(log: FlightLog) -> str | None:
-    """One sentence for a report's headline when ``log`` was read from a truncated ULog."""
-    cut = log.metadata.get("truncated_at_byte")
-    if not cut:
-        return None
+def damage_note(log: FlightLog) -> str | None:
+    """One sentence for a report's headline when ``log`` was read from a truncated or a corrupt
+    ULog (:mod:`flightlog.ulog_integrity`), else None."""
     name = log.metadata.get("ulog", "the ULog")
-    return (
-        f"{name} is truncated (last message incomplete at byte {cut[0]} of {cut[1]}: logging "
-        f"stopped mid-message, as a crash or power loss leaves it); its complete part, "
-        f"{log.metadata.get('duration_s', float('nan')):.1f} s, was read"
-    )
+    duration = f"{log.metadata.get('duration_s', float('nan')):.1f} s"
+    cut = log.metadata.get("truncated_at_byte")
+    if cut:
+        return (
+            f"{name} is truncated (last message incomplete at byte {cut[0]} of {cut[1]}: logging "
+            f"stopped mid-message, as a crash or power loss leaves it); its complete part, "
+            f"{duration}, was read"
+        )
+    bad = log.metadata.get("corrupt_at_byte")
+    if bad:
+        return (
+            f"{name} is corrupt at byte {bad[0]} of {bad[1]} "
+            f"({log.metadata.get('corrupt_header', 'an invalid message header')}: the file was "
+            f"damaged, e.g. by the SD card or the copy, not cut short); {duration} were read and "
+            "messages after the damage may be missing; copy the .ulg again from the vehicle"
+        )
+    return None
+
+
+def _damage_clause(damage: ULogDamage, duration_s: float) -> str:
+    """What a mapping error on a damaged file adds: where, and how much could be read."""
+    if damage.kind == "truncated":
+        where = f"truncated (at byte {damage.at_byte} of {damage.file_bytes})"
+    else:
+        where = f"corrupt (at byte {damage.at_byte} of {damage.file_bytes}: {damage.detail})"
+    return f"the file is {where}: only its first {duration_s:.1f} s could be read"
 
 
 def read_ulog(path: str | Path) -> FlightLog:
@@ -114,7 +116,9 @@ def read_ulog(path: str | Path) -> FlightLog:
         FlightLogError: unreadable file, not a multirotor, no valid motion (one line naming
             what is wrong and what to fly or log instead). A truncated file (the vehicle stopped
             logging mid-message: a crash, a power loss) is read up to its last complete message
-            and says so in ``truncated_at_byte`` (:func:`truncation_note`).
+            and says so in ``truncated_at_byte``; a corrupt one (an invalid message header before
+            the end) is read as far as pyulog can and says so in ``corrupt_at_byte`` and
+            ``corrupt_header`` (:func:`damage_note`).
     """
     path = Path(path)
     if not path.is_file():
@@ -124,7 +128,7 @@ def read_ulog(path: str | Path) -> FlightLog:
             f"{path}: not a ULog file (it does not start with the ULog magic bytes); "
             "copy the .ulg again from the vehicle, or pass a schema-v1 CSV"
         )
-    cut = truncated_at(path)  # a crash or power loss leaves such a file: its complete part
+    damage = find_damage(path)  # a crash, a power loss or a failing card leaves such a file
     try:
         ulog = _parse(path)
     except Exception as exc:  # pyulog raises several types for corrupt files
@@ -133,8 +137,12 @@ def read_ulog(path: str | Path) -> FlightLog:
             "copy the .ulg again from the vehicle's SD card"
         ) from None
     topics = {d.name: d.data for d in ulog.data_list if d.multi_id == 0}
-    if "vehicle_local_position" not in topics and ulog.file_corruption is not False:
-        raise FlightLogError(f"{path}: ULog is corrupt or truncated and holds no local position")
+    if "vehicle_local_position" not in topics and (damage or ulog.file_corruption):
+        what = f"{damage.kind} at byte {damage.at_byte}" if damage else "corrupt"
+        raise FlightLogError(
+            f"{path}: ULog is {what} and holds no local position; copy the .ulg again from the "
+            "vehicle"
+        )
     params = {k: float(v) for k, v in ulog.initial_parameters.items()}
     info = ulog.msg_info_dict
     meta = {
@@ -144,8 +152,11 @@ def read_ulog(path: str | Path) -> FlightLog:
         "hardware": info.get("ver_hw"),
         "duration_s": round((ulog.last_timestamp - ulog.start_timestamp) * 1e-6, 3),
     }
-    if cut is not None:
-        meta["truncated_at_byte"] = [cut, path.stat().st_size]
+    if damage is not None and damage.kind == "truncated":
+        meta["truncated_at_byte"] = [damage.at_byte, damage.file_bytes]
+    elif damage is not None:
+        meta["corrupt_at_byte"] = [damage.at_byte, damage.file_bytes]
+        meta["corrupt_header"] = damage.detail
     where = str(path)
     if not topics:
         raise FlightLogError(
@@ -155,12 +166,9 @@ def read_ulog(path: str | Path) -> FlightLog:
     try:
         log = flight_log_from_topics(topics, where, params, meta["firmware"])
     except FlightLogError as exc:
-        if cut is None:
+        if damage is None:
             raise
-        raise FlightLogError(
-            f"{exc}; the file is truncated (at byte {cut} of {path.stat().st_size}): only its "
-            f"first {meta['duration_s']:.1f} s could be read"
-        ) from None
+        raise FlightLogError(f"{exc}; {_damage_clause(damage, meta['duration_s'])}") from None
     return FlightLog(log.columns, {**log.metadata, **meta}, path)
 
 

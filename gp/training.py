@@ -18,6 +18,7 @@ from gp.features import FeatureDefinition, feature_definition
 from gp.inducing import InducingConfig
 from gp.lag_identification import LagIdentification, identify_velocity_lag
 from gp.model_io import ResidualModel
+from gp.noise_optimum import all_noise_note, all_noise_outputs
 from gp.prediction_check import PredictionCheck, Predictor, check_prediction, split_logs
 from gp.sparse_gp import SparseGP
 from gp.velocity_integrator import VELOCITY_LOOP_GAIN_NAMES, logged_velocity_loop_gains
@@ -68,7 +69,9 @@ class TrainingConfig:
 @dataclass(frozen=True, eq=False)
 class TrainingResult:
     """The trained model, the data it saw, its held-out figures and, when checked, the
-    multi-step prediction verdict against the incumbent (``check.passed``: it may fly)."""
+    multi-step prediction verdict against the incumbent (``check.passed``: it may fly);
+    ``all_noise``: one line when some output's GP explains nothing but noise
+    (gp.noise_optimum), else None."""
 
     model: ResidualModel
     train: ResidualDataset
@@ -76,6 +79,7 @@ class TrainingResult:
     metrics: dict[str, list[float]]
     check: PredictionCheck | None = None
     structure_check: PredictionCheck | None = None
+    all_noise: str | None = None
 
     @property
     def may_fly(self) -> bool:
@@ -122,6 +126,12 @@ def train_residual_model(
     mean, _ = estimator.predict(test.X)
     metrics = residual_rmse(test, mean)
     training = {**train.summary(), "held_out": test.summary(), **metrics}
+    signal = np.array([kernel.variance for kernel in estimator.kernels_])
+    noise = estimator.noise_variances_
+    all_noise = all_noise_note(features.outputs, signal, noise)
+    if all_noise is not None:
+        found = all_noise_outputs(signal, noise)
+        training["all_noise_outputs"] = [features.outputs[i] for i in found]
     if identified is not None:
         training["identified_lag"] = identified.to_dict()
     model = ResidualModel.from_estimator(
@@ -149,7 +159,7 @@ def train_residual_model(
             progress(alone.describe())
             training["prediction_check_structure"] = alone.to_dict()
         model = ResidualModel.from_estimator(estimator, features, model.inducing, training)
-    return TrainingResult(model, train, test, metrics, check, alone)
+    return TrainingResult(model, train, test, metrics, check, alone, all_noise)
 
 
 def resolve_features(

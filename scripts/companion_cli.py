@@ -2,7 +2,11 @@
 
     companion MISSION --link {mavsdk,pymavlink,inprocess} [--url udpin://127.0.0.1:14540]
               [--planner pd|nmpc|nmpc_clutter] [--gp-model MODEL.npz] [--rate-hz 50]
-              [--log out/flight.csv] [--seed 0] [--vehicle iris]
+              [--log FLIGHT.csv] [--seed 0] [--vehicle iris]
+
+Without ``--log`` each flight's log is a new file, out/flights/flight_<UTC date_time>.csv, as
+PX4 never writes a log over an earlier one; ``--log PATH`` writes there, as every command's
+output option does, and a log already there is kept as PATH-stem.1.csv (the first free number).
 
 Progress goes to stderr. Exit codes: 0 mission completed (goal reached, landed, disarmed);
 1 flight failed or goal not reached (the vehicle was brought to HOLD and LAND); 2 bad input
@@ -61,7 +65,11 @@ def parse_args(argv: list[str] | None) -> CompanionConfig:
     )
     parser.add_argument("--rate-hz", type=float, default=50.0, help="control loop rate [Hz]")
     parser.add_argument(
-        "--log", type=output_path, default=Path("out/flight.csv"), help="flight log"
+        "--log",
+        type=output_path,
+        default=None,
+        help="flight log (schema-v1 CSV) to write; a log already there is kept as "
+        "PATH-stem.1.csv (default: a new file out/flights/flight_<UTC date_time>.csv)",
     )
     parser.add_argument("--seed", type=int, default=0, help="simulator seed (inprocess)")
     parser.add_argument("--vehicle", default="iris", help="simulator preset or config (inprocess)")

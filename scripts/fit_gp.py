@@ -15,6 +15,12 @@ With ``--nominal first_order_lag`` and no ``--nominal-param tau_s=...``, the vel
 time constants are identified from the logs first (least squares, gp.lag_identification) and
 the GP learns what the identified lag leaves; the model file records them.
 
+Logs of different vehicles or configs (their metadata disagree on the simulator preset,
+mass, PX4 airframe, board or velocity-loop gains: flightlog.vehicle_identity) are pooled as
+given, with a one-line warning naming the logs and the field.
+A GP that explains nothing but noise on some axis (signal variance under 1 % of the noise
+variance: it predicts about 0 there; gp.noise_optimum) is said in a one-line warning too.
+
 Writes MODEL.npz (one self-describing file) and MODEL_residual_{n,e,d}.png, prints the
 held-out nominal and augmented RMSE per axis ([Kulathunga23], Table 2) on stdout; progress goes
 to stderr. Exit code 0 on success, 1 when the prediction check refuses the model, 2 with a
@@ -31,7 +37,8 @@ from pathlib import Path
 from flightlog.atomic_output import OutputError, check_writable_file
 from flightlog.reader import read_log, require_distinct, require_modes, require_rates
 from flightlog.schema import FlightLogError
-from flightlog.ulog import truncation_note
+from flightlog.ulog import damage_note
+from flightlog.vehicle_identity import mixed_vehicle_fields
 from gp.errors import DatasetError, GPInputError, ModelFileError
 from gp.features import FEATURE_SETS
 from gp.inducing import STRATEGIES
@@ -185,12 +192,22 @@ def main(argv: list[str] | None = None) -> int:
             logs.append(read_log(path))
             require_rates(logs[-1], "fit-gp")
             progress(f"read {path} ({logs[-1].n_rows} rows)")
-            truncated = truncation_note(logs[-1])
-            if truncated:
-                print(f"fit-gp: warning: {truncated}", file=sys.stderr)
+            damaged = damage_note(logs[-1])
+            if damaged:
+                print(f"fit-gp: warning: {damaged}", file=sys.stderr)
+        mixed = mixed_vehicle_fields(logs)
+        if mixed:
+            print(
+                f"fit-gp: warning: the logs are from different vehicles or configs "
+                f"({'; '.join(mixed)}); one model learns their mix, which fits each of them "
+                "less well: fit each vehicle's logs on their own unless they fly alike",
+                file=sys.stderr,
+            )
         require_modes(logs, config.training.modes)
         check_writable_file(model_path(config.out))  # found now, not after the fit
         result = train_residual_model(logs, config.training, progress)
+        if result.all_noise is not None:
+            print(f"fit-gp: warning: {result.all_noise}", file=sys.stderr)
         if not result.may_fly:
             print(f"fit-gp: {refusal(result.model)}", file=sys.stderr)
             return 1

@@ -13,6 +13,7 @@ from diagnosis.excitation import schedule_from_mapping
 from diagnosis.fly_schedule import fly_schedule
 from flightlog.schema import FlightLog, FlightLogError
 from flightlog.ulog import flight_log_from_topics, read_ulog
+from tests.flightlog.ulog_damage import corrupt_copy
 from vehicle_sim import load_sim_config
 
 FIXTURES_ULOG = Path(__file__).resolve().parents[1] / "fixtures" / "ulog"
@@ -84,3 +85,10 @@ def test_a_diagnosis_of_a_truncated_ulog_says_so_in_its_headline(tmp_path):
     (tmp_path / "crashed.ulg").write_bytes(whole[: len(whole) // 2])
     result = diagnose([read_ulog(tmp_path / "crashed.ulg")], load_sim_config("iris"))
     assert any(w.startswith("crashed.ulg is truncated") for w in result.warnings), result.warnings
+
+
+def test_a_diagnosis_of_a_corrupt_ulog_calls_it_corrupt_not_truncated(tmp_path):
+    damaged, offset = corrupt_copy(tmp_path, "size")
+    result = diagnose([read_ulog(damaged)], load_sim_config("iris"))
+    named = [w for w in result.warnings if w.startswith("damaged.ulg is")]
+    assert len(named) == 1 and named[0].startswith(f"damaged.ulg is corrupt at byte {offset}")

@@ -14,6 +14,7 @@ from flightlog.reader import read_log
 from scripts import diagnose as diagnose_cli
 from scripts import fit_gp as fit_gp_cli
 from scripts import flightlog_cli
+from tests.flightlog.ulog_damage import corrupt_copy
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "ulog"
 AUTO = FIXTURES / "quad_sitl_v1_15_auto.ulg"
@@ -148,3 +149,14 @@ def test_fit_gp_says_a_ulog_was_truncated(tmp_path, capsys):
     fit_gp_cli.main([str(tmp_path / "crashed.ulg"), "--out", str(tmp_path / "model")])
     err = capsys.readouterr().err
     assert "fit-gp: warning: crashed.ulg is truncated" in err, err
+
+
+def test_fit_gp_and_info_say_a_ulog_with_a_damaged_header_is_corrupt(tmp_path, capsys):
+    damaged, offset = corrupt_copy(tmp_path, "size")
+    assert flightlog_cli.main(["info", str(damaged)]) == 0
+    out = capsys.readouterr().out
+    assert f"corrupt: damaged.ulg is corrupt at byte {offset}" in out and "truncated" not in out
+    fit_gp_cli.main([str(damaged), "--out", str(tmp_path / "model")])
+    err = capsys.readouterr().err
+    assert f"fit-gp: warning: damaged.ulg is corrupt at byte {offset}" in err, err
+    assert "truncated" not in err

@@ -1,0 +1,97 @@
+"""Which vehicle a log was flown on, from its metadata, and whether several logs agree.
+
+What a log's sidecar (or a ULog's header and parameters) says about the vehicle, compared only
+where two logs both say it:
+
+- ``vehicle preset``: the simulator preset (``vehicle`` of a vehicle-sim onboard log,
+  ``vehicle_preset`` of an in-process companion log);
+- ``simulator backend``: vehicle-sim's physics (``backend``: builtin or jsbsim);
+- ``mass_kg``: the configured mass (equal within :data:`MASS_REL_TOL`);
+- ``vehicle type``: a ULog's MAV_TYPE name (quadrotor, hexarotor ...);
+- ``airframe``: a ULog's SYS_AUTOSTART ([PX4-params]), PX4's airframe id;
+- ``hardware``: a ULog's flight-controller board (ver_hw);
+- ``velocity_loop_gains``: the PX4 velocity-loop gains the companion read before arming.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+
+from flightlog.schema import FlightLog
+
+MASS_REL_TOL = 1e-3  # masses closer than this (relative) are the same configured mass
+
+
+def _preset(meta: Mapping[str, object]) -> object:
+    for key in ("vehicle", "vehicle_preset"):
+        if isinstance(meta.get(key), str):
+            return meta[key]
+    return None
+
+
+def _backend(meta: Mapping[str, object]) -> object:
+    return meta.get("backend") if isinstance(meta.get("backend"), str) else None
+
+
+def _hardware(meta: Mapping[str, object]) -> object:
+    return meta.get("hardware") if isinstance(meta.get("hardware"), str) else None
+
+
+def _vehicle_type(meta: Mapping[str, object]) -> object:
+    vehicle = meta.get("vehicle")
+    return vehicle.get("type") if isinstance(vehicle, Mapping) else None
+
+
+def _airframe(meta: Mapping[str, object]) -> object:
+    params = meta.get("px4_params")
+    value = params.get("SYS_AUTOSTART") if isinstance(params, Mapping) else None
+    return None if value is None else int(float(value))
+
+
+def _mass(meta: Mapping[str, object]) -> object:
+    mass = meta.get("mass_kg")
+    return float(mass) if isinstance(mass, int | float) else None
+
+
+def _gains(meta: Mapping[str, object]) -> object:
+    gains = meta.get("velocity_loop_gains")
+    return dict(sorted(gains.items())) if isinstance(gains, Mapping) else None
+
+
+IDENTITY_FIELDS: tuple[tuple[str, Callable[[Mapping[str, object]], object]], ...] = (
+    ("vehicle preset", _preset),
+    ("simulator backend", _backend),
+    ("mass_kg", _mass),
+    ("vehicle type", _vehicle_type),
+    ("airframe (SYS_AUTOSTART)", _airframe),
+    ("hardware", _hardware),
+    ("velocity_loop_gains", _gains),
+)
+
+
+def _same(a: object, b: object) -> bool:
+    if isinstance(a, float) and isinstance(b, float):
+        return abs(a - b) <= MASS_REL_TOL * max(abs(a), abs(b))
+    return a == b
+
+
+def mixed_vehicle_fields(logs: Sequence[FlightLog]) -> list[str]:
+    """One clause per identity field on which the logs that record it disagree, naming each
+    value with its logs, e.g. ``airframe (SYS_AUTOSTART) 4001 in a.ulg, 4003 in b.ulg``;
+    [] when every field recorded by two or more logs agrees."""
+    clauses = []
+    for name, read in IDENTITY_FIELDS:
+        groups: list[tuple[object, list[str]]] = []
+        for log in logs:
+            value = read(log.metadata)
+            if value is None:
+                continue
+            group = next((g for g in groups if _same(g[0], value)), None)
+            if group is None:
+                groups.append((value, [log._where()]))
+            else:
+                group[1].append(log._where())
+        if len(groups) > 1:
+            values = ", ".join(f"{value} in {' and '.join(where)}" for value, where in groups)
+            clauses.append(f"{name} {values}")
+    return clauses

@@ -1,0 +1,36 @@
+"""Damaged copies of a real ULog fixture, for the tests of truncated and corrupt files."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "ulog"
+POSCTL = FIXTURES / "quad_posctl_v1_15.ulg"
+
+
+def message_headers(data: bytes) -> list[tuple[int, int, str]]:
+    """(offset, payload size, type) of each message of a sound ULog, walked naively."""
+    headers, offset = [], 16
+    while offset < len(data):
+        size = int.from_bytes(data[offset : offset + 2], "little")
+        headers.append((offset, size, chr(data[offset + 2])))
+        offset += 3 + size
+    return headers
+
+
+def corrupt_copy(tmp_path: Path, how: str) -> tuple[Path, int]:
+    """quad_posctl_v1_15.ulg with one data message header damaged; the file and its offset.
+
+    "size": near the end, the size set to 0xFFFF, which runs past the end of the file (a walk
+    by sizes alone takes it for a cut); "type": mid-file, the type byte's bits flipped."""
+    data = bytearray(POSCTL.read_bytes())
+    data_messages = [h for h in message_headers(bytes(data)) if h[2] == "D"]
+    if how == "size":
+        offset = next(h[0] for h in data_messages if h[0] > len(data) - 30_000)
+        data[offset : offset + 2] = b"\xff\xff"
+    else:
+        offset = next(h[0] for h in data_messages if h[0] > len(data) // 2)
+        data[offset + 2] ^= 0xFF
+    path = tmp_path / "damaged.ulg"
+    path.write_bytes(bytes(data))
+    return path, offset
