@@ -47,6 +47,8 @@ class CompanionConfig:
         log_path: where the schema-v1 CSV log goes (sidecar beside it); a log already there is
             kept under a numbered name; None: a new file in ``out/flights/`` named by the time
             (companion.flight_log_files), never an earlier flight's log.
+        replace_log: replace a log already at ``log_path`` instead of keeping it (for tools
+            that own their output folder and write it anew each run: the demo, the showcase).
         seed: simulator seed (in process).
         vehicle: simulator preset or config file (in process).
         runner: timing of the mission sequence (loop rate, deadlines).
@@ -59,6 +61,7 @@ class CompanionConfig:
     planner: str = "pd"
     gp_model: Path | None = None
     log_path: Path | None = None
+    replace_log: bool = False
     seed: int = 0
     vehicle: str = "iris"
     runner: RunnerConfig = field(default_factory=RunnerConfig)
@@ -147,7 +150,7 @@ def _open_log(
         progress(f"flight log: {path} (a new file; --log PATH chooses another)")
         return live, None
     check_not_an_input(config.log_path, [config.mission_path])
-    kept = keep_earlier_log(config.log_path)
+    kept = None if config.replace_log else keep_earlier_log(config.log_path)
     try:
         live = LiveFlightLog(config.log_path, metadata)
     except OutputError:

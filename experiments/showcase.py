@@ -104,6 +104,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                     link="inprocess",
                     planner=planner,
                     log_path=config.out_dir / f"square_{planner}_{air}.csv",
+                    replace_log=True,
                     seed=config.seed,
                     vehicle=vehicle,
                 ),

@@ -125,6 +125,7 @@ def _fly(
             planner="nmpc",
             gp_model=gp_model,
             log_path=log_path,
+            replace_log=True,
             runner=RunnerConfig(
                 rate_hz=config.rate_hz,
                 connect_timeout_s=DEMO_CONNECT_TIMEOUT_S,

@@ -7,6 +7,7 @@ from __future__ import annotations
 from datetime import UTC, datetime
 from pathlib import Path
 
+from companion.app import CompanionConfig, run_companion
 from companion.flight_log_files import claim_new_log_path
 from flightlog.schema import read_flight_log, sidecar_path
 from scripts.companion_cli import main
@@ -82,3 +83,13 @@ def test_a_flight_refused_before_take_off_leaves_the_earlier_log_in_place(tmp_pa
         "nominal.csv",
         "nominal.csv.json",
     ]
+
+
+def test_a_tool_that_owns_its_folder_replaces_its_log(tmp_path) -> None:
+    """The demo and the showcase write their folder anew each run: no numbered copies pile up."""
+    log = tmp_path / "nominal.csv"
+    for seed in (0, 1):
+        config = CompanionConfig(LINE, link="inprocess", log_path=log, replace_log=True, seed=seed)
+        assert run_companion(config, lambda _: None).outcome.status == "completed"
+    assert read_flight_log(log).metadata["seed"] == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["nominal.csv", "nominal.csv.json"]
