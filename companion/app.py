@@ -11,7 +11,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal, get_args
 
-from companion.flight_log_files import claim_new_log_path, keep_earlier_log, restore_earlier_log
 from companion.flight_recorder import FlightRecorder
 from companion.link import Link
 from companion.mission import Mission, load_mission
@@ -19,6 +18,7 @@ from companion.mission_reference import reference_of
 from companion.planner_registry import OBSTACLE_PLANNERS, honours_obstacles, make_planner
 from companion.runner import FlightOutcome, RunnerConfig, fly_mission
 from flightlog.atomic_output import OutputError, check_not_an_input
+from flightlog.flight_log_files import claim_new_log_path, keep_earlier_log, restore_earlier_log
 from flightlog.live_log import LiveFlightLog
 from flightlog.schema import sidecar_path
 
@@ -46,7 +46,7 @@ class CompanionConfig:
         gp_model: residual model file (from fit-gp) for the NMPC, or None for nominal.
         log_path: where the schema-v1 CSV log goes (sidecar beside it); a log already there is
             kept under a numbered name; None: a new file in ``out/flights/`` named by the time
-            (companion.flight_log_files), never an earlier flight's log.
+            (flightlog.flight_log_files), never an earlier flight's log.
         replace_log: replace a log already at ``log_path`` instead of keeping it (for tools
             that own their output folder and write it anew each run: the demo, the showcase).
         seed: simulator seed (in process).

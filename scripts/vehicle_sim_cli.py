@@ -32,6 +32,7 @@ from typing import Any
 
 from companion.realtime import MAX_RT_PRIORITY, raise_to_realtime
 from flightlog.atomic_output import OutputError, check_writable_file
+from flightlog.flight_log_files import keep_earlier_log, restore_earlier_log
 from flightlog.schema import sidecar_path
 from scripts.one_line_parser import output_path
 from vehicle_sim import EFFECT_NAMES, SimConfigError, Simulator, load_sim_config
@@ -168,7 +169,7 @@ def parse_args(argv: Sequence[str] | None) -> VehicleSimCliConfig:
         type=output_path,
         metavar="FILE.csv",
         help="write the vehicle's onboard flight log (with acceleration and thrust) here, row "
-        "by row as it flies (complete on exit)",
+        "by row as it flies (complete on exit); a log already there is kept as FILE.1.csv",
     )
     parser.add_argument(
         "--realtime-priority",
@@ -296,6 +297,17 @@ def main(argv: Sequence[str] | None = None) -> int:
             signal.signal(sig, handler)
 
 
+def _keep_earlier_log(log_path: str | None) -> Path | None:
+    """Move a log already at ``--log`` aside (``stem.N.csv``, as the companion does) before
+    this session streams over it; where it went, or None."""
+    if log_path is None:
+        return None
+    kept = keep_earlier_log(Path(log_path))
+    if kept is not None:
+        print(f"{PROG}: onboard log: {log_path} (the log there before is kept as {kept})")
+    return kept
+
+
 def _run(config: VehicleSimCliConfig, stop: threading.Event) -> int:
     if config.log_path is not None:
         try:  # found out now, not after a flight whose log would be lost
@@ -305,9 +317,16 @@ def _run(config: VehicleSimCliConfig, stop: threading.Event) -> int:
             print(f"{PROG}: error: --log {exc}", file=sys.stderr)
             return 2
     try:
+        kept = _keep_earlier_log(config.log_path)
+    except OutputError as exc:
+        print(f"{PROG}: error: --log {exc}", file=sys.stderr)
+        return 2
+    try:
         endpoint = build_endpoint(config)
         endpoint.start()
     except (SimConfigError, SigningKeyError, ValueError, OSError) as exc:
+        if kept is not None:
+            restore_earlier_log(kept, Path(config.log_path))
         print(f"{PROG}: error: {exc}", file=sys.stderr)
         return 2
     try:

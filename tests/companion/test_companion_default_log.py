@@ -8,7 +8,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from companion.app import CompanionConfig, run_companion
-from companion.flight_log_files import claim_new_log_path
+from flightlog.flight_log_files import claim_new_log_path
 from flightlog.schema import read_flight_log, sidecar_path
 from scripts.companion_cli import main
 

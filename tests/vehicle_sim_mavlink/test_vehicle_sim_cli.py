@@ -171,3 +171,25 @@ def test_a_killed_simulator_leaves_its_onboard_log_up_to_then(tmp_path):
     log = read_flight_log(log_path)
     assert log.n_rows >= 100 and log.metadata["complete"] is False
     assert log.has("thrust_n", "acc_n_mps2") and float(np.min(log["thrust_n"])) >= 0.0
+
+
+def _ports() -> list[str]:
+    return [
+        "--offboard-port", str(free_udp_port()), "--gcs-port", str(free_udp_port()),
+        "--offboard-bind-port", "0", "--gcs-bind-port", "0",
+    ]  # fmt: skip
+
+
+def test_a_log_already_at_the_path_is_kept_not_emptied(tmp_path, capsys):
+    """As the companion's --log: an earlier onboard log is moved to stem.1.csv, not streamed
+    over; a session that cannot start puts it back."""
+    log_path = tmp_path / "onboard.csv"
+    log_path.write_text("an earlier flight\n")
+    assert main(["--vehicle", "no_such_quad", "--log", str(log_path), *_ports()]) == 2
+    assert log_path.read_text() == "an earlier flight\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["onboard.csv"]
+    assert main(["--duration-s", "0.5", "--log", str(log_path), *_ports()]) == 0
+    kept = tmp_path / "onboard.1.csv"
+    assert f"kept as {kept}" in capsys.readouterr().out
+    assert kept.read_text() == "an earlier flight\n"
+    assert read_flight_log(log_path).n_rows > 0

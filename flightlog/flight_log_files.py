@@ -7,6 +7,7 @@ is written there, as every command's output option is, but a log already there i
 it is kept as ``PATH-stem.1.csv`` (``.2``, ... the first free number), with its sidecar, and put
 back when the flight records no row (refused before take-off). Names are claimed by creating
 the file exclusively, so two companions started at once cannot pick the same one.
+``vehicle-sim --log`` keeps an earlier onboard log the same way.
 """
 
 from __future__ import annotations
