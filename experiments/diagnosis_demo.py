@@ -27,7 +27,7 @@ from diagnosis.extend_config import write_extended_config
 from diagnosis.report import write_report
 from experiments.mavlink_excitation import fly_schedule_over_link
 from experiments.sim_endpoint import EndpointError, SimEndpoint
-from flightlog.schema import FlightLogError, read_flight_log, write_flight_log
+from flightlog.schema import FlightLogError, read_flight_log, sidecar_path, write_flight_log
 from vehicle_sim import load_sim_config
 from vehicle_sim.sensor_noise import add_sensor_noise, draw_sensor_noise
 
@@ -80,6 +80,8 @@ def run_diagnosis_demo(
     """
     out_dir.mkdir(parents=True, exist_ok=True)
     onboard = out_dir / "onboard.csv"
+    for earlier in (onboard, sidecar_path(onboard)):  # the demo writes its folder anew
+        earlier.unlink(missing_ok=True)
     progress(f"diagnosis: starting vehicle-sim ({DEMO_VEHICLE}) with its onboard log")
     with SimEndpoint(DEMO_VEHICLE, seed, out_dir / "vehicle_sim.log", onboard) as sim:
         link = PymavlinkLink(sim.mavsdk_url)
