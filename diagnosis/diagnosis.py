@@ -55,6 +55,7 @@ from diagnosis.thrust_response import (
 from diagnosis.warm_up import LEAD_IN_S
 from flightlog.schema import FlightLog
 from flightlog.ulog import damage_note
+from flightlog.vehicle_identity import mixed_vehicle_fields
 from vehicle_sim import SimConfig
 from vehicle_sim.effects import EFFECT_CLASSES, BatterySag
 from vehicle_sim.effects.base import effect_as_mapping
@@ -298,6 +299,12 @@ def diagnose(
             f"closed-loop tracking not examined: no held-out row of a whole flight segment ({why})"
         )
     warnings += [note for note in map(damage_note, logs) if note]
+    mixed = mixed_vehicle_fields(logs)
+    if mixed:
+        warnings.append(
+            f"the logs are from different vehicles or configs ({'; '.join(mixed)}); one "
+            "diagnosis fits one config to all of them: diagnose each vehicle's logs on their own"
+        )
     if not_ident:
         warnings.append(
             "not examined (the logs cannot identify them): " + ", ".join(n.name for n in not_ident)

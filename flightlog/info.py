@@ -26,7 +26,7 @@ def describe_log(log: FlightLog) -> list[str]:
     """Lines: vehicle, firmware, duration, rates, modes, validity, thrust, what commands can do."""
     meta = log.metadata
     t = log["t_s"]
-    lines = [f"file: {log._where()}", f"source: {meta.get('source', 'csv')}"]
+    lines = [f"file: {log.where}", f"source: {meta.get('source', 'csv')}"]
     vehicle = meta.get("vehicle")
     if isinstance(vehicle, dict):
         vtol = " (VTOL)" if vehicle.get("is_vtol") else ""

@@ -80,7 +80,7 @@ def require_rates(log: FlightLog, command: str) -> None:
     short = rate_shortfalls(log, command)
     if short:
         raise FlightLogError(
-            f"{log._where()}: {command} needs faster signals: {'; '.join(short)}; log "
+            f"{log.where}: {command} needs faster signals: {'; '.join(short)}; log "
             "vehicle_local_position and vehicle_local_position_setpoint faster (SDLOG_PROFILE "
             "default or high rate) or record the companion's own log"
         )
@@ -93,7 +93,7 @@ def require_modes(logs: Sequence[FlightLog], modes: Sequence[str] | None) -> Non
     for log in logs:
         if not log.has("mode"):
             raise FlightLogError(
-                f"{log._where()}: --mode {','.join(modes)} given but the log has no mode "
+                f"{log.where}: --mode {','.join(modes)} given but the log has no mode "
                 "column; drop --mode or use a log that records modes (a PX4 ULog has them)"
             )
     flown = sorted({str(m) for log in logs for m in np.unique(log["mode"])})

@@ -76,7 +76,7 @@ class FlightLog:
             return self.columns[name]
         except KeyError:
             raise KeyError(
-                f"{self._where()}: no column {name!r}; present: {', '.join(self.columns)}"
+                f"{self.where}: no column {name!r}; present: {', '.join(self.columns)}"
             ) from None
 
     def has(self, *names: str) -> bool:
@@ -92,7 +92,9 @@ class FlightLog:
         cols = {k: v[start:stop] for k, v in self.columns.items()}
         return FlightLog(cols, self.metadata, self.path)
 
-    def _where(self) -> str:
+    @property
+    def where(self) -> str:
+        """The log's file for messages, or ``<in-memory log>``."""
         return str(self.path) if self.path is not None else "<in-memory log>"
 
 
@@ -266,7 +268,7 @@ def validate_flight_log(log: FlightLog, max_gap_s: float | None = None) -> None:
     Raises:
         FlightLogError: naming the file, the first bad row (1-based) and the column.
     """
-    where = log._where()
+    where = log.where
     missing = [c for c in REQUIRED_COLUMNS if c not in log.columns]
     if missing:
         raise FlightLogError(f"{where}: missing required column(s) {', '.join(missing)}")

@@ -88,9 +88,9 @@ def mixed_vehicle_fields(logs: Sequence[FlightLog]) -> list[str]:
                 continue
             group = next((g for g in groups if _same(g[0], value)), None)
             if group is None:
-                groups.append((value, [log._where()]))
+                groups.append((value, [log.where]))
             else:
-                group[1].append(log._where())
+                group[1].append(log.where)
         if len(groups) > 1:
             values = ", ".join(f"{value} in {' and '.join(where)}" for value, where in groups)
             clauses.append(f"{name} {values}")

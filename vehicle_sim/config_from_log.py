@@ -44,7 +44,7 @@ def config_from_log(log: FlightLog, preset: str = "iris") -> ConfigFromLog:
     hover, hover_how = _hover_thrust(log, params)
     if hover is None:
         raise ValueError(
-            f"{log._where()}: no MPC_THR_HOVER parameter and no produced thrust while "
+            f"{log.where}: no MPC_THR_HOVER parameter and no produced thrust while "
             "hovering; use a PX4 ULog (it records parameters) or log actuator_motors"
         )
     v = base.vehicle
@@ -71,7 +71,7 @@ def config_from_log(log: FlightLog, preset: str = "iris") -> ConfigFromLog:
     ]
     if defaults:
         assumed.append(f"PX4 defaults for {', '.join(defaults)} (not in the log)")
-    lines = [f"# Built from {log._where()} by vehicle-sim config-from-log.", "# From the log:"]
+    lines = [f"# Built from {log.where} by vehicle-sim config-from-log.", "# From the log:"]
     lines += [f"#   {s}" for s in from_log]
     lines += ["# Assumed (the log cannot tell):"] + [f"#   {s}" for s in assumed]
     lines += [

@@ -93,3 +93,15 @@ def test_replay_runs_end_at_gaps_left_by_dropped_rows():
     assert len(runs) == 2
     (a0, b0), (a1, b1) = runs
     assert cols["t_s"][b0 - 1] < 8.0 < cols["t_s"][a1] and b0 == a1
+
+
+def test_logs_of_two_airframes_diagnosed_together_are_named_in_the_headline():
+    """One diagnosis fits one config to every log it is given: pooling two PX4 airframes (4001
+    and 4003, two boards) is said in the headline, with the logs and the differing fields."""
+    from flightlog.reader import read_log
+
+    offboard = AUTO.parent / "quad_offboard_v1_16.ulg"
+    d = diagnose([read_log(POSCTL), read_log(offboard)], load_sim_config("iris"))
+    mixed = [w for w in d.warnings if w.startswith("the logs are from different vehicles")]
+    assert len(mixed) == 1
+    assert f"4001 in {POSCTL}" in mixed[0] and f"4003 in {offboard}" in mixed[0]
