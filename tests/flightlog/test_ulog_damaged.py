@@ -8,12 +8,13 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from pyulog import ULog
 
 from flightlog.info import describe_log
 from flightlog.schema import FlightLogError
 from flightlog.ulog import damage_note, read_ulog
 from flightlog.ulog_integrity import find_damage
-from tests.flightlog.ulog_damage import corrupt_copy
+from tests.flightlog.ulog_damage import corrupt_copy, hardfault_copy
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "ulog"
 
@@ -56,3 +57,27 @@ def test_a_ulog_with_a_damaged_header_is_called_corrupt_not_truncated(tmp_path, 
     assert note.startswith(f"damaged.ulg is corrupt at byte {offset} of {path.stat().st_size}")
     assert "truncated" not in note and "copy the .ulg again" in note
     assert f"corrupt: {note}" in describe_log(log)
+
+
+def test_a_crashed_ulog_with_the_hardfault_report_appended_is_truncated_not_corrupt(tmp_path):
+    """PX4 appends its hardfault report after the message the crash cut (pyulog reads it, and
+    the log before it, without a fault): the walk resumes at the appended offset."""
+    path, cut_at = hardfault_copy(tmp_path)
+    parsed = ULog(str(path))
+    assert not parsed.file_corruption and "hardfault_plain" in parsed.msg_info_multiple_dict
+    damage = find_damage(path)
+    assert damage is not None and (damage.kind, damage.at_byte) == ("truncated", cut_at)
+    log = read_ulog(path)
+    assert "corrupt_at_byte" not in log.metadata
+    assert damage_note(log).startswith(
+        f"hardfault.ulg is truncated (last message incomplete at byte {cut_at}"
+    )
+
+
+def test_an_appended_offset_past_the_end_is_corrupt(tmp_path):
+    path, _ = hardfault_copy(tmp_path)
+    data = bytearray(path.read_bytes())
+    data[16 + 3 + 16 : 16 + 3 + 24] = (len(data) + 1).to_bytes(8, "little")
+    path.write_bytes(bytes(data))
+    damage = find_damage(path)
+    assert damage is not None and damage.kind == "corrupt" and "appended-data" in damage.detail

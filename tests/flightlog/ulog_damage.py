@@ -34,3 +34,24 @@ def corrupt_copy(tmp_path: Path, how: str) -> tuple[Path, int]:
     path = tmp_path / "damaged.ulg"
     path.write_bytes(bytes(data))
     return path, offset
+
+
+def hardfault_copy(tmp_path: Path) -> tuple[Path, int]:
+    """quad_posctl_v1_15.ulg as PX4 leaves it after a hardfault: logging stopped mid-message
+    (the last data message 20 kB before the end is cut in two), then the hardfault report
+    appended as an info-multiple message, the flag bits' DATA_APPENDED bit set and the first
+    appended offset at the cut ([ULog-format] "Flag Bits Message"); the file and the offset of
+    the cut message."""
+    whole = POSCTL.read_bytes()
+    assert whole[18:19] == b"B", "the fixture starts with a flag-bits message"
+    cut_message = next(h for h in message_headers(whole) if h[0] > len(whole) - 20_000)
+    cut = cut_message[0] + 3 + cut_message[1] // 2
+    key = b"char[24] hardfault_plain"
+    report = bytes([0, len(key)]) + key + b"hardfault: HardFault_Handler".ljust(24)[:24]
+    data = bytearray(whole[:cut] + len(report).to_bytes(2, "little") + b"M" + report)
+    flags = 16 + 3  # the flag-bits payload: compat[8], incompat[8], appended_offsets uint64[3]
+    data[flags + 8] |= 0x01
+    data[flags + 16 : flags + 24] = cut.to_bytes(8, "little")
+    path = tmp_path / "hardfault.ulg"
+    path.write_bytes(bytes(data))
+    return path, cut_message[0]
