@@ -10,16 +10,20 @@ where two logs both say it:
 - ``vehicle type``: a ULog's MAV_TYPE name (quadrotor, hexarotor ...);
 - ``airframe``: a ULog's SYS_AUTOSTART ([PX4-params]), PX4's airframe id;
 - ``hardware``: a ULog's flight-controller board (ver_hw);
-- ``velocity_loop_gains``: the PX4 velocity-loop gains the companion read before arming.
+- ``velocity_loop_gains``: the PX4 velocity-loop gains the companion read before arming (each
+  equal within :data:`GAIN_REL_TOL`: over MAVLink a parameter is a float32, so 1.8 read in
+  process is 1.7999999523 read from vehicle-sim or PX4).
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping, Sequence
 
 from flightlog.schema import FlightLog
 
 MASS_REL_TOL = 1e-3  # masses closer than this (relative) are the same configured mass
+GAIN_REL_TOL = 1e-6  # gains closer than this (relative) are the same (float32 keeps ~6e-8)
 
 
 def _preset(meta: Mapping[str, object]) -> object:
@@ -45,17 +49,24 @@ def _vehicle_type(meta: Mapping[str, object]) -> object:
 def _airframe(meta: Mapping[str, object]) -> object:
     params = meta.get("px4_params")
     value = params.get("SYS_AUTOSTART") if isinstance(params, Mapping) else None
-    return None if value is None else int(float(value))
+    return int(value) if _is_number(value) else None
 
 
 def _mass(meta: Mapping[str, object]) -> object:
     mass = meta.get("mass_kg")
-    return float(mass) if isinstance(mass, int | float) else None
+    return float(mass) if _is_number(mass) else None
 
 
 def _gains(meta: Mapping[str, object]) -> object:
     gains = meta.get("velocity_loop_gains")
-    return dict(sorted(gains.items())) if isinstance(gains, Mapping) else None
+    if not isinstance(gains, Mapping) or not all(map(_is_number, gains.values())):
+        return None
+    return {name: float(value) for name, value in sorted(gains.items())}
+
+
+def _is_number(value: object) -> bool:
+    """A finite int or float (not a bool, a string or NaN: a sidecar may hold anything)."""
+    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
 
 
 IDENTITY_FIELDS: tuple[tuple[str, Callable[[Mapping[str, object]], object]], ...] = (
@@ -69,9 +80,16 @@ IDENTITY_FIELDS: tuple[tuple[str, Callable[[Mapping[str, object]], object]], ...
 )
 
 
+def _close(a: float, b: float, rel_tol: float) -> bool:
+    return abs(a - b) <= rel_tol * max(abs(a), abs(b))
+
+
 def _same(a: object, b: object) -> bool:
+    """Equal identity values: masses within MASS_REL_TOL, gains each within GAIN_REL_TOL."""
     if isinstance(a, float) and isinstance(b, float):
-        return abs(a - b) <= MASS_REL_TOL * max(abs(a), abs(b))
+        return _close(a, b, MASS_REL_TOL)
+    if isinstance(a, dict) and isinstance(b, dict) and a.keys() == b.keys():
+        return all(_close(a[k], b[k], GAIN_REL_TOL) for k in a)
     return a == b
 
 

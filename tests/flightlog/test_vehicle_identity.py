@@ -5,10 +5,17 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from pymavlink.dialects.v20 import common as mavlink2
+
+from companion.autopilot_gains import velocity_loop_metadata
+from companion.inprocess_link import InProcessLink
 from flightlog.schema import FlightLog
 from flightlog.ulog import read_ulog
 from flightlog.vehicle_identity import mixed_vehicle_fields
+from gp.velocity_integrator import GAINS_METADATA_KEY, VELOCITY_LOOP_PARAMS
 from scripts import fit_gp as fit_gp_cli
+from vehicle_sim import Simulator, load_sim_config
+from vehicle_sim.mavlink.params import param_value_msg
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "ulog"
 POSCTL = FIXTURES / "quad_posctl_v1_15.ulg"  # airframe 4001 on a PX4_FMU_V6C
@@ -57,3 +64,37 @@ def test_fit_gp_warns_when_ulogs_of_two_airframes_are_pooled(tmp_path, capsys) -
     assert out.with_suffix(".npz").is_file()  # pooled as asked: a warning, not a refusal
     fit_gp_cli.main([str(POSCTL), "--out", str(tmp_path / "one"), *argv])  # one vehicle
     assert "different vehicles" not in capsys.readouterr().err
+
+
+def _over_mavlink(sim: Simulator, name: str) -> float:
+    """A parameter as the companion reads it from vehicle-sim: PARAM_VALUE on the wire."""
+    wire = param_value_msg(sim, name).pack(mavlink2.MAVLink(None))
+    return mavlink2.MAVLink(None).decode(bytearray(wire)).param_value
+
+
+def test_the_same_gains_read_in_process_and_over_mavlink_are_the_same_vehicle() -> None:
+    """In process MPC_XY_VEL_P_ACC is 1.8; over MAVLink a float32, 1.7999999523: one vehicle."""
+    rows = read_ulog(POSCTL)
+    sim = Simulator(load_sim_config("iris"), seed=0)
+    in_process = velocity_loop_metadata(InProcessLink(sim, {}))[GAINS_METADATA_KEY]
+    wire = {n: _over_mavlink(sim, p) for n, p in VELOCITY_LOOP_PARAMS.items()}
+    assert wire != in_process  # float32 on the wire
+    logs = [
+        with_metadata(rows, "inprocess.csv", vehicle_preset="iris", velocity_loop_gains=in_process),
+        with_metadata(rows, "mavlink.csv", velocity_loop_gains=wire),
+    ]
+    assert mixed_vehicle_fields(logs) == []
+    retuned = with_metadata(rows, "retuned.csv", velocity_loop_gains={**wire, "vel_p_xy": 1.9})
+    assert [c.split(" ")[0] for c in mixed_vehicle_fields([*logs, retuned])] == [
+        "velocity_loop_gains"
+    ]
+
+
+def test_unreadable_identity_values_are_left_out_not_a_crash() -> None:
+    rows = read_ulog(POSCTL)
+    logs = [
+        with_metadata(rows, "a.csv", px4_params={"SYS_AUTOSTART": "quad"}, mass_kg=float("nan")),
+        with_metadata(rows, "b.csv", px4_params={"SYS_AUTOSTART": 4001}, mass_kg=True),
+        with_metadata(rows, "c.csv", velocity_loop_gains={"vel_p_xy": "fast"}),
+    ]
+    assert mixed_vehicle_fields(logs) == []
