@@ -146,6 +146,7 @@ def _open_log(
             live = LiveFlightLog(path, metadata)
         except OutputError:
             path.unlink(missing_ok=True)
+            sidecar_path(path).unlink(missing_ok=True)
             raise
         progress(f"flight log: {path} (a new file; --log PATH chooses another)")
         return live, None

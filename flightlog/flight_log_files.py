@@ -52,19 +52,26 @@ def keep_earlier_log(path: Path) -> Path | None:
     kept = _claim(path.with_name(f"{path.stem}.{n}{path.suffix}") for n in _counts())
     try:
         os.replace(path, kept)
-        if sidecar_path(path).is_file():
-            os.replace(sidecar_path(path), sidecar_path(kept))
     except OSError as exc:
         kept.unlink(missing_ok=True)
         raise OutputError(describe_os_error(path, exc)) from None
+    try:
+        if sidecar_path(path).is_file():
+            os.replace(sidecar_path(path), sidecar_path(kept))
+    except OSError as exc:
+        os.replace(kept, path)  # the log goes back beside its sidecar, as it was
+        raise OutputError(describe_os_error(sidecar_path(path), exc)) from None
     return kept
 
 
 def restore_earlier_log(kept: Path, path: Path) -> None:
-    """Put the log :func:`keep_earlier_log` moved to ``kept`` back at ``path``, sidecar too."""
+    """Put the log :func:`keep_earlier_log` moved to ``kept`` back at ``path``, with its sidecar;
+    a sidecar the refused session left at ``path`` goes when the earlier log had none."""
     os.replace(kept, path)
     if sidecar_path(kept).is_file():
         os.replace(sidecar_path(kept), sidecar_path(path))
+    else:
+        sidecar_path(path).unlink(missing_ok=True)
 
 
 def _counts() -> range:
@@ -85,4 +92,7 @@ def _claim(candidates: Iterable[Path]) -> Path:
         except OSError as exc:
             raise OutputError(describe_os_error(path, exc)) from None
         return path
-    raise OutputError(f"{last}: {MAX_NAMES} names like it are taken; give --log PATH")
+    raise OutputError(
+        f"{last}: {MAX_NAMES} names like it are taken; move earlier logs away or choose "
+        "another --log PATH"
+    )

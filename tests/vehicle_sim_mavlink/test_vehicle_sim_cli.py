@@ -193,3 +193,17 @@ def test_a_log_already_at_the_path_is_kept_not_emptied(tmp_path, capsys):
     assert f"kept as {kept}" in capsys.readouterr().out
     assert kept.read_text() == "an earlier flight\n"
     assert read_flight_log(log_path).n_rows > 0
+
+
+def test_a_session_that_cannot_bind_puts_back_an_earlier_log_without_a_stray_sidecar(tmp_path):
+    """The onboard log is opened (CSV and sidecar) before the links bind: when binding fails,
+    the earlier log (here one without a sidecar) is back exactly as it was."""
+    log_path = tmp_path / "onboard.csv"
+    log_path.write_text("an earlier flight\n")
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as taken:
+        taken.bind(("127.0.0.1", 0))
+        busy = str(taken.getsockname()[1])
+        argv = ["--log", str(log_path), *_ports(), "--offboard-bind-port", busy]
+        assert main(argv) == 2
+    assert log_path.read_text() == "an earlier flight\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["onboard.csv"]
