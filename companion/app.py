@@ -150,7 +150,7 @@ def _open_log(
             raise
         progress(f"flight log: {path} (a new file; --log PATH chooses another)")
         return live, None
-    check_not_an_input(config.log_path, [config.mission_path])
+    check_not_an_input(config.log_path, _inputs(config, mission))
     kept = None if config.replace_log else keep_earlier_log(config.log_path)
     try:
         live = LiveFlightLog(config.log_path, metadata)
@@ -161,6 +161,13 @@ def _open_log(
     if kept is not None:
         progress(f"flight log: {config.log_path} (the log there before is kept as {kept})")
     return live, kept
+
+
+def _inputs(config: CompanionConfig, mission: Mission) -> list[Path]:
+    """The files the flight reads (mission, its world, GP model, vehicle config): a ``--log``
+    there would move one of them aside."""
+    files = (config.mission_path, mission.obstacles_world, config.gp_model, Path(config.vehicle))
+    return [Path(f) for f in files if f is not None]
 
 
 def _obstacle_world(config: CompanionConfig, mission: Mission) -> object | None:

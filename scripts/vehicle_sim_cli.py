@@ -31,7 +31,7 @@ from pathlib import Path
 from typing import Any
 
 from companion.realtime import MAX_RT_PRIORITY, raise_to_realtime
-from flightlog.atomic_output import OutputError, check_writable_file
+from flightlog.atomic_output import OutputError, check_not_an_input, check_writable_file
 from flightlog.flight_log_files import keep_earlier_log, restore_earlier_log
 from flightlog.schema import sidecar_path
 from scripts.one_line_parser import output_path
@@ -313,6 +313,8 @@ def _run(config: VehicleSimCliConfig, stop: threading.Event) -> int:
         try:  # found out now, not after a flight whose log would be lost
             check_writable_file(config.log_path)
             check_writable_file(sidecar_path(config.log_path))
+            inputs = (config.vehicle, config.world_path, config.signing_key_path)
+            check_not_an_input(config.log_path, [Path(f) for f in inputs if f is not None])
         except OutputError as exc:
             print(f"{PROG}: error: --log {exc}", file=sys.stderr)
             return 2

@@ -93,3 +93,15 @@ def test_a_tool_that_owns_its_folder_replaces_its_log(tmp_path) -> None:
         assert run_companion(config, lambda _: None).outcome.status == "completed"
     assert read_flight_log(log).metadata["seed"] == 1
     assert sorted(p.name for p in tmp_path.iterdir()) == ["nominal.csv", "nominal.csv.json"]
+
+
+def test_a_log_at_the_vehicle_config_it_flies_is_refused_not_moved_aside(tmp_path) -> None:
+    """--log at an input the flight reads (here --vehicle's TOML) would move that input to a
+    numbered name and leave a flight log in its place."""
+    vehicle = tmp_path / "quad.toml"
+    preset = Path(__file__).resolve().parents[2] / "vehicle_sim" / "presets" / "iris.toml"
+    vehicle.write_text(preset.read_text())
+    argv = [str(LINE), "--link", "inprocess", "--vehicle", str(vehicle), "--log", str(vehicle)]
+    assert main(argv) == 2
+    assert vehicle.read_text() == preset.read_text()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["quad.toml"]

@@ -207,3 +207,13 @@ def test_a_session_that_cannot_bind_puts_back_an_earlier_log_without_a_stray_sid
         assert main(argv) == 2
     assert log_path.read_text() == "an earlier flight\n"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["onboard.csv"]
+
+
+def test_a_log_at_the_vehicle_config_is_refused_not_moved_aside(tmp_path, capsys):
+    vehicle = tmp_path / "quad.toml"
+    preset = Path(__file__).resolve().parents[2] / "vehicle_sim" / "presets" / "iris.toml"
+    vehicle.write_text(preset.read_text())
+    assert main(["--vehicle", str(vehicle), "--log", str(vehicle), *_ports()]) == 2
+    assert "is an input being read" in capsys.readouterr().err
+    assert vehicle.read_text() == preset.read_text()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["quad.toml"]
