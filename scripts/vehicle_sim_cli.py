@@ -297,15 +297,16 @@ def main(argv: Sequence[str] | None = None) -> int:
             signal.signal(sig, handler)
 
 
-def _keep_earlier_log(log_path: str | None) -> Path | None:
-    """Move a log already at ``--log`` aside (``stem.N.csv``, as the companion does) before
-    this session streams over it; where it went, or None."""
+def _undo_log(log_path: str | None, kept: Path | None) -> None:
+    """A session that never started leaves no log of its own: the earlier one ``kept`` aside
+    is put back, or the empty one it opened (with its sidecar) goes."""
     if log_path is None:
-        return None
-    kept = keep_earlier_log(Path(log_path))
+        return
     if kept is not None:
-        print(f"{PROG}: onboard log: {log_path} (the log there before is kept as {kept})")
-    return kept
+        restore_earlier_log(kept, Path(log_path))
+    else:
+        Path(log_path).unlink(missing_ok=True)
+        sidecar_path(log_path).unlink(missing_ok=True)
 
 
 def _run(config: VehicleSimCliConfig, stop: threading.Event) -> int:
@@ -318,8 +319,8 @@ def _run(config: VehicleSimCliConfig, stop: threading.Event) -> int:
         except OutputError as exc:
             print(f"{PROG}: error: --log {exc}", file=sys.stderr)
             return 2
-    try:
-        kept = _keep_earlier_log(config.log_path)
+    try:  # an onboard log already there is moved aside (stem.N.csv), as the companion does
+        kept = None if config.log_path is None else keep_earlier_log(Path(config.log_path))
     except OutputError as exc:
         print(f"{PROG}: error: --log {exc}", file=sys.stderr)
         return 2
@@ -327,10 +328,11 @@ def _run(config: VehicleSimCliConfig, stop: threading.Event) -> int:
         endpoint = build_endpoint(config)
         endpoint.start()
     except (SimConfigError, SigningKeyError, ValueError, OSError) as exc:
-        if kept is not None:
-            restore_earlier_log(kept, Path(config.log_path))
+        _undo_log(config.log_path, kept)
         print(f"{PROG}: error: {exc}", file=sys.stderr)
         return 2
+    if kept is not None:
+        print(f"{PROG}: onboard log: {config.log_path} (the log there before is kept as {kept})")
     try:
         if config.realtime_priority and endpoint.loop_thread_id is not None:
             outcome = raise_to_realtime(config.realtime_priority, endpoint.loop_thread_id)

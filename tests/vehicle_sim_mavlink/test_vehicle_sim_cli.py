@@ -195,7 +195,9 @@ def test_a_log_already_at_the_path_is_kept_not_emptied(tmp_path, capsys):
     assert read_flight_log(log_path).n_rows > 0
 
 
-def test_a_session_that_cannot_bind_puts_back_an_earlier_log_without_a_stray_sidecar(tmp_path):
+def test_a_session_that_cannot_bind_puts_back_an_earlier_log_without_a_stray_sidecar(
+    tmp_path, capsys
+):
     """The onboard log is opened (CSV and sidecar) before the links bind: when binding fails,
     the earlier log (here one without a sidecar) is back exactly as it was."""
     log_path = tmp_path / "onboard.csv"
@@ -205,8 +207,12 @@ def test_a_session_that_cannot_bind_puts_back_an_earlier_log_without_a_stray_sid
         busy = str(taken.getsockname()[1])
         argv = ["--log", str(log_path), *_ports(), "--offboard-bind-port", busy]
         assert main(argv) == 2
-    assert log_path.read_text() == "an earlier flight\n"
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["onboard.csv"]
+        assert log_path.read_text() == "an earlier flight\n"
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["onboard.csv"]
+        assert "kept as" not in capsys.readouterr().out  # it was not: it is back
+        log_path.unlink()
+        assert main(argv) == 2  # no earlier log: the session leaves none of its own
+        assert list(tmp_path.iterdir()) == []
 
 
 def test_a_log_at_the_vehicle_config_is_refused_not_moved_aside(tmp_path, capsys):
