@@ -75,7 +75,7 @@ def logged_velocity_loop_gains(logs: Sequence[FlightLog]) -> dict[str, float]:
     """
     gains: dict[str, float] | None = None
     for log in logs:
-        where = str(log.path) if log.path is not None else "<in-memory log>"
+        where = log.where
         record = log.metadata.get(GAINS_METADATA_KEY)
         params = log.metadata.get("px4_params")
         if not isinstance(record, dict) and isinstance(params, dict):
