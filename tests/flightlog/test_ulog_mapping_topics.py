@@ -171,3 +171,22 @@ def test_default_ten_hz_logging_with_logger_jitter_is_fast_enough(flight):
     assert log.metadata["rates_hz"]["local_position"] == pytest.approx(9.78, abs=0.01)
     require_rates(log, "diagnose")
     require_rates(log, "fit-gp")
+
+
+def test_info_says_a_log_recorded_disarmed_on_the_ground_gives_the_commands_nothing(flight):
+    """A v1.8 log kept on the ground after an RTL (disarmed throughout): its rows map and its
+    rates suffice, but fit-gp and diagnose find no flight in it, and info says so."""
+    from flightlog.info import describe_log
+
+    topics = topics_of(flight)
+    topics["vehicle_status"]["arming_state"] = np.array([1])  # standby: disarmed
+    lines = describe_log(flight_log_from_topics(topics))
+    assert f"armed: 0 of {flight.n_rows} rows (0 flying)" in lines
+    for command in ("fit-gp", "diagnose"):
+        assert f"{command}: cannot use this log: no armed row (the vehicle never flew)" in lines
+    topics["vehicle_status"]["arming_state"] = np.array([2])
+    topics["vehicle_land_detected"] = {"timestamp": topics["vehicle_status"]["timestamp"],
+                                       "landed": np.array([1])}  # fmt: skip
+    lines = describe_log(flight_log_from_topics(topics))
+    assert "diagnose: cannot use this log: no airborne row (armed on the ground only)" in lines
+    assert "fit-gp: rates sufficient" in lines
