@@ -144,7 +144,7 @@ def _markdown(
     for c in d.causes:
         params = ", ".join(f"{k} = {v:.4g}" for k, v in c.params.items()) or "-"
         lines.append(
-            f"| `{c.name}` | {params} | {100 * c.explained_fraction:.0f} % | "
+            f"| `{c.name}` | {params} | {round(100 * c.explained_fraction):d} % | "
             f"{c.confidence:.2f} | {c.evidence} |"
         )
     if d.not_identifiable:

@@ -163,7 +163,11 @@ def select_causes(
     baseline = float(current_sq.sum())
     remaining_sse = baseline
     least_sse = test.n_rows * 3 * (config.min_force_fraction * data.mass_kg * GRAVITY_MPS2) ** 2
-    scale = max(baseline - noise_sse, least_sse)  # explained fractions: of the explainable part
+    # Explained fractions are of the explainable part (above the noise floor); when nothing
+    # stands above the floor there is no such part, and they are of the whole held-out residual
+    # (a fraction of a vanishing part read 10^6 % on a real log whose floor swamped it).
+    explainable_sse = baseline - noise_sse
+    scale = explainable_sse if explainable_sse > least_sse else baseline
     chosen: list[Candidate] = []
     accepted: list[CauseScore] = []
     last_try: dict[str, CauseScore] = {}
@@ -264,7 +268,7 @@ def _simplest_of_best(tried: list, before: float, tolerance: float = 0.05):
 
 
 def _score(name, fit, scale, before, after, test, accepted, sig=None) -> CauseScore:
-    explained = (before - after) / scale if scale > 0 else 0.0
+    explained = min((before - after) / scale, 1.0) if scale > 0 else 0.0  # at most all of it
     step = (before - after) / before if before > 0 else 0.0
     return CauseScore(
         name,
