@@ -23,10 +23,12 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
+from functools import partial
 
 import numpy as np
 
 from diagnosis.candidates import Candidate, fit_jointly, make_candidate, residual_sse
+from diagnosis.cause import explained_fraction
 from diagnosis.force_model import BatteryModel, EffectParams, predicted_residual
 from diagnosis.forces import GRAVITY_MPS2, ForceData
 from diagnosis.noise_floor import (
@@ -163,11 +165,7 @@ def select_causes(
     baseline = float(current_sq.sum())
     remaining_sse = baseline
     least_sse = test.n_rows * 3 * (config.min_force_fraction * data.mass_kg * GRAVITY_MPS2) ** 2
-    # Explained fractions are of the explainable part (above the noise floor); when nothing
-    # stands above the floor there is no such part, and they are of the whole held-out residual
-    # (a fraction of a vanishing part read 10^6 % on a real log whose floor swamped it).
-    explainable_sse = baseline - noise_sse
-    scale = explainable_sse if explainable_sse > least_sse else baseline
+    share = partial(explained_fraction, total=baseline, noise=noise_sse, least=least_sse)
     chosen: list[Candidate] = []
     accepted: list[CauseScore] = []
     last_try: dict[str, CauseScore] = {}
@@ -180,7 +178,7 @@ def select_causes(
             tried.append((sse, fit))
             after_sq = _row_sq(fit.effects, test, battery)
             sig = block_bootstrap(current_sq, after_sq, test_block, fine_block=fine_block)
-            last_try[name] = _score(name, fit, scale, remaining_sse, sse, test, False, sig)
+            last_try[name] = _score(name, fit, share, remaining_sse, sse, test, False, sig)
             progress(
                 f"  {name}: held-out force residual {_rms(sse, test):.3f} N (p {sig.p_value:.3g})"
             )
@@ -198,7 +196,7 @@ def select_causes(
             or best.at_bound
         ):
             break
-        accepted.append(_score(best.name, best, scale, remaining_sse, best_sse, test, True, sig))
+        accepted.append(_score(best.name, best, share, remaining_sse, best_sse, test, True, sig))
         chosen.append(make_candidate(best.name, base))
         current = best.effects
         current_sq = _row_sq(current, test, battery)
@@ -267,8 +265,8 @@ def _simplest_of_best(tried: list, before: float, tolerance: float = 0.05):
     return min(near, key=lambda t: (t[1].n_params, t[0]))
 
 
-def _score(name, fit, scale, before, after, test, accepted, sig=None) -> CauseScore:
-    explained = min((before - after) / scale, 1.0) if scale > 0 else 0.0  # at most all of it
+def _score(name, fit, share, before, after, test, accepted, sig=None) -> CauseScore:
+    explained = share(before - after)
     step = (before - after) / before if before > 0 else 0.0
     return CauseScore(
         name,
