@@ -4,6 +4,7 @@ validity drops, thrust and rotor speed sources, rates, and what each command doe
 
 from __future__ import annotations
 
+import json
 import re
 from pathlib import Path
 
@@ -195,8 +196,6 @@ def test_a_replay_that_cannot_be_examined_gives_no_gain_and_says_so_in_the_headl
     """The EKF-failure flight keeps 4.9 s of POSCTL, too short for a held-out replay window:
     the last line names what was not examined instead of a gain of 1.0x, and report.json
     gives no gain (as for a closed loop that scores no row)."""
-    import json
-
     out = tmp_path / "out"
     log = str(FIXTURES / "quad_posctl_ekf_fail_v1_15.ulg")
     assert diagnose_cli.main([log, "--sim-config", "iris", "--out", str(out)]) == 0
