@@ -40,3 +40,13 @@ def flatten_params(params: dict[str, object]) -> dict[str, float]:
         else:
             out[key] = float(value)
     return out
+
+
+def explained_fraction(removed: float, total: float, noise: float, least: float) -> float:
+    """What share a cause explains: ``removed`` of the explainable part ``total - noise`` (the
+    held-out squared error above the noise floor, in the units of ``total``), clipped to
+    [-1, 1]; when that part is not above ``least``, nothing stands above the floor and the
+    share is of the whole ``total`` (a share of a vanishing part read 10^6 % on a real log)."""
+    explainable = total - noise
+    scale = explainable if explainable > least else total
+    return float(np.clip(removed / scale, -1.0, 1.0)) if scale > 0.0 else 0.0

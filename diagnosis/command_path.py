@@ -29,7 +29,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from scipy.optimize import minimize, minimize_scalar
 
-from diagnosis.cause import Cause
+from diagnosis.cause import Cause, explained_fraction
 from diagnosis.controller_fit import (
     ControllerFitError,
     fit_velocity_gains,
@@ -264,7 +264,7 @@ def select_command_causes(
     accepted: list[Cause] = []
     rejected: dict[str, Cause] = {}
     left = list(names)
-    scale = max(baseline.rmse_mps() ** 2 - noise_mse_mps2, 1e-12)
+    total, least = baseline.rmse_mps() ** 2, thresholds.min_gain_mps**2
     while left and search and current.rmse_mps() >= thresholds.min_gain_mps:
         fitted = [
             fit_command_cause(n, config_now, logs, search, test, progress, regression) for n in left
@@ -287,7 +287,7 @@ def select_command_causes(
             rejected[f.name] = Cause(
                 f.name,
                 dict(f.params),
-                float((before**2 - f.test_rmse_mps**2) / scale),
+                explained_fraction(before**2 - f.test_rmse_mps**2, total, noise_mse_mps2, least),
                 float(max(0.0, 1.0 - (f.test_rmse_mps / before) ** 2)),
                 f"held-out replay velocity RMSE {before:.4f} -> {f.test_rmse_mps:.4f} m/s"
                 f" (p {sig.p_value:.3g}){bound}{loose}",

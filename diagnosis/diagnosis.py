@@ -145,7 +145,10 @@ class Diagnosis:
 
     @property
     def gain(self) -> float:
-        """Baseline / extended held-out replay velocity RMSE (1 when nothing was added)."""
+        """Baseline / extended held-out replay velocity RMSE (1 when nothing was added; NaN
+        when the replay was not examined: no held-out window, so no gain was measured)."""
+        if not np.isfinite(self.baseline.rmse_mps()):
+            return float("nan")
         if not self.added_effects:
             return 1.0
         return self.baseline.rmse_mps() / max(self.extended.rmse_mps(), 1e-9)
@@ -205,7 +208,11 @@ def diagnose(
     replay_floor_mse = float(np.sum(vel_noise**2))
     baseline = replay(sim_config, logs, test)
     current = replay(force_config, logs, test) if added else baseline
-    progress(f"baseline held-out replay RMSE {baseline.rmse_mps():.4f} m/s")
+    progress(
+        f"baseline held-out replay RMSE {baseline.rmse_mps():.4f} m/s"
+        if test
+        else "replay not examined: no held-out window"
+    )
     moved: list[Cause] = []
     force_fits = ({c.name: c for c in causes}, {k: dict(v) for k, v in effects.items()})
     if added:

@@ -76,6 +76,19 @@ def report_document(diagnosis: Diagnosis) -> dict[str, Any]:
     }
 
 
+def headline(diagnosis: Diagnosis) -> str:
+    """One line for the terminal: the verdict and the held-out replay gain, or that the replay
+    was not examined (then no gain was measured, and the causes the logs could not examine
+    are named)."""
+    verdict = ", ".join(diagnosis.verdict) or "none"
+    if math.isfinite(diagnosis.gain):
+        return f"{verdict}; gain {diagnosis.gain:.1f}x"
+    line = f"{verdict}; held-out replay not examined (no gain measured)"
+    if diagnosis.not_examined:
+        line += f"; not examined: {', '.join(diagnosis.not_examined)}"
+    return line
+
+
 def write_report(
     diagnosis: Diagnosis,
     out_dir: Path,
@@ -131,7 +144,7 @@ def _markdown(
     for c in d.causes:
         params = ", ".join(f"{k} = {v:.4g}" for k, v in c.params.items()) or "-"
         lines.append(
-            f"| `{c.name}` | {params} | {100 * c.explained_fraction:.0f} % | "
+            f"| `{c.name}` | {params} | {round(100 * c.explained_fraction):d} % | "
             f"{c.confidence:.2f} | {c.evidence} |"
         )
     if d.not_identifiable:

@@ -23,10 +23,12 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
+from functools import partial
 
 import numpy as np
 
 from diagnosis.candidates import Candidate, fit_jointly, make_candidate, residual_sse
+from diagnosis.cause import explained_fraction
 from diagnosis.force_model import BatteryModel, EffectParams, predicted_residual
 from diagnosis.forces import GRAVITY_MPS2, ForceData
 from diagnosis.noise_floor import (
@@ -163,7 +165,7 @@ def select_causes(
     baseline = float(current_sq.sum())
     remaining_sse = baseline
     least_sse = test.n_rows * 3 * (config.min_force_fraction * data.mass_kg * GRAVITY_MPS2) ** 2
-    scale = max(baseline - noise_sse, least_sse)  # explained fractions: of the explainable part
+    share = partial(explained_fraction, total=baseline, noise=noise_sse, least=least_sse)
     chosen: list[Candidate] = []
     accepted: list[CauseScore] = []
     last_try: dict[str, CauseScore] = {}
@@ -176,7 +178,7 @@ def select_causes(
             tried.append((sse, fit))
             after_sq = _row_sq(fit.effects, test, battery)
             sig = block_bootstrap(current_sq, after_sq, test_block, fine_block=fine_block)
-            last_try[name] = _score(name, fit, scale, remaining_sse, sse, test, False, sig)
+            last_try[name] = _score(name, fit, share, remaining_sse, sse, test, False, sig)
             progress(
                 f"  {name}: held-out force residual {_rms(sse, test):.3f} N (p {sig.p_value:.3g})"
             )
@@ -194,7 +196,7 @@ def select_causes(
             or best.at_bound
         ):
             break
-        accepted.append(_score(best.name, best, scale, remaining_sse, best_sse, test, True, sig))
+        accepted.append(_score(best.name, best, share, remaining_sse, best_sse, test, True, sig))
         chosen.append(make_candidate(best.name, base))
         current = best.effects
         current_sq = _row_sq(current, test, battery)
@@ -263,8 +265,8 @@ def _simplest_of_best(tried: list, before: float, tolerance: float = 0.05):
     return min(near, key=lambda t: (t[1].n_params, t[0]))
 
 
-def _score(name, fit, scale, before, after, test, accepted, sig=None) -> CauseScore:
-    explained = (before - after) / scale if scale > 0 else 0.0
+def _score(name, fit, share, before, after, test, accepted, sig=None) -> CauseScore:
+    explained = share(before - after)
     step = (before - after) / before if before > 0 else 0.0
     return CauseScore(
         name,

@@ -14,6 +14,7 @@ from concurrent.futures import Executor
 from dataclasses import dataclass
 
 from diagnosis.diagnosis import Diagnosis, diagnose
+from diagnosis.report import headline
 from flightlog.schema import FlightLog
 from vehicle_sim import SimConfig
 
@@ -40,7 +41,6 @@ def diagnose_each(
     for n, (job, result) in enumerate(
         zip(jobs, pool.map(run_diagnosis_job, jobs), strict=True), start=1
     ):
-        verdict = ", ".join(result.verdict) or "none"
-        progress(f"diagnosed {n}/{len(jobs)} {job.name}: {verdict}, gain {result.gain:.2f}x")
+        progress(f"diagnosed {n}/{len(jobs)} {job.name}: {headline(result)}")
         results.append(result)
     return results

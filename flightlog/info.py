@@ -69,9 +69,21 @@ def describe_log(log: FlightLog) -> list[str]:
             f"rotor speed: produced, from {rotor.get('topic')} ({rotor.get('detail')}); diagnose "
             "prefers it when the config's thrust coefficient matches the hover"
         )
+    grounded: dict[str, str] = {}  # command: why the log's rows give it nothing to use
+    if log.has("armed"):
+        armed = log["armed"] > 0.5
+        flying = armed & (log["landed"] < 0.5) if log.has("landed") else armed
+        lines.append(f"armed: {int(armed.sum())} of {log.n_rows} rows ({int(flying.sum())} flying)")
+        if not armed.any():
+            why = "no armed row (the vehicle never flew)"
+            grounded = {"fit-gp": why, "diagnose": why}
+        elif not flying.any():
+            grounded = {"diagnose": "no airborne row (armed on the ground only)"}
     for command in NEEDS_HZ:
         short = rate_shortfalls(log, command)
         verdict = "too slow: " + "; ".join(short) if short else "rates sufficient"
+        if command in grounded:
+            verdict = f"cannot use this log: {grounded[command]}"
         lines.append(f"{command}: {verdict}")
     has_thrust = log.has("thrust_n") or log.has("thrust_norm") or log.has("rotor_speed_rms_radps")
     if not has_thrust:

@@ -115,10 +115,7 @@ def residual_dataset(logs: Sequence[FlightLog], config: DatasetConfig) -> Residu
                 parts.append((*part, np.full(part[0].shape[0], len(names))))
                 names.append(f"{_name(log)}#{i}")
     if not parts:
-        raise DatasetError(
-            f"no usable rows in {len(logs)} log(s): every segment is shorter than "
-            f"{config.min_segment_rows} rows or in an excluded mode; record longer flights"
-        )
+        raise DatasetError(f"no usable rows in {len(logs)} log(s): {_why_unusable(logs, config)}")
     X, Y, dt, vel, seg = (np.concatenate(p) for p in zip(*parts, strict=True))
     return ResidualDataset(config.features, X, Y, dt, vel, seg.astype(int), tuple(names))
 
@@ -147,6 +144,26 @@ def split_segments(log: FlightLog, config: DatasetConfig) -> list[FlightLog]:
         for a, b in zip(edges[:-1], edges[1:], strict=True)
         if b - a >= need and keep[a]
     ]
+
+
+def _why_unusable(logs: Sequence[FlightLog], config: DatasetConfig) -> str:
+    """Why no segment of ``logs`` is usable: the rows disarmed, in excluded modes, and in
+    segments too short, counted over all logs (one clause, with what to fly)."""
+    total = disarmed = excluded = 0
+    for log in logs:
+        total += log.n_rows
+        armed = log["armed"] > 0.5 if log.has("armed") else np.ones(log.n_rows, dtype=bool)
+        disarmed += int(np.count_nonzero(~armed))
+        if log.has("mode") and config.modes is not None:
+            excluded += int(np.count_nonzero(armed & ~np.isin(log["mode"], config.modes)))
+    if total and disarmed == total:
+        return f"all {total} rows are disarmed (the vehicle never flew); use a log of a flight"
+    short = total - disarmed - excluded
+    parts = [f"{disarmed} disarmed"] if disarmed else []
+    if excluded:
+        parts.append(f"{excluded} in modes other than {', '.join(config.modes or ())}")
+    parts.append(f"{short} in segments shorter than {config.min_segment_rows} rows")
+    return f"of {total} rows, {', '.join(parts)}; record longer flights"
 
 
 def _segment_rows(seg: FlightLog, features: FeatureDefinition) -> tuple[np.ndarray, ...] | None:

@@ -15,6 +15,7 @@ per log). Progress goes to stderr. Exit codes: 0 done, 2 bad input (one line say
 from __future__ import annotations
 
 import json
+import math
 import sys
 import time
 from collections.abc import Callable
@@ -24,7 +25,7 @@ from pathlib import Path
 from diagnosis.diagnosis import diagnose
 from diagnosis.extend_config import write_extended_config
 from diagnosis.forces import ForceDataError
-from diagnosis.report import write_report
+from diagnosis.report import headline, write_report
 from experiments.batch_diagnose import DiagnosisJob, diagnose_each
 from experiments.executors import SchedulerError, check_scheduler_address, job_executor
 from flightlog.atomic_output import OutputError, atomic_output_dir, check_writable_dir
@@ -127,8 +128,7 @@ def main(argv: list[str] | None = None) -> int:
     except OutputError as exc:
         print(f"diagnose: --out {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    verdict = ", ".join(result.verdict) or "none"
-    progress(f"verdict: {verdict}; gain {result.gain:.1f}x; report in {args.out_dir}")
+    progress(f"verdict: {headline(result)}; report in {args.out_dir}")
     return EXIT_OK
 
 
@@ -157,7 +157,7 @@ def _run_batch(
                         "log": str(path),  # as given: two logs may share a file name
                         "report": f"{name}/report.json",
                         "verdict": list(result.verdict),
-                        "gain": result.gain,
+                        "gain": result.gain if math.isfinite(result.gain) else None,
                     }
                 )
             doc = {"schema": "diagnosis-batch/1", "sim_config": args.sim_config, "logs": summary}

@@ -57,3 +57,29 @@ def test_a_ground_effect_confined_to_short_low_holds_is_named():
     assert result.accepted == ("ground_effect",)
     clean = with_residual(synthetic(n=n, alt_m=alt), {}, noise_n=0.2)
     assert select_causes(clean, {}, BATTERY, FORCE_CAUSES).accepted == ()
+
+
+def test_explained_fractions_stay_shares_when_the_noise_floor_swamps_the_residual():
+    """Noise alone at 1 N: the estimated floor lies above the held-out residual, so nothing is
+    explainable; a candidate's explained fraction is then its share of the whole held-out
+    residual (a few tenths of a percent), not of a vanishing explainable part (128 % and
+    -113 % here; 996185 % on a real EKF-failure log)."""
+    data = with_residual(synthetic(n=1200), {}, noise_n=1.0)
+    result = select_causes(data, {}, BATTERY, FORCE_CAUSES)
+    assert result.baseline_sse_n2 < result.noise_sse_n2
+    assert result.accepted == ()
+    assert all(abs(s.explained_fraction) < 0.02 for s in result.scores), result.scores
+
+
+def test_an_explained_fraction_is_of_the_part_above_the_floor_else_of_the_whole():
+    """The rule both the force and the replay path use: a share of the explainable part, at
+    most all of it; of the whole error when nothing stands above the floor (a replay whose
+    error is within its noise floor had divided by 1e-12 m^2/s^2)."""
+    from diagnosis.cause import explained_fraction
+
+    assert explained_fraction(2.0, total=10.0, noise=6.0, least=0.1) == 0.5
+    assert explained_fraction(6.0, total=10.0, noise=6.0, least=0.1) == 1.0
+    assert explained_fraction(-9.0, total=10.0, noise=6.0, least=0.1) == -1.0
+    assert explained_fraction(0.5, total=10.0, noise=10.5, least=0.1) == 0.05
+    assert explained_fraction(0.5, total=10.0, noise=9.95, least=0.1) == 0.05
+    assert explained_fraction(0.5, total=0.0, noise=0.0, least=0.0) == 0.0

@@ -154,3 +154,39 @@ def test_nav_state_6_is_position_slow_from_v1_15_and_retired_before(flight):
     assert set(log["mode"]) == {"POSITION_SLOW"}  # position-controlled: kept
     with pytest.raises(FlightLogError, match="not_position_controlled"):
         flight_log_from_topics(topics, firmware="v1.10.0")  # AUTO_RCRECOVER then
+
+
+def test_default_ten_hz_logging_with_logger_jitter_is_fast_enough(flight):
+    """PX4's logger writes vehicle_local_position once per 100 ms interval at most, so the
+    default profile's 10 Hz comes out at 9.78 Hz on average in a v1.8 log (102.2 ms between
+    samples); such a log is used, while the v1.9 hardware log's 8 Hz is not."""
+    topics = topics_of(flight)
+    t = topics["vehicle_local_position"]["timestamp"]
+    every = round(100_000 / float(np.median(np.diff(t))))  # the flight's rows to one of 10 Hz
+    for name in ("vehicle_local_position", "vehicle_local_position_setpoint"):
+        topics[name] = {k: v[::every] for k, v in topics[name].items()}
+    for topic in topics.values():
+        topic["timestamp"] = t[0] + (topic["timestamp"] - t[0]) * 1.0225
+    log = flight_log_from_topics(topics)
+    assert log.metadata["rates_hz"]["local_position"] == pytest.approx(9.78, abs=0.01)
+    require_rates(log, "diagnose")
+    require_rates(log, "fit-gp")
+
+
+def test_info_says_a_log_recorded_disarmed_on_the_ground_gives_the_commands_nothing(flight):
+    """A v1.8 log kept on the ground after an RTL (disarmed throughout): its rows map and its
+    rates suffice, but fit-gp and diagnose find no flight in it, and info says so."""
+    from flightlog.info import describe_log
+
+    topics = topics_of(flight)
+    topics["vehicle_status"]["arming_state"] = np.array([1])  # standby: disarmed
+    lines = describe_log(flight_log_from_topics(topics))
+    assert f"armed: 0 of {flight.n_rows} rows (0 flying)" in lines
+    for command in ("fit-gp", "diagnose"):
+        assert f"{command}: cannot use this log: no armed row (the vehicle never flew)" in lines
+    topics["vehicle_status"]["arming_state"] = np.array([2])
+    topics["vehicle_land_detected"] = {"timestamp": topics["vehicle_status"]["timestamp"],
+                                       "landed": np.array([1])}  # fmt: skip
+    lines = describe_log(flight_log_from_topics(topics))
+    assert "diagnose: cannot use this log: no airborne row (armed on the ground only)" in lines
+    assert "fit-gp: rates sufficient" in lines

@@ -4,6 +4,7 @@ validity drops, thrust and rotor speed sources, rates, and what each command doe
 
 from __future__ import annotations
 
+import json
 import re
 from pathlib import Path
 
@@ -187,3 +188,22 @@ def test_a_closed_loop_that_scores_no_row_says_so_in_the_headline(tmp_path):
     assert len(said) == 1 and f"{cl.reanchored} of {cl.segments}" in said[0], d.warnings
     doc = report_document(d)["closed_loop"]
     assert doc["gain"] is None and doc["ground_hold_gain"] is None  # no row: no ratio
+
+
+def test_a_replay_that_cannot_be_examined_gives_no_gain_and_says_so_in_the_headline(
+    tmp_path, capsys
+):
+    """The EKF-failure flight keeps 4.9 s of POSCTL, too short for a held-out replay window:
+    the last line names what was not examined instead of a gain of 1.0x, and report.json
+    gives no gain (as for a closed loop that scores no row)."""
+    out = tmp_path / "out"
+    log = str(FIXTURES / "quad_posctl_ekf_fail_v1_15.ulg")
+    assert diagnose_cli.main([log, "--sim-config", "iris", "--out", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "nan" not in err
+    last = err.strip().splitlines()[-1]
+    assert "held-out replay not examined" in last and not re.search(r"gain [\d.]+x", last), last
+    assert "not examined: " in last and "command_delay" in last, last
+    doc = json.loads((out / "report.json").read_text())
+    assert doc["baseline"]["replay_vel_rmse_mps"] is None
+    assert doc["extended"]["gain"] is None

@@ -99,3 +99,16 @@ def test_feature_definition_round_trips_through_dict():
     fd = feature_definition("state_input", "first_order_lag", tau_s=0.4)
     assert FeatureDefinition.from_dict(fd.to_dict()) == fd
     assert fd.speed_columns == (0, 1, 2) and fd.n_features == 7
+
+
+def test_a_log_disarmed_throughout_is_refused_for_that_not_for_short_segments():
+    """A real log recorded on the ground after the flight (v1.8, RTL finished, disarmed): the
+    error says the vehicle never flew, not that its segments were short."""
+    log = record_log(50)
+    cols = dict(log.columns)
+    cols["armed"] = np.zeros(50)
+    with pytest.raises(DatasetError, match=r"all 50 rows are disarmed \(the vehicle never flew\)"):
+        residual_dataset([FlightLog(cols)], _config())
+    cols["armed"] = np.where(np.arange(50) < 47, 0.0, 1.0)
+    with pytest.raises(DatasetError, match=r"of 50 rows, 47 disarmed, 3 in segments shorter"):
+        residual_dataset([FlightLog(cols)], _config())
