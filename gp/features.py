@@ -18,6 +18,13 @@ Built-in sets (outputs are always the NED velocity-rate residuals in m/s^2):
     history: [Ostafew16]'s a_k = (x_k, v_{k-1}, u_k, u_{k-1}) for a velocity-commanded
         multirotor: the velocity state now and one step ago, the command now and one step ago
         (vel_ned[k], vel_ned[k-1], cmd_vel_ned[k], cmd_vel_ned[k-1]), 12 features in m/s.
+    velocity_history: the part of it the NMPC can carry along its horizon without the command:
+        the measured velocity now and one residual interval ago (vel_ned[k], vel_ned[k-H],
+        H = residual_steps log steps: 0.1 s, the planner's interval), 6 features in m/s, on a
+        model with a velocity state. The planner adds the previous velocity as states
+        (planners.velocity_history: node j's is node j-1's predicted velocity, node 0's the
+        velocity measured one interval before now). The command stays out: the optimiser
+        exploits a GP that sees its decision variable (experiments.study.regimes, agile).
 In the NMPC, "vel" is the velocity the (augmented) model predicts for the vehicle.
 """
 
@@ -28,12 +35,16 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from planners.nominal_models import MODELS, NominalModel, make_model
+from planners.nominal_models import HISTORY_STATES, MODELS, NominalModel, make_model
+from planners.velocity_history import with_velocity_history
 
 RESIDUAL_OUTPUTS: tuple[str, ...] = ("res_acc_n_mps2", "res_acc_e_mps2", "res_acc_d_mps2")
 _VEL = ("vel_n_mps", "vel_e_mps", "vel_d_mps")
 _CMD = ("cmd_vel_n_mps", "cmd_vel_e_mps", "cmd_vel_d_mps")
 _POS = ("pos_n_m", "pos_e_m", "pos_d_m")
+
+# A lag of one residual interval: the definition's residual_steps log steps.
+INTERVAL = -1
 
 FEATURE_SETS: dict[str, tuple[tuple[str, int], ...]] = {
     "velocity": tuple((c, 0) for c in _VEL),
@@ -46,6 +57,7 @@ FEATURE_SETS: dict[str, tuple[tuple[str, int], ...]] = {
         [(c, 0) for c in _VEL] + [(c, 1) for c in _VEL]
         + [(c, 0) for c in _CMD] + [(c, 1) for c in _CMD]
     ),
+    "velocity_history": tuple([(c, 0) for c in _VEL] + [(c, INTERVAL) for c in _VEL]),
 }  # fmt: skip
 
 
@@ -56,6 +68,11 @@ _PLANNER_SOURCES: dict[str, Callable[..., ca.SX]] = {
     **{c: (lambda m, x, u, vel, i=i: u[i]) for i, c in enumerate(_CMD)},
     "cmd_yaw_rate_radps": lambda m, x, u, vel: u[3],
     **{c: (lambda m, x, u, vel, c=c: x[m.state_names.index(c)]) for c in _POS},
+}
+# A velocity one interval ago is the model's previous-velocity state (planners.velocity_history).
+_HISTORY_SOURCES: dict[str, Callable[..., ca.SX]] = {
+    c: (lambda m, x, u, vel, h=h: x[m.state_names.index(h)])
+    for c, h in zip(_VEL, HISTORY_STATES, strict=True)
 }
 
 
@@ -104,22 +121,41 @@ class FeatureDefinition:
         """Indices of the current measured velocity components (used by low_speed inducing)."""
         return tuple(i for i, (c, lag) in enumerate(self.inputs) if c in _VEL and lag == 0)
 
+    @property
+    def history_lag(self) -> int:
+        """The lag [log steps] of the lagged measured velocities, 0 without any."""
+        return max((lag for c, lag in self.inputs if c in _VEL), default=0)
+
     def nominal(self) -> NominalModel:
         """The nominal model instance."""
         return make_model(self.nominal_model, **dict(self.nominal_params))
 
+    def planner_model(self) -> NominalModel:
+        """The model the NMPC plans with: the nominal model, with the velocity one interval
+        ago as extra states when a feature is a lagged velocity (planners.velocity_history;
+        ValueError, one line, for a model without a velocity state)."""
+        nominal = self.nominal()
+        return with_velocity_history(nominal) if self.history_lag else nominal
+
     def planner_map(self, model: NominalModel) -> Callable[[ca.SX, ca.SX], ca.SX]:
         """z(x, u) (SX, n_features) for the NMPC, from the same ``inputs`` the dataset reads
         from the logs: a measured velocity is the model's velocity (``model.velocity_of``), a
-        command is the input u. Raises ValueError (one line) if the planner cannot build it:
-        lagged features, or a measured velocity beside other features on a model that does
-        not carry the velocity ([Kulathunga23]'s "velocity" set queries the kinematic model
-        at its commanded velocity, its only notion of velocity)."""
-        lagged = [n for n, (_, lag) in zip(self.input_names, self.inputs, strict=True) if lag]
+        command is the input u, a velocity one residual interval ago the model's
+        previous-velocity state (``planner_model``). Raises ValueError (one line) if the
+        planner cannot build it: other lagged features, or a measured velocity beside other
+        features on a model that does not carry the velocity ([Kulathunga23]'s "velocity" set
+        queries the kinematic model at its commanded velocity, its only notion of velocity)."""
+        carried = HISTORY_STATES[0] in model.state_names
+        lagged = [
+            n
+            for n, (c, lag) in zip(self.input_names, self.inputs, strict=True)
+            if lag and not (carried and c in _VEL and lag == self.residual_steps)
+        ]
         if lagged:
             raise ValueError(
-                f"the NMPC cannot feed lagged features {lagged} (it carries no history along "
-                "the horizon); use the 'velocity' or 'state_input' feature set"
+                f"the NMPC cannot feed lagged features {lagged} (it carries only the velocity "
+                "one residual interval ago along the horizon); use the 'velocity', "
+                "'state_input' or 'velocity_history' feature set"
             )
         uses = {c in _VEL for c, _ in self.inputs if c not in _POS}
         if uses == {True, False} and not model.carries_velocity:
@@ -138,7 +174,8 @@ class FeatureDefinition:
 
         def z(x: ca.SX, u: ca.SX) -> ca.SX:
             vel = model.velocity_of(x, u)
-            return ca.vertcat(*(_PLANNER_SOURCES[c](model, x, u, vel) for c, _ in self.inputs))
+            sources = [(_HISTORY_SOURCES if lag else _PLANNER_SOURCES)[c] for c, lag in self.inputs]
+            return ca.vertcat(*(source(model, x, u, vel) for source in sources))
 
         return z
 
@@ -182,7 +219,8 @@ def feature_definition(
     **nominal_params: float,
 ) -> FeatureDefinition:
     """A built-in feature set against a nominal model, its residual measured over
-    ``residual_steps`` log steps; bad names raise ValueError."""
+    ``residual_steps`` log steps (an INTERVAL lag becomes that many); bad names raise
+    ValueError."""
     if name not in FEATURE_SETS:
         raise ValueError(f"unknown feature set {name!r}; choose one of {', '.join(FEATURE_SETS)}")
     if nominal_model not in MODELS:
@@ -190,9 +228,10 @@ def feature_definition(
             f"unknown nominal model {nominal_model!r}; choose one of {', '.join(MODELS)}"
         )
     params = tuple(sorted((k, float(v)) for k, v in nominal_params.items()))
+    inputs = tuple((c, residual_steps if lag == INTERVAL else lag) for c, lag in FEATURE_SETS[name])
     definition = FeatureDefinition(
         name,
-        FEATURE_SETS[name],
+        inputs,
         nominal_model=nominal_model,
         nominal_params=params,
         residual_steps=residual_steps,
