@@ -17,7 +17,10 @@ residual flies the integrator enters as kept: the residual was fitted against it
 (gp.velocity_integrator) and carries the disturbance.
 Augmented, a residual model file from ``fit-gp`` adds its mean g(z) [m/s^2] as in
 [Kulathunga23], eq. 1; the file names the nominal model and features it was trained on, and
-the planner is built for exactly those. The reference is
+the planner is built for exactly those; a file on velocity_history features (the velocity now
+and one planner interval ago) makes the planner carry the previous velocity along its horizon
+(planners.velocity_history), its first node's from the measured velocities the companion
+recorded over the last interval (companion.velocity_buffer). The reference is
 time-parametrised and the NMPC's input reference is its velocity (feed-forward), so the nominal
 planner already tracks well and what is left is the residual.
 

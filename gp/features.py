@@ -25,6 +25,10 @@ Built-in sets (outputs are always the NED velocity-rate residuals in m/s^2):
         (planners.velocity_history: node j's is node j-1's predicted velocity, node 0's the
         velocity measured one interval before now). The command stays out: the optimiser
         exploits a GP that sees its decision variable (experiments.study.regimes, agile).
+    velocity_change: the same information as the velocity now and its change over that
+        interval (vel_ned[k], vel_ned[k] - vel_ned[k-H]), 6 features in m/s: a stationary
+        kernel with one length scale per input reaches a function of the change directly,
+        where on (v[k], v[k-H]), two nearly equal inputs, it needs short scales on both.
 In the NMPC, "vel" is the velocity the (augmented) model predicts for the vehicle.
 """
 
@@ -43,10 +47,12 @@ _VEL = ("vel_n_mps", "vel_e_mps", "vel_d_mps")
 _CMD = ("cmd_vel_n_mps", "cmd_vel_e_mps", "cmd_vel_d_mps")
 _POS = ("pos_n_m", "pos_e_m", "pos_d_m")
 
-# A lag of one residual interval: the definition's residual_steps log steps.
-INTERVAL = -1
+# In FEATURE_SETS, lags of one residual interval (the definition's residual_steps log steps,
+# resolved by feature_definition): the value that far back, and the change since then.
+INTERVAL = "interval"
+CHANGE = "change"
 
-FEATURE_SETS: dict[str, tuple[tuple[str, int], ...]] = {
+FEATURE_SETS: dict[str, tuple[tuple[str, int | str], ...]] = {
     "velocity": tuple((c, 0) for c in _VEL),
     "state_input": tuple((c, 0) for c in (*_VEL, *_CMD, "cmd_yaw_rate_radps")),
     "position_state": tuple(
@@ -58,6 +64,7 @@ FEATURE_SETS: dict[str, tuple[tuple[str, int], ...]] = {
         + [(c, 0) for c in _CMD] + [(c, 1) for c in _CMD]
     ),
     "velocity_history": tuple([(c, 0) for c in _VEL] + [(c, INTERVAL) for c in _VEL]),
+    "velocity_change": tuple([(c, 0) for c in _VEL] + [(c, CHANGE) for c in _VEL]),
 }  # fmt: skip
 
 
@@ -76,13 +83,25 @@ _HISTORY_SOURCES: dict[str, Callable[..., ca.SX]] = {
 }
 
 
+def _source(column: str, lag: int) -> Callable[..., ca.SX]:
+    """Where the NMPC takes a feature (column, lag) from (planner_map has checked the lag)."""
+    if lag == 0:
+        return _PLANNER_SOURCES[column]
+    past = _HISTORY_SOURCES[column]
+    if lag > 0:
+        return past
+    now = _PLANNER_SOURCES[column]
+    return lambda m, x, u, vel: now(m, x, u, vel) - past(m, x, u, vel)
+
+
 @dataclass(frozen=True)
 class FeatureDefinition:
     """What a residual model was trained on.
 
     Attributes:
         name: feature-set name (a key of FEATURE_SETS).
-        inputs: (log column, lag in control steps) per feature, in input-vector order.
+        inputs: (log column, lag L in control steps) per feature, in input-vector order: L = 0
+            the value at k, L > 0 the value at k - L, L < 0 the change x[k] - x[k - |L|].
         outputs: residual names, in output order (units in the names).
         nominal_model: name of the planners' nominal model the residual is taken against.
         nominal_params: that model's parameters as sorted (name, value) pairs.
@@ -105,8 +124,12 @@ class FeatureDefinition:
 
     @property
     def input_names(self) -> tuple[str, ...]:
-        """Feature names: the column, with ``[k-L]`` for a lag L > 0 (e.g. vel_n_mps[k-1])."""
-        return tuple(c if lag == 0 else f"{c}[k-{lag}]" for c, lag in self.inputs)
+        """Feature names: the column, with ``[k-L]`` for a lag L > 0 (e.g. vel_n_mps[k-1]),
+        ``[k]-...[k-L]`` for a change (e.g. vel_n_mps[k]-vel_n_mps[k-5])."""
+        return tuple(
+            c if lag == 0 else f"{c}[k-{lag}]" if lag > 0 else f"{c}[k]-{c}[k-{-lag}]"
+            for c, lag in self.inputs
+        )
 
     @property
     def n_features(self) -> int:
@@ -114,7 +137,7 @@ class FeatureDefinition:
 
     @property
     def max_lag(self) -> int:
-        return max(lag for _, lag in self.inputs)
+        return max(abs(lag) for _, lag in self.inputs)
 
     @property
     def speed_columns(self) -> tuple[int, ...]:
@@ -123,8 +146,9 @@ class FeatureDefinition:
 
     @property
     def history_lag(self) -> int:
-        """The lag [log steps] of the lagged measured velocities, 0 without any."""
-        return max((lag for c, lag in self.inputs if c in _VEL), default=0)
+        """The lag [log steps] of the lagged measured velocities (or their changes), 0 without
+        any."""
+        return max((abs(lag) for c, lag in self.inputs if c in _VEL), default=0)
 
     def nominal(self) -> NominalModel:
         """The nominal model instance."""
@@ -149,7 +173,7 @@ class FeatureDefinition:
         lagged = [
             n
             for n, (c, lag) in zip(self.input_names, self.inputs, strict=True)
-            if lag and not (carried and c in _VEL and lag == self.residual_steps)
+            if lag and not (carried and c in _VEL and abs(lag) == self.residual_steps)
         ]
         if lagged:
             raise ValueError(
@@ -174,8 +198,7 @@ class FeatureDefinition:
 
         def z(x: ca.SX, u: ca.SX) -> ca.SX:
             vel = model.velocity_of(x, u)
-            sources = [(_HISTORY_SOURCES if lag else _PLANNER_SOURCES)[c] for c, lag in self.inputs]
-            return ca.vertcat(*(source(model, x, u, vel) for source in sources))
+            return ca.vertcat(*(_source(c, lag)(model, x, u, vel) for c, lag in self.inputs))
 
         return z
 
@@ -219,8 +242,8 @@ def feature_definition(
     **nominal_params: float,
 ) -> FeatureDefinition:
     """A built-in feature set against a nominal model, its residual measured over
-    ``residual_steps`` log steps (an INTERVAL lag becomes that many); bad names raise
-    ValueError."""
+    ``residual_steps`` log steps (an INTERVAL lag becomes that many, a CHANGE lag minus that
+    many); bad names raise ValueError."""
     if name not in FEATURE_SETS:
         raise ValueError(f"unknown feature set {name!r}; choose one of {', '.join(FEATURE_SETS)}")
     if nominal_model not in MODELS:
@@ -228,7 +251,8 @@ def feature_definition(
             f"unknown nominal model {nominal_model!r}; choose one of {', '.join(MODELS)}"
         )
     params = tuple(sorted((k, float(v)) for k, v in nominal_params.items()))
-    inputs = tuple((c, residual_steps if lag == INTERVAL else lag) for c, lag in FEATURE_SETS[name])
+    resolve = {INTERVAL: residual_steps, CHANGE: -residual_steps}
+    inputs = tuple((c, resolve.get(lag, lag)) for c, lag in FEATURE_SETS[name])
     definition = FeatureDefinition(
         name,
         inputs,

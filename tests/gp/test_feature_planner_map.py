@@ -77,3 +77,12 @@ def test_lags_the_planner_does_not_carry_are_still_refused(features, nominal, st
     with pytest.raises(ValueError, match=words) as info:
         fd.planner_map(fd.planner_model())
     assert "\n" not in str(info.value)
+
+
+def test_velocity_change_is_the_velocity_minus_the_previous_velocity_state():
+    fd = feature_definition("velocity_change", "first_order_lag", residual_steps=5)
+    assert fd.input_names[3] == "vel_n_mps[k]-vel_n_mps[k-5]" and fd.max_lag == 5
+    model = fd.planner_model()
+    x = np.arange(1.0, 11.0)  # pos (1, 2, 3), vel (4, 5, 6), yaw 7, previous vel (8, 9, 10)
+    z = np.asarray(ca.DM(fd.planner_map(model)(ca.DM(x), ca.DM.zeros(4)))).ravel()
+    np.testing.assert_allclose(z, [4.0, 5.0, 6.0, -4.0, -4.0, -4.0])

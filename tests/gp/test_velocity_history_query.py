@@ -1,6 +1,7 @@
 """A velocity-history GP flies on the query it was trained on: the companion's NMPC builds, at
-its first node, the dataset's row (vel[k], vel[k-H]) for the same log, from the velocities it
-recorded itself; along the horizon each node's previous velocity is the node before's."""
+its first node, the dataset's row (vel[k], vel[k-H]) or (vel[k], vel[k] - vel[k-H]) for the
+same log, from the velocities it recorded itself; along the horizon each node's previous
+velocity is the node before's."""
 
 from __future__ import annotations
 
@@ -25,15 +26,16 @@ _VEL = ("vel_n_mps", "vel_e_mps", "vel_d_mps")
 
 
 def _fitted(features, log) -> tuple[ResidualModel, np.ndarray]:
-    """A small GP on the log's velocity_history dataset, and the dataset's rows X (n, 6)."""
+    """A small GP on the log's dataset for ``features``, and the dataset's rows X (n, 6)."""
     data = residual_dataset([log], DatasetConfig(features))
     gp = ExactGP(noise_variance=1e-3, optimize=False).fit(data.X[::4], data.Y[::4])
     return ResidualModel.from_estimator(gp, features, training={}), data.X
 
 
-def test_the_planner_queries_the_gp_at_the_datasets_row_for_the_same_log():
+@pytest.mark.parametrize("name", ["velocity_history", "velocity_change"])
+def test_the_planner_queries_the_gp_at_the_datasets_row_for_the_same_log(name):
     features = feature_definition(
-        "velocity_history", "first_order_lag", residual_steps=STEPS, tau_s=0.5, tau_d_s=0.4
+        name, "first_order_lag", residual_steps=STEPS, tau_s=0.5, tau_d_s=0.4
     )
     log = record_log(60, dt_s=PERIOD_S)
     model, rows = _fitted(features, log)
@@ -56,7 +58,7 @@ def test_the_planner_queries_the_gp_at_the_datasets_row_for_the_same_log():
         if k >= STEPS:  # the dataset's row for log row k (its rows start at the lag)
             np.testing.assert_allclose(z, rows[k - STEPS], atol=1e-12)
         else:  # before one interval is recorded: the oldest velocity, the first row's
-            np.testing.assert_allclose(z[3:], vel[0], atol=1e-12)
+            np.testing.assert_allclose(node0[prev_idx], vel[0], atol=1e-12)
         later = result.predicted_trajectory[1:]
         np.testing.assert_allclose(later[:, prev_idx], result.predicted_trajectory[:-1, vel_idx])
 
