@@ -156,10 +156,12 @@ class FeatureDefinition:
 
     def planner_model(self) -> NominalModel:
         """The model the NMPC plans with: the nominal model, with the velocity one interval
-        ago as extra states when a feature is a lagged velocity (planners.velocity_history;
-        ValueError, one line, for a model without a velocity state)."""
+        ago as extra states when a feature is a lagged velocity and the model has a velocity
+        state (planners.velocity_history; else planner_map refuses the lag)."""
         nominal = self.nominal()
-        return with_velocity_history(nominal) if self.history_lag else nominal
+        if self.history_lag and nominal.carries_velocity:
+            return with_velocity_history(nominal)
+        return nominal
 
     def planner_map(self, model: NominalModel) -> Callable[[ca.SX, ca.SX], ca.SX]:
         """z(x, u) (SX, n_features) for the NMPC, from the same ``inputs`` the dataset reads
@@ -178,8 +180,8 @@ class FeatureDefinition:
         if lagged:
             raise ValueError(
                 f"the NMPC cannot feed lagged features {lagged} (it carries only the velocity "
-                "one residual interval ago along the horizon); use the 'velocity', "
-                "'state_input' or 'velocity_history' feature set"
+                "one residual interval ago along the horizon, on a model with a velocity "
+                "state); use the 'velocity', 'state_input' or 'velocity_history' feature set"
             )
         uses = {c in _VEL for c, _ in self.inputs if c not in _POS}
         if uses == {True, False} and not model.carries_velocity:

@@ -69,7 +69,7 @@ def test_velocity_history_map_takes_the_previous_velocity_from_the_model_state()
     ("features", "nominal", "steps", "words"),
     [
         ("history", "first_order_lag", 1, r"cmd_vel_n_mps\[k-1\]"),  # commands are not carried
-        ("velocity_history", "kinematic_4dof", 5, "no velocity state"),
+        ("velocity_history", "kinematic_4dof", 5, "with a velocity state"),
     ],
 )
 def test_lags_the_planner_does_not_carry_are_still_refused(features, nominal, steps, words):
