@@ -17,8 +17,8 @@ residual flies the integrator enters as kept: the residual was fitted against it
 (gp.velocity_integrator) and carries the disturbance.
 Augmented, a residual model file from ``fit-gp`` adds its mean g(z) [m/s^2] as in
 [Kulathunga23], eq. 1; the file names the nominal model and features it was trained on, and
-the planner is built for exactly those; a file on velocity_history features (the velocity now
-and one planner interval ago) makes the planner carry the previous velocity along its horizon
+the planner is built for exactly those; a file on velocity_history or velocity_change features
+(the velocity one planner interval ago) makes the planner carry it along its horizon
 (planners.velocity_history), its first node's from the measured velocities the companion
 recorded over the last interval (companion.velocity_buffer). The reference is
 time-parametrised and the NMPC's input reference is its velocity (feed-forward), so the nominal
@@ -355,9 +355,9 @@ def _one_step_function(
     return ca.Function("one_step_velocity", [x, u], [vel])
 
 
-def check_residual_model(model: ResidualModel, period_s: float, dt_s: float = 0.1) -> None:
+def check_residual_model(model: ResidualModel, period_s: float, planner_dt_s: float = 0.1) -> None:
     """Raise ModelFileError (one line) unless the NMPC can fly ``model`` at this control period
-    and planner interval ``dt_s`` [s] (a velocity history must lag by exactly one interval)."""
+    and planner interval ``planner_dt_s`` [s] (a velocity history must lag by one interval)."""
     refused = refusal(model)
     if refused is not None:
         raise ModelFileError(refused)
@@ -373,10 +373,10 @@ def check_residual_model(model: ResidualModel, period_s: float, dt_s: float = 0.
     except ValueError as exc:
         raise ModelFileError(f"residual model: {exc}; refit with fit-gp") from None
     lag_s = features.history_lag * period_s
-    if features.history_lag and abs(lag_s - dt_s) > _DT_TOLERANCE * dt_s:
+    if features.history_lag and abs(lag_s - planner_dt_s) > _DT_TOLERANCE * planner_dt_s:
         raise ModelFileError(
             f"residual model's velocity history lags {lag_s:g} s but the NMPC's interval is "
-            f"{dt_s:g} s; refit with the residual over one planner interval"
+            f"{planner_dt_s:g} s; refit with the residual over one planner interval"
         )
     dt_s = dict(features.nominal_params).get("residual_dt_s")
     off_rate = dt_s is None or abs(dt_s - period_s) > _DT_TOLERANCE * period_s
