@@ -17,7 +17,10 @@ residual flies the integrator enters as kept: the residual was fitted against it
 (gp.velocity_integrator) and carries the disturbance.
 Augmented, a residual model file from ``fit-gp`` adds its mean g(z) [m/s^2] as in
 [Kulathunga23], eq. 1; the file names the nominal model and features it was trained on, and
-the planner is built for exactly those. The reference is
+the planner is built for exactly those; a file on velocity_history or velocity_change features
+(the velocity one planner interval ago) makes the planner carry it along its horizon
+(planners.velocity_history), its first node's from the measured velocities the companion
+recorded over the last interval (companion.velocity_buffer). The reference is
 time-parametrised and the NMPC's input reference is its velocity (feed-forward), so the nominal
 planner already tracks well and what is left is the residual.
 
@@ -28,12 +31,13 @@ records as ``pred_vel_*``, so the residual of exactly the model that flew can be
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import casadi as ca
 import numpy as np
 
+from companion.velocity_buffer import VelocityBuffer
 from gp.errors import ModelFileError
 from gp.features import feature_definition
 from gp.model_io import ResidualModel, load_model
@@ -41,7 +45,7 @@ from gp.prediction_check import refusal, structure_only
 from planners.model_vectors import state_vector
 from planners.nmpc import NmpcPlanner
 from planners.nmpc_formulation import NmpcConfig
-from planners.nominal_models import INTEGRATOR_STATES, NominalModel, make_model
+from planners.nominal_models import HISTORY_STATES, INTEGRATOR_STATES, NominalModel, make_model
 from planners.plan_result import PlanResult
 from planners.reference import PlannerState, Reference, ReferenceSample
 from planners.residual import ResidualTerm
@@ -133,12 +137,14 @@ class CompanionNmpc:
                 params.setdefault("residual_dt_s", settings.period_s)
             self.model = make_model(settings.nominal_model, **params)
         else:
-            check_residual_model(residual_model, settings.period_s)
-            self.model = residual_model.features.nominal()
+            check_residual_model(residual_model, settings.period_s, settings.dt_s)
+            features = residual_model.features
+            self.model = features.nominal()
             if not structure_only(residual_model):
+                self.model = features.planner_model()
                 residual = ResidualTerm(
                     residual_model.flight_mean_function(expand=False),
-                    residual_model.features.planner_map(self.model),
+                    features.planner_map(self.model),
                     residual_model.flight_mean_batch(),
                 )
         v, w = settings.speed_limit_mps, settings.yaw_rate_limit_radps
@@ -169,6 +175,10 @@ class CompanionNmpc:
         self._ki = np.asarray(self.model.integrator_gains, dtype=float)
         self._vel_int = np.zeros(3)
         self._int_at: tuple[float, np.ndarray] | None = None  # (t [s], velocity [m/s])
+        self._velocities = None  # the measured velocities, for a model that carries history
+        if HISTORY_STATES[0] in self.model.state_names:
+            self._velocities = VelocityBuffer(settings.dt_s, INTEGRATOR_GAP_S)
+        self._vel_prev: np.ndarray | None = None  # the last plan's previous velocity [m/s]
         self._warm_up()
 
     def _warm_up(self) -> None:
@@ -181,6 +191,9 @@ class CompanionNmpc:
         self._last_ok = None
         self._vel_int = np.zeros(3)
         self._int_at = None
+        if self._velocities is not None:
+            self._velocities.clear()
+        self._vel_prev = None
 
     def set_obstacles(self, world: object | None) -> None:
         """Obstacles to keep d_o from: anything with ``clearance_m(points)`` and
@@ -194,12 +207,19 @@ class CompanionNmpc:
 
     def plan(self, state: PlannerState, reference: Reference, t_s: float) -> PlanResult:
         """One NMPC step (see :meth:`NmpcPlanner.plan`), from the state predicted over the
-        known latency when ``latency_s`` is set; never raises."""
+        known latency when ``latency_s`` is set, with the velocity measured one planner
+        interval before the plan's start for a model that carries it; never raises."""
+        history = self._velocities is not None and state.is_finite()
         if self._ki.size and state.is_finite():
             state = self._with_integrator(state, t_s)
+        if history:
+            self._velocities.record(t_s, state.vel_ned_mps)
+            state = self._with_previous_velocity(state, t_s)
         if self._advance is not None and self._last_command is not None and state.is_finite():
             state = self._predicted(state, self._last_command)
             t_s = t_s + self._latency_s
+            if history:
+                state = self._with_previous_velocity(state, t_s)
         result = self._planner.plan(state, reference, t_s)
         late = self._planner.late_plan
         if result.ok:
@@ -210,6 +230,12 @@ class CompanionNmpc:
             result = self._previous_plan(t_s, result.solve_time_s) or result
         self._last_command = np.array(result.command, dtype=float)
         return result
+
+    def _with_previous_velocity(self, state: PlannerState, t_s: float) -> PlannerState:
+        """``state`` with the velocity measured one planner interval before ``t_s`` (from the
+        recorded velocities, companion.velocity_buffer), kept for :meth:`one_step_velocity`."""
+        self._vel_prev = self._velocities.at(t_s - self._dt_s)
+        return replace(state, vel_prev_ned_mps=self._vel_prev)
 
     @property
     def velocity_integrator_mps2(self) -> np.ndarray:
@@ -290,11 +316,12 @@ class CompanionNmpc:
         period after sending ``cmd_vel_ned_mps`` (3,) at velocity ``vel_ned_mps`` (3,) and
         position ``pos_ned_m`` (3,) [m] (a residual on position features is evaluated there;
         None: the origin), with the velocity integrator the model plans from (0 when no
-        learned residual flies: offset-free); the yaw-rate command is taken as zero (the
+        learned residual flies: offset-free) and, for a model that carries it, the previous
+        velocity the last plan started from; the yaw-rate command is taken as zero (the
         study's references hold their yaw)."""
         pos = np.zeros(3) if pos_ned_m is None else np.asarray(pos_ned_m, dtype=float)
         vel = np.asarray(vel_ned_mps, dtype=float)
-        state = PlannerState(pos, vel, 0.0, self._planned_integrator())
+        state = PlannerState(pos, vel, 0.0, self._planned_integrator(), self._vel_prev)
         x = state_vector(self.model, state)
         u = np.append(np.asarray(cmd_vel_ned_mps, dtype=float).reshape(3), 0.0)
         return np.asarray(self._one_step(x, u), dtype=float).reshape(3)
@@ -328,8 +355,9 @@ def _one_step_function(
     return ca.Function("one_step_velocity", [x, u], [vel])
 
 
-def check_residual_model(model: ResidualModel, period_s: float) -> None:
-    """Raise ModelFileError (one line) unless the NMPC can fly ``model`` at this period."""
+def check_residual_model(model: ResidualModel, period_s: float, planner_dt_s: float = 0.1) -> None:
+    """Raise ModelFileError (one line) unless the NMPC can fly ``model`` at this control period
+    and planner interval ``planner_dt_s`` [s] (a velocity history must lag by one interval)."""
     refused = refusal(model)
     if refused is not None:
         raise ModelFileError(refused)
@@ -341,9 +369,15 @@ def check_residual_model(model: ResidualModel, period_s: float) -> None:
         )
     nominal = features.nominal()
     try:
-        features.planner_map(nominal)
+        features.planner_map(features.planner_model())
     except ValueError as exc:
         raise ModelFileError(f"residual model: {exc}; refit with fit-gp") from None
+    lag_s = features.history_lag * period_s
+    if features.history_lag and abs(lag_s - planner_dt_s) > _DT_TOLERANCE * planner_dt_s:
+        raise ModelFileError(
+            f"residual model's velocity history lags {lag_s:g} s but the NMPC's interval is "
+            f"{planner_dt_s:g} s; refit with the residual over one planner interval"
+        )
     dt_s = dict(features.nominal_params).get("residual_dt_s")
     off_rate = dt_s is None or abs(dt_s - period_s) > _DT_TOLERANCE * period_s
     if not nominal.carries_velocity and off_rate:
@@ -358,7 +392,7 @@ def check_feature_set(features: str, nominal_model: str) -> None:
     state and input of ``nominal_model`` (see FeatureDefinition.planner_map)."""
 
     definition = feature_definition(features, nominal_model)
-    definition.planner_map(definition.nominal())
+    definition.planner_map(definition.planner_model())
 
 
 def load_nmpc(settings: NmpcSettings, gp_model_path: Path | None) -> CompanionNmpc:

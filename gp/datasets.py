@@ -10,7 +10,8 @@ the logged commands u(k..k+H-1) (one RK4 step per row, of its own dt; for H = 1 
 default kinematic_4dof model, the commanded velocity itself, [Kulathunga23] eq. 5). H > 1
 measures the residual over the planner's interval: the mean acceleration the nominal model
 misses over it, which is how the NMPC applies it (constant over each 0.1 s interval). The
-input row z_k is the feature definition's columns at k minus their lags.
+input row z_k is the feature definition's columns at k minus their lags (a negative lag -L: the
+change x[k] - x[k-L]).
 
 Segments: a log is split where the time step exceeds ``max_gap_factor`` times its median step,
 where ``mode`` changes, and where ``armed`` is 0; segments in modes not listed in ``modes``
@@ -189,7 +190,9 @@ def _segment_rows(seg: FlightLog, features: FeatureDefinition) -> tuple[np.ndarr
         v_pred = np.asarray(model.velocity_of.map(k.size)(xt, u_all[k + steps - 1].T)).T
     v_meas = seg.stack(*_VEL)
     Y = (v_meas[k + steps] - v_pred) / dt[:, None]
-    X = np.column_stack([seg[c][k - lg] for c, lg in features.inputs])
+    X = np.column_stack(
+        [seg[c][k - lg] if lg >= 0 else seg[c][k] - seg[c][k + lg] for c, lg in features.inputs]
+    )
     return X, Y, dt, v_meas[k]
 
 

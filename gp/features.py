@@ -18,6 +18,17 @@ Built-in sets (outputs are always the NED velocity-rate residuals in m/s^2):
     history: [Ostafew16]'s a_k = (x_k, v_{k-1}, u_k, u_{k-1}) for a velocity-commanded
         multirotor: the velocity state now and one step ago, the command now and one step ago
         (vel_ned[k], vel_ned[k-1], cmd_vel_ned[k], cmd_vel_ned[k-1]), 12 features in m/s.
+    velocity_history: the part of it the NMPC can carry along its horizon without the command:
+        the measured velocity now and one residual interval ago (vel_ned[k], vel_ned[k-H],
+        H = residual_steps log steps: 0.1 s, the planner's interval), 6 features in m/s, on a
+        model with a velocity state. The planner adds the previous velocity as states
+        (planners.velocity_history: node j's is node j-1's predicted velocity, node 0's the
+        velocity measured one interval before now). The command stays out: the optimiser
+        exploits a GP that sees its decision variable (experiments.study.regimes, agile).
+    velocity_change: the same information as the velocity now and its change over that
+        interval (vel_ned[k], vel_ned[k] - vel_ned[k-H]), 6 features in m/s: a stationary
+        kernel with one length scale per input reaches a function of the change directly,
+        where on (v[k], v[k-H]), two nearly equal inputs, it needs short scales on both.
 In the NMPC, "vel" is the velocity the (augmented) model predicts for the vehicle.
 """
 
@@ -28,14 +39,20 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from planners.nominal_models import MODELS, NominalModel, make_model
+from planners.nominal_models import HISTORY_STATES, MODELS, NominalModel, make_model
+from planners.velocity_history import with_velocity_history
 
 RESIDUAL_OUTPUTS: tuple[str, ...] = ("res_acc_n_mps2", "res_acc_e_mps2", "res_acc_d_mps2")
 _VEL = ("vel_n_mps", "vel_e_mps", "vel_d_mps")
 _CMD = ("cmd_vel_n_mps", "cmd_vel_e_mps", "cmd_vel_d_mps")
 _POS = ("pos_n_m", "pos_e_m", "pos_d_m")
 
-FEATURE_SETS: dict[str, tuple[tuple[str, int], ...]] = {
+# In FEATURE_SETS, lags of one residual interval (the definition's residual_steps log steps,
+# resolved by feature_definition): the value that far back, and the change since then.
+INTERVAL = "interval"
+CHANGE = "change"
+
+FEATURE_SETS: dict[str, tuple[tuple[str, int | str], ...]] = {
     "velocity": tuple((c, 0) for c in _VEL),
     "state_input": tuple((c, 0) for c in (*_VEL, *_CMD, "cmd_yaw_rate_radps")),
     "position_state": tuple(
@@ -46,6 +63,8 @@ FEATURE_SETS: dict[str, tuple[tuple[str, int], ...]] = {
         [(c, 0) for c in _VEL] + [(c, 1) for c in _VEL]
         + [(c, 0) for c in _CMD] + [(c, 1) for c in _CMD]
     ),
+    "velocity_history": tuple([(c, 0) for c in _VEL] + [(c, INTERVAL) for c in _VEL]),
+    "velocity_change": tuple([(c, 0) for c in _VEL] + [(c, CHANGE) for c in _VEL]),
 }  # fmt: skip
 
 
@@ -57,6 +76,22 @@ _PLANNER_SOURCES: dict[str, Callable[..., ca.SX]] = {
     "cmd_yaw_rate_radps": lambda m, x, u, vel: u[3],
     **{c: (lambda m, x, u, vel, c=c: x[m.state_names.index(c)]) for c in _POS},
 }
+# A velocity one interval ago is the model's previous-velocity state (planners.velocity_history).
+_HISTORY_SOURCES: dict[str, Callable[..., ca.SX]] = {
+    c: (lambda m, x, u, vel, h=h: x[m.state_names.index(h)])
+    for c, h in zip(_VEL, HISTORY_STATES, strict=True)
+}
+
+
+def _source(column: str, lag: int) -> Callable[..., ca.SX]:
+    """Where the NMPC takes a feature (column, lag) from (planner_map has checked the lag)."""
+    if lag == 0:
+        return _PLANNER_SOURCES[column]
+    past = _HISTORY_SOURCES[column]
+    if lag > 0:
+        return past
+    now = _PLANNER_SOURCES[column]
+    return lambda m, x, u, vel: now(m, x, u, vel) - past(m, x, u, vel)
 
 
 @dataclass(frozen=True)
@@ -65,7 +100,8 @@ class FeatureDefinition:
 
     Attributes:
         name: feature-set name (a key of FEATURE_SETS).
-        inputs: (log column, lag in control steps) per feature, in input-vector order.
+        inputs: (log column, lag L in control steps) per feature, in input-vector order: L = 0
+            the value at k, L > 0 the value at k - L, L < 0 the change x[k] - x[k - |L|].
         outputs: residual names, in output order (units in the names).
         nominal_model: name of the planners' nominal model the residual is taken against.
         nominal_params: that model's parameters as sorted (name, value) pairs.
@@ -88,8 +124,12 @@ class FeatureDefinition:
 
     @property
     def input_names(self) -> tuple[str, ...]:
-        """Feature names: the column, with ``[k-L]`` for a lag L > 0 (e.g. vel_n_mps[k-1])."""
-        return tuple(c if lag == 0 else f"{c}[k-{lag}]" for c, lag in self.inputs)
+        """Feature names: the column, with ``[k-L]`` for a lag L > 0 (e.g. vel_n_mps[k-1]),
+        ``[k]-...[k-L]`` for a change (e.g. vel_n_mps[k]-vel_n_mps[k-5])."""
+        return tuple(
+            c if lag == 0 else f"{c}[k-{lag}]" if lag > 0 else f"{c}[k]-{c}[k-{-lag}]"
+            for c, lag in self.inputs
+        )
 
     @property
     def n_features(self) -> int:
@@ -97,29 +137,51 @@ class FeatureDefinition:
 
     @property
     def max_lag(self) -> int:
-        return max(lag for _, lag in self.inputs)
+        return max(abs(lag) for _, lag in self.inputs)
 
     @property
     def speed_columns(self) -> tuple[int, ...]:
         """Indices of the current measured velocity components (used by low_speed inducing)."""
         return tuple(i for i, (c, lag) in enumerate(self.inputs) if c in _VEL and lag == 0)
 
+    @property
+    def history_lag(self) -> int:
+        """The lag [log steps] of the lagged measured velocities (or their changes), 0 without
+        any."""
+        return max((abs(lag) for c, lag in self.inputs if c in _VEL), default=0)
+
     def nominal(self) -> NominalModel:
         """The nominal model instance."""
         return make_model(self.nominal_model, **dict(self.nominal_params))
 
+    def planner_model(self) -> NominalModel:
+        """The model the NMPC plans with: the nominal model, with the velocity one interval
+        ago as extra states when a feature is a lagged velocity and the model has a velocity
+        state (planners.velocity_history; else planner_map refuses the lag)."""
+        nominal = self.nominal()
+        if self.history_lag and nominal.carries_velocity:
+            return with_velocity_history(nominal)
+        return nominal
+
     def planner_map(self, model: NominalModel) -> Callable[[ca.SX, ca.SX], ca.SX]:
         """z(x, u) (SX, n_features) for the NMPC, from the same ``inputs`` the dataset reads
         from the logs: a measured velocity is the model's velocity (``model.velocity_of``), a
-        command is the input u. Raises ValueError (one line) if the planner cannot build it:
-        lagged features, or a measured velocity beside other features on a model that does
-        not carry the velocity ([Kulathunga23]'s "velocity" set queries the kinematic model
-        at its commanded velocity, its only notion of velocity)."""
-        lagged = [n for n, (_, lag) in zip(self.input_names, self.inputs, strict=True) if lag]
+        command is the input u, a velocity one residual interval ago the model's
+        previous-velocity state (``planner_model``). Raises ValueError (one line) if the
+        planner cannot build it: other lagged features, or a measured velocity beside other
+        features on a model that does not carry the velocity ([Kulathunga23]'s "velocity" set
+        queries the kinematic model at its commanded velocity, its only notion of velocity)."""
+        carried = HISTORY_STATES[0] in model.state_names
+        lagged = [
+            n
+            for n, (c, lag) in zip(self.input_names, self.inputs, strict=True)
+            if lag and not (carried and c in _VEL and abs(lag) == self.residual_steps)
+        ]
         if lagged:
             raise ValueError(
-                f"the NMPC cannot feed lagged features {lagged} (it carries no history along "
-                "the horizon); use the 'velocity' or 'state_input' feature set"
+                f"the NMPC cannot feed lagged features {lagged} (it carries only the velocity "
+                "one residual interval ago along the horizon, on a model with a velocity "
+                "state); use the 'velocity', 'state_input' or 'velocity_history' feature set"
             )
         uses = {c in _VEL for c, _ in self.inputs if c not in _POS}
         if uses == {True, False} and not model.carries_velocity:
@@ -138,7 +200,7 @@ class FeatureDefinition:
 
         def z(x: ca.SX, u: ca.SX) -> ca.SX:
             vel = model.velocity_of(x, u)
-            return ca.vertcat(*(_PLANNER_SOURCES[c](model, x, u, vel) for c, _ in self.inputs))
+            return ca.vertcat(*(_source(c, lag)(model, x, u, vel) for c, lag in self.inputs))
 
         return z
 
@@ -182,7 +244,8 @@ def feature_definition(
     **nominal_params: float,
 ) -> FeatureDefinition:
     """A built-in feature set against a nominal model, its residual measured over
-    ``residual_steps`` log steps; bad names raise ValueError."""
+    ``residual_steps`` log steps (an INTERVAL lag becomes that many, a CHANGE lag minus that
+    many); bad names raise ValueError."""
     if name not in FEATURE_SETS:
         raise ValueError(f"unknown feature set {name!r}; choose one of {', '.join(FEATURE_SETS)}")
     if nominal_model not in MODELS:
@@ -190,9 +253,11 @@ def feature_definition(
             f"unknown nominal model {nominal_model!r}; choose one of {', '.join(MODELS)}"
         )
     params = tuple(sorted((k, float(v)) for k, v in nominal_params.items()))
+    resolve = {INTERVAL: residual_steps, CHANGE: -residual_steps}
+    inputs = tuple((c, resolve.get(lag, lag)) for c, lag in FEATURE_SETS[name])
     definition = FeatureDefinition(
         name,
-        FEATURE_SETS[name],
+        inputs,
         nominal_model=nominal_model,
         nominal_params=params,
         residual_steps=residual_steps,

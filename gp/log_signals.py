@@ -4,7 +4,9 @@ The planners' models name their signals (``pos_n_m``, ``yaw_rad``, ``vel_n_mps``
 holds measurements and commands (``vel_n_mps`` measured, ``cmd_vel_n_mps`` commanded, the
 attitude as a quaternion). States come from measurements, inputs from the logged commands;
 an autopilot velocity integrator (px4_velocity_pi's ``vel_int_*``) is rebuilt from both as the
-companion keeps it in flight (gp.velocity_integrator), 0 at the log's (segment's) first row.
+companion keeps it in flight (gp.velocity_integrator), 0 at the log's (segment's) first row;
+a previous velocity (planners.velocity_history's ``vel_prev_*``) is the measured velocity a
+given number of rows earlier (the first row's before it).
 """
 
 from __future__ import annotations
@@ -16,7 +18,12 @@ import numpy as np
 from flightlog.schema import FlightLog
 from gp.errors import DatasetError
 from gp.velocity_integrator import velocity_integrator
-from planners.nominal_models import INTEGRATOR_STATES, NominalModel
+from planners.nominal_models import (
+    HISTORY_STATES,
+    INTEGRATOR_STATES,
+    VELOCITY_STATES,
+    NominalModel,
+)
 
 
 def yaw_from_quaternion(log: FlightLog) -> np.ndarray:
@@ -40,10 +47,13 @@ _INPUT_SIGNALS: dict[str, Callable[[FlightLog], np.ndarray]] = {
 }
 
 
-def model_state(model: NominalModel, log: FlightLog) -> np.ndarray:
+def model_state(model: NominalModel, log: FlightLog, history_lag: int = 0) -> np.ndarray:
     """The model's state per log row, (n, nx), from measured signals (an integrator state from
-    0 at the first row: pass one segment)."""
+    0 at the first row: pass one segment; a previous velocity ``history_lag`` rows back)."""
     table = dict(_STATE_SIGNALS)
+    earlier = np.maximum(np.arange(log.n_rows) - history_lag, 0)
+    pairs = zip(HISTORY_STATES, VELOCITY_STATES, strict=True)
+    table |= {h: (lambda log, c=c: log[c][earlier]) for h, c in pairs}
     if model.integrator_gains:
         integrator = velocity_integrator(log, model.integrator_gains)
         table |= {c: (lambda _log, i=i: integrator[:, i]) for i, c in enumerate(INTEGRATOR_STATES)}

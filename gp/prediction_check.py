@@ -6,8 +6,9 @@ From every ``stride``-th row k of a clean segment of a held-out log, each model 
 open loop under the *logged* commands u(k..k+H-1), starting from the measured state at k
 (one RK4 step per log row, of that row's dt, residual g(z) evaluated at every stage as in the
 NMPC; an autopilot integrator state starts as the companion plans from it: as rebuilt from the
-log with a residual, 0 without one, companion.nmpc_planner), and the predicted position is
-compared with the measured one:
+log with a residual, 0 without one, companion.nmpc_planner; a previous velocity
+(planners.velocity_history) is, at every step, the velocity its lag earlier: measured before
+k, predicted after), and the predicted position is compared with the measured one:
 
     e = sqrt(mean over starts k and steps h = 1..H of |p_hat(k+h) - p(k+h)|^2)     [m]
 
@@ -31,7 +32,12 @@ from gp.errors import DatasetError
 from gp.features import feature_definition
 from gp.log_signals import model_input, model_state
 from gp.model_io import ResidualModel
-from planners.nominal_models import INTEGRATOR_STATES, NominalModel
+from planners.nominal_models import (
+    HISTORY_STATES,
+    INTEGRATOR_STATES,
+    VELOCITY_STATES,
+    NominalModel,
+)
 from planners.residual import ResidualTerm
 
 _POS = ("pos_n_m", "pos_e_m", "pos_d_m")
@@ -50,8 +56,9 @@ class Predictor:
 
     @classmethod
     def of_residual_model(cls, residual: ResidualModel, name: str = "learned") -> Predictor:
-        """The residual model on the nominal model it was trained against."""
-        return cls(name, residual.features.nominal(), residual)
+        """The residual model on the nominal model it was trained against, as the NMPC plans
+        with it (FeatureDefinition.planner_model)."""
+        return cls(name, residual.features.planner_model(), residual)
 
     @classmethod
     def as_flown(cls, residual: ResidualModel, name: str = "previous") -> Predictor:
@@ -60,6 +67,11 @@ class Predictor:
         if structure_only(residual):
             return cls(name, residual.features.nominal())
         return cls.of_residual_model(residual, name)
+
+    @property
+    def history_lag(self) -> int:
+        """Log rows back to the previous velocity the model carries, 0 without one."""
+        return self.residual.features.history_lag if self.residual is not None else 0
 
     def start_states(self, x: np.ndarray) -> np.ndarray:
         """The states (nx, n) rollouts start from, given the states rebuilt from a log (nx, n):
@@ -154,13 +166,19 @@ def horizon_prediction_rmse(
             k0 = np.arange(0, seg.n_rows - steps, stride)
             if steps < 1 or k0.size == 0:
                 continue
-            x = predictor.start_states(model_state(predictor.model, seg)[k0].T)
+            lag = predictor.history_lag
+            x = predictor.start_states(model_state(predictor.model, seg, lag)[k0].T)
             u_all = model_input(predictor.model, seg)
             pos = seg.stack(*_POS)
             step = predictor.step_function().map(k0.size)
             p_index = [predictor.model.state_names.index(c) for c in _POS]
+            history = _History(predictor.model, seg, k0, lag) if lag else None
             for h in range(steps):
+                if history is not None:
+                    x = history.fill(np.asarray(x), h)
                 x = step(x, u_all[k0 + h].T, (t[k0 + h + 1] - t[k0 + h])[None, :])
+                if history is not None:
+                    history.append(np.asarray(x))
                 err = np.asarray(x)[p_index].T - pos[k0 + h + 1]
                 sq_sum += float(np.sum(err**2))
                 count += k0.size
@@ -171,6 +189,34 @@ def horizon_prediction_rmse(
             "hold out longer flights"
         )
     return float(np.sqrt(sq_sum / count)), starts
+
+
+class _History:
+    """The previous velocity of rollouts from rows ``k0`` (n,) of a segment: at step h (row
+    k0 + h), the velocity ``lag`` rows earlier, measured (the segment's first before it) until
+    the rollout has predicted it."""
+
+    def __init__(self, model: NominalModel, seg: FlightLog, k0: np.ndarray, lag: int) -> None:
+        self._rows = [model.state_names.index(c) for c in HISTORY_STATES]
+        self._vel_rows = [model.state_names.index(c) for c in VELOCITY_STATES]
+        self._measured = seg.stack(*VELOCITY_STATES)
+        self._k0, self._lag = k0, lag
+        self._predicted: list[np.ndarray] = []  # velocity (3, n) after step 0, 1, ...
+
+    def fill(self, x: np.ndarray, h: int) -> np.ndarray:
+        """States x (nx, n) before step h with their previous velocity set."""
+        back = h - self._lag  # the step whose start holds the previous velocity
+        if back >= 1:
+            previous = self._predicted[back - 1]
+        else:
+            previous = self._measured[np.maximum(self._k0 + back, 0)].T
+        x = np.array(x, dtype=float)
+        x[self._rows] = previous
+        return x
+
+    def append(self, x: np.ndarray) -> None:
+        """Record the velocity of the states x (nx, n) after the next step."""
+        self._predicted.append(x[self._vel_rows])
 
 
 def check_prediction(

@@ -11,11 +11,12 @@ stages by the chain rule:
 small CasADi Function mapped over the nodes (the nominal model: a few dozen operations), and
 the residual g with d g / d z from the residual's batched form (``ResidualTerm.batch``, e.g.
 the GP mean's arrays as data, gp.batched_mean) or, without one, from its CasADi Function
-mapped over the nodes. Condensing is then dense linear algebra:
-S = d x_{1..N} / d u (block lower triangular, S_k = A_{k-1} S_{k-1} plus B_{k-1}), H = S' Q S + R,
-grad = S' Q e + R (u - u_ref). The result is the same QP data as the symbolic linearisation
-(planners.sqp_solver) up to rounding; its cost does not grow with a graph per model, and
-nothing is compiled, so a new residual model is ready at once.
+mapped over the nodes. A history state (NominalModel.history) then takes its source's value
+at the node: its row of A selects the source, its row of B is zero. Condensing is then dense
+linear algebra: S = d x_{1..N} / d u (block lower triangular, S_k = A_{k-1} S_{k-1} plus
+B_{k-1}), H = S' Q S + R, grad = S' Q e + R (u - u_ref). The result is the same QP data as the
+symbolic linearisation (planners.sqp_solver) up to rounding; its cost does not grow with a
+graph per model, and nothing is compiled, so a new residual model is ready at once.
 """
 
 from __future__ import annotations
@@ -58,6 +59,7 @@ class BatchedLinearisation:
         fx = model.f(x, u)
         outs = [fx, ca.jacobian(fx, x), ca.jacobian(fx, u)]
         self._residual_map = np.asarray(model.residual_map, dtype=float)
+        self._history = np.asarray(model.history, dtype=int).reshape(-1, 2).T  # (2, n_history)
         self._batch = None
         if residual is not None:
             z = ca.vec(residual.features(x, u))
@@ -97,7 +99,14 @@ class BatchedLinearisation:
             total += weight * k
             a_sum += weight * j_x
             b_sum += weight * j_u
-        return xs + h / 6.0 * total, eye + h / 6.0 * a_sum, h / 6.0 * b_sum
+        x_next, a, b = xs + h / 6.0 * total, eye + h / 6.0 * a_sum, h / 6.0 * b_sum
+        if self._history.size:  # a history state takes its source's value at the node
+            rows, sources = self._history
+            x_next[:, rows] = xs[:, sources]
+            a[:, rows, :] = 0.0
+            a[:, rows, sources] = 1.0
+            b[:, rows, :] = 0.0
+        return x_next, a, b
 
     def __call__(self, w: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, ...]:
         """The linearisation's fields in planners.sqp_solver._Linearisation's order."""

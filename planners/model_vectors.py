@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from planners.nominal_models import INTEGRATOR_STATES, NominalModel
+from planners.nominal_models import HISTORY_STATES, INTEGRATOR_STATES, NominalModel
 from planners.reference import PlannerState, ReferenceSample
 
 _AXES = {"n": 0, "e": 1, "d": 2}
@@ -17,13 +17,15 @@ ANGLE_SUFFIX = "_rad"
 
 
 def _element(
-    name: str, pos: np.ndarray, vel: np.ndarray, yaw, yaw_rate, vel_int=None
+    name: str, pos: np.ndarray, vel: np.ndarray, yaw, yaw_rate, vel_int=None, vel_prev=None
 ) -> np.ndarray:
-    """One named quantity from (n, 3) positions/velocities/velocity integrators (None: zeros)
-    and (n,) yaw/yaw rate."""
+    """One named quantity from (n, 3) positions/velocities/velocity integrators (None: zeros)/
+    previous velocities (None: the velocities) and (n,) yaw/yaw rate."""
     if name in INTEGRATOR_STATES:
         axis = INTEGRATOR_STATES.index(name)
         return np.zeros(pos.shape[0]) if vel_int is None else vel_int[:, axis]
+    if name in HISTORY_STATES:
+        return (vel if vel_prev is None else vel_prev)[:, HISTORY_STATES.index(name)]
     kind, _, axis = name.rpartition("_")[0].partition("_")
     if kind == "pos" and axis in _AXES:
         return pos[:, _AXES[axis]]
@@ -45,10 +47,14 @@ def state_vector(model: NominalModel, state: PlannerState) -> np.ndarray:
     """The model state (nx,) for a vehicle state."""
     pos = np.reshape(np.asarray(state.pos_ned_m, dtype=float), (1, 3))
     vel = np.reshape(np.asarray(state.vel_ned_mps, dtype=float), (1, 3))
-    vel_int = None
+    vel_int = vel_prev = None
     if state.vel_int_mps2 is not None:
         vel_int = np.reshape(np.asarray(state.vel_int_mps2, dtype=float), (1, 3))
-    cols = [_element(n, pos, vel, [state.yaw_rad], [0.0], vel_int) for n in model.state_names]
+    if state.vel_prev_ned_mps is not None:
+        vel_prev = np.reshape(np.asarray(state.vel_prev_ned_mps, dtype=float), (1, 3))
+    cols = [
+        _element(n, pos, vel, [state.yaw_rad], [0.0], vel_int, vel_prev) for n in model.state_names
+    ]
     return np.concatenate(cols)
 
 
@@ -61,8 +67,9 @@ def reference_vectors(
     ``velocity_lead_s`` times the reference acceleration (u = v + tau a for a first-order
     lag: the input that keeps the model on the reference), so the input cost does not pull
     the plan behind the reference during accelerations; without it (or for a model with no
-    lead) the input reference is the reference velocity. An integrator state's reference is 0
-    (its default cost weight is 0: the model's ``untracked_states``)."""
+    lead) the input reference is the reference velocity. An integrator state's reference is 0,
+    a previous velocity's the reference velocity (their default cost weight is 0: the model's
+    ``untracked_states``)."""
     args = (sample.pos_ned_m, sample.vel_ned_mps, sample.yaw_rad, sample.yaw_rate_radps)
     x_ref = np.column_stack([_element(n, *args) for n in model.state_names])
     vel = np.asarray(sample.vel_ned_mps, dtype=float)

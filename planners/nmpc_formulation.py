@@ -120,7 +120,8 @@ class NmpcFormulation:
         model, config, residual: as given.
         q_diag (nx,), r_diag (nu,): cost weights.
         x_min, x_max (nx,): state bounds; u_min, u_max (nu,): input bounds.
-        step: CasADi Function (x, u) -> x_next, RK4 over dt_s, residual included.
+        step: CasADi Function (x, u) -> x_next, RK4 over dt_s, residual included, a history
+            state shifted (NominalModel.interval_step).
         n_w, n_p: sizes of w and of the parameter vector p.
     """
 
@@ -144,7 +145,7 @@ class NmpcFormulation:
 
         x = ca.SX.sym("x", nx)
         u = ca.SX.sym("u", nu)
-        x_next = model.rk4_step(x, u, config.dt_s, residual)
+        x_next = model.interval_step(x, u, config.dt_s, residual)
         self.step = ca.Function("nmpc_step", [x, u], [ca.cse(x_next)], ["x", "u"], ["x_next"])
         slot = ca.SX.sym("slot", OBSTACLE_SLOT_SIZE)
         self.clearance = ca.Function(
@@ -153,7 +154,7 @@ class NmpcFormulation:
         # The plan's simulation, node after node: built on MX so that a residual given as an
         # MX Function (dense matrix operations) is evaluated as such, not expanded to scalars.
         xm, um = ca.MX.sym("x", nx), ca.MX.sym("u", nu)
-        x_next_mx = model.rk4_step(xm, um, config.dt_s, residual)
+        x_next_mx = model.interval_step(xm, um, config.dt_s, residual)
         self._rollout = ca.Function("nmpc_step_mx", [xm, um], [x_next_mx]).mapaccum(n)
 
     # -- packing ---------------------------------------------------------------------------

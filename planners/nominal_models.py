@@ -34,6 +34,7 @@ import numpy as np
 
 VELOCITY_STATES: tuple[str, ...] = ("vel_n_mps", "vel_e_mps", "vel_d_mps")
 INTEGRATOR_STATES: tuple[str, ...] = ("vel_int_n_mps2", "vel_int_e_mps2", "vel_int_d_mps2")
+HISTORY_STATES: tuple[str, ...] = ("vel_prev_n_mps", "vel_prev_e_mps", "vel_prev_d_mps")
 
 
 @dataclass(frozen=True)
@@ -59,6 +60,9 @@ class NominalModel:
             weight defaults to 0.
         integrator_gains: per NED axis, the I gain [1/s] of an autopilot velocity integrator
             the model carries as INTEGRATOR_STATES; empty for a model without one.
+        history: (state index, source state index) pairs: a state that holds its source's
+            value one planner interval ago (planners.velocity_history); held within an
+            interval, shifted at its end by :meth:`interval_step`; empty for most models.
     """
 
     name: str
@@ -71,6 +75,7 @@ class NominalModel:
     velocity_lead_s: tuple[float, ...] = ()
     untracked_states: tuple[str, ...] = ()
     integrator_gains: tuple[float, ...] = ()
+    history: tuple[tuple[int, int], ...] = ()
 
     @property
     def nx(self) -> int:
@@ -108,6 +113,16 @@ class NominalModel:
         k3 = rate(x + dt_s / 2 * k2)
         k4 = rate(x + dt_s * k3)
         return x + dt_s / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+
+    def interval_step(self, x, u, dt_s: float, residual_fn=None):
+        """One planner interval (symbolic): :meth:`rk4_step`, then each ``history`` state takes
+        its source's value at the interval's start, so node j + 1 holds node j's value. The
+        RK4 step itself for a model without history."""
+        x_next = self.rk4_step(x, u, dt_s, residual_fn)
+        if not self.history:
+            return x_next
+        source = dict(self.history)
+        return ca.vertcat(*(x[source[i]] if i in source else x_next[i] for i in range(self.nx)))
 
     def step_function(self, dt_s: float) -> ca.Function:
         """CasADi Function (x, u) -> x_next for a fixed step, without residual."""

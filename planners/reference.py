@@ -76,12 +76,15 @@ class PlannerState:
 
     ``vel_int_mps2`` (3,): the autopilot's velocity integrator as the companion keeps it (for a
     model that carries it, planners.nominal_models.px4_velocity_pi); None reads as zeros.
+    ``vel_prev_ned_mps`` (3,) [m/s]: the velocity measured one planner interval ago (for a
+    model that carries it, planners.velocity_history); None reads as ``vel_ned_mps``.
     """
 
     pos_ned_m: np.ndarray
     vel_ned_mps: np.ndarray
     yaw_rad: float
     vel_int_mps2: np.ndarray | None = None
+    vel_prev_ned_mps: np.ndarray | None = None
 
     def is_finite(self) -> bool:
         """True when every element is finite (no NaN or inf)."""

@@ -3,7 +3,7 @@
     study [--out out/study] [--trajectories 20] [--repeats 3] [--trials 6] [--m 30]
           [--workers 2 | --scheduler tcp://HOST:8786] [--vehicle iris_study]
           [--learned-model first_order_lag|kinematic_4dof]
-          [--features state_input|velocity] [--seed 0] [--compile] [--quick]
+          [--features state_input|velocity|velocity_history] [--seed 0] [--compile] [--quick]
           [--regime paper000|agile|wind_field] [--refit-rounds N] [--closed-loop-check]
 
 ``--regime`` picks the task (experiments.study.regimes, physics written down there):

@@ -37,7 +37,8 @@ class StudyConfig:
             time constants identified from the flights, then the GP on what is left; see
             gp.lag_identification) or "kinematic_4dof" ([Kulathunga23]'s GP alone).
         features: GP feature set ("state_input" needs first_order_lag; "velocity" is paper
-            000's).
+            000's; "velocity_history" adds the velocity one planner interval ago, which the
+            NMPC carries along its horizon, on a model with a velocity state).
         gp_restarts: hyperparameter restarts per fit.
         compile_augmented: compile each augmented planner's symbolic linearisation to C
             (cached on disk; over 6 minutes and 3 GB per model). The planner the companion and

@@ -48,3 +48,41 @@ def test_position_state_map_takes_the_position_from_the_model_state():
     u = np.array([0.5, 0.6, 0.7, 0.8])
     z = np.asarray(ca.DM(fd.planner_map(model)(ca.DM(x), ca.DM(u)))).ravel()
     np.testing.assert_allclose(z, [1.0, 2.0, 4.0, 5.0, 6.0, 0.5, 0.6, 0.7, 0.8])
+
+
+def test_velocity_history_lags_one_residual_interval():
+    fd = feature_definition("velocity_history", "first_order_lag", residual_steps=5)
+    assert fd.input_names[3:] == ("vel_n_mps[k-5]", "vel_e_mps[k-5]", "vel_d_mps[k-5]")
+    assert fd.history_lag == 5 and fd.speed_columns == (0, 1, 2)
+    assert fd.nominal().nx == 7 and fd.planner_model().nx == 10
+
+
+def test_velocity_history_map_takes_the_previous_velocity_from_the_model_state():
+    fd = feature_definition("velocity_history", "first_order_lag", residual_steps=5)
+    model = fd.planner_model()
+    x = np.arange(1.0, 11.0)  # pos (1, 2, 3), vel (4, 5, 6), yaw 7, previous vel (8, 9, 10)
+    z = np.asarray(ca.DM(fd.planner_map(model)(ca.DM(x), ca.DM.zeros(4)))).ravel()
+    np.testing.assert_allclose(z, [4.0, 5.0, 6.0, 8.0, 9.0, 10.0])
+
+
+@pytest.mark.parametrize(
+    ("features", "nominal", "steps", "words"),
+    [
+        ("history", "first_order_lag", 1, r"cmd_vel_n_mps\[k-1\]"),  # commands are not carried
+        ("velocity_history", "kinematic_4dof", 5, "with a velocity state"),
+    ],
+)
+def test_lags_the_planner_does_not_carry_are_still_refused(features, nominal, steps, words):
+    fd = feature_definition(features, nominal, residual_steps=steps)
+    with pytest.raises(ValueError, match=words) as info:
+        fd.planner_map(fd.planner_model())
+    assert "\n" not in str(info.value)
+
+
+def test_velocity_change_is_the_velocity_minus_the_previous_velocity_state():
+    fd = feature_definition("velocity_change", "first_order_lag", residual_steps=5)
+    assert fd.input_names[3] == "vel_n_mps[k]-vel_n_mps[k-5]" and fd.max_lag == 5
+    model = fd.planner_model()
+    x = np.arange(1.0, 11.0)  # pos (1, 2, 3), vel (4, 5, 6), yaw 7, previous vel (8, 9, 10)
+    z = np.asarray(ca.DM(fd.planner_map(model)(ca.DM(x), ca.DM.zeros(4)))).ravel()
+    np.testing.assert_allclose(z, [4.0, 5.0, 6.0, -4.0, -4.0, -4.0])
