@@ -111,7 +111,8 @@ def train_residual_model(
     data = residual_dataset(logs, DatasetConfig(features, modes=config.modes))
     train, test = holdout_split(data, config.holdout_fraction, config.seed)
     progress(
-        f"{data.n_rows} rows in {len(data.segment_names)} segments: "
+        f"{data.n_rows} rows in {len(data.segment_names)} "
+        f"segment{'' if len(data.segment_names) == 1 else 's'}: "
         f"{train.n_rows} for training, {test.n_rows} held out"
     )
     inducing = InducingConfig(

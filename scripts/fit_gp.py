@@ -4,7 +4,7 @@
            [--nominal kinematic_4dof|first_order_lag] [--nominal-param residual_dt_s=0.05]
            [--inducing low_speed|cluster|random] [--m 30] [--optimize-inducing]
            [--seed 0] [--holdout-fraction 0.2] [--restarts 3] [--mode offboard] [--no-plots]
-           [--check-horizon-s 2.0]
+           [--check-horizon-s 2.0] [--residual-interval-s 0.1]
 
 With ``--check-horizon-s``, a quarter of the logs (or of each log) is held out and the model's
 position prediction over that horizon (the NMPC's N x dt) is compared with [Kulathunga23]'s
@@ -14,6 +14,11 @@ written; gp.prediction_check).
 With ``--nominal first_order_lag`` and no ``--nominal-param tau_s=...``, the velocity loop's
 time constants are identified from the logs first (least squares, gp.lag_identification) and
 the GP learns what the identified lag leaves; the model file records them.
+
+``--residual-interval-s`` measures the residual over that interval, a whole number of the logs'
+steps (default: one step, [Kulathunga23]'s one-step residual). The NMPC applies the residual
+constant over its 0.1 s interval; `study` learns over it, and ``--features velocity_history``
+needs it (its lag is one interval, which the companion checks).
 
 Logs of different vehicles or configs (their metadata disagree on the simulator preset,
 mass, PX4 airframe, board or velocity-loop gains: flightlog.vehicle_identity) are pooled as
@@ -31,12 +36,14 @@ from __future__ import annotations
 
 import sys
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
+
+import numpy as np
 
 from flightlog.atomic_output import OutputError, check_writable_file
 from flightlog.reader import read_log, require_distinct, require_modes, require_rates
-from flightlog.schema import FlightLogError
+from flightlog.schema import FlightLog, FlightLogError
 from flightlog.ulog import damage_note
 from flightlog.vehicle_identity import mixed_vehicle_fields
 from gp.errors import DatasetError, GPInputError, ModelFileError
@@ -60,6 +67,7 @@ class FitGpConfig:
     training: TrainingConfig
     plots: bool = True
     force: bool = False
+    residual_interval_s: float | None = None
 
 
 def parse_args(argv: list[str] | None) -> FitGpConfig:
@@ -102,11 +110,19 @@ def parse_args(argv: list[str] | None) -> FitGpConfig:
         help="check the multi-step prediction over this horizon on held-out logs first",
     )
     parser.add_argument(
+        "--residual-interval-s",
+        type=float,
+        default=None,
+        help="measure the residual over this interval [s] (the NMPC's 0.1 s; default one log step)",
+    )
+    parser.add_argument(
         "--force",
         action="store_true",
         help="write the model even if it is worse than nominal or a time constant is on its bound",
     )
     args = parser.parse_args(argv)
+    if args.residual_interval_s is not None and not args.residual_interval_s > 0:
+        parser.error(f"--residual-interval-s must be > 0 s, got {args.residual_interval_s}")
     if args.check_horizon_s is not None and not args.check_horizon_s > 0:
         parser.error(f"--check-horizon-s must be > 0 s, got {args.check_horizon_s}")
     params = []
@@ -140,8 +156,30 @@ def parse_args(argv: list[str] | None) -> FitGpConfig:
         check_horizon_s=args.check_horizon_s,
     )
     return FitGpConfig(
-        tuple(args.logs), args.out, training, plots=not args.no_plots, force=args.force
+        tuple(args.logs),
+        args.out,
+        training,
+        plots=not args.no_plots,
+        force=args.force,
+        residual_interval_s=args.residual_interval_s,
     )
+
+
+def residual_steps(logs: list[FlightLog], interval_s: float) -> int:
+    """The whole number of log steps (the logs' median step) that makes ``interval_s`` [s].
+
+    Raises:
+        GPInputError: the interval is not within a fifth of a step of a whole number (>= 1)
+            of steps (one line naming both and the fix).
+    """
+    step_s = float(np.median(np.concatenate([np.diff(log["t_s"]) for log in logs])))
+    steps = round(interval_s / step_s)
+    if steps < 1 or abs(steps * step_s - interval_s) > 0.2 * step_s:
+        raise GPInputError(
+            f"--residual-interval-s {interval_s:g}: not a whole number of the logs' "
+            f"{step_s:.4g} s steps; give a multiple of it (the NMPC's interval is 0.1 s)"
+        )
+    return steps
 
 
 EXIT_DOUBTFUL = 3
@@ -205,7 +243,12 @@ def main(argv: list[str] | None = None) -> int:
             )
         require_modes(logs, config.training.modes)
         check_writable_file(model_path(config.out))  # found now, not after the fit
-        result = train_residual_model(logs, config.training, progress)
+        training = config.training
+        if config.residual_interval_s is not None:
+            steps = residual_steps(logs, config.residual_interval_s)
+            progress(f"residual over {steps} log steps ({config.residual_interval_s:g} s)")
+            training = replace(training, residual_steps=steps)
+        result = train_residual_model(logs, training, progress)
         if result.all_noise is not None:
             print(f"fit-gp: warning: {result.all_noise}", file=sys.stderr)
         if not result.may_fly:

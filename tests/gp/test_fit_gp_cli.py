@@ -113,3 +113,28 @@ def test_the_same_flight_given_twice_is_refused(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "the same flight as" in err[0], err
     assert not (tmp_path / "m.npz").exists() and not (tmp_path / "d").exists()
+
+
+def test_a_history_model_from_fit_gp_flies_with_the_nmpcs_interval(tmp_path, capsys):
+    """--residual-interval-s 0.1 on 50 Hz logs: the residual over 5 steps, so a
+    velocity_history model lags one planner interval and the companion's NMPC takes it (over
+    one step it lags 0.02 s and is refused in one line)."""
+    from companion.nmpc_planner import CompanionNmpc, NmpcSettings
+    from gp.errors import ModelFileError
+
+    log = write_flight_log(tmp_path / "f.csv", record_log(300, dt_s=0.02, noise_mps=0.002))
+    settings = NmpcSettings(speed_limit_mps=4.0, period_s=0.02, time_budget_s=30.0)
+    base = [str(log), "--features", "velocity_history", "--nominal", "first_order_lag"]
+    base += ["--nominal-param", "tau_s=0.5", "--nominal-param", "tau_d_s=0.4"]
+    base += ["--m", "8", "--restarts", "1", "--no-plots", "--force"]  # judged elsewhere
+    assert main([*base, "--out", str(tmp_path / "one_step")]) == 0
+    with pytest.raises(ModelFileError, match="interval"):
+        CompanionNmpc(settings, load_model(tmp_path / "one_step"))
+    assert main([*base, "--out", str(tmp_path / "interval"), "--residual-interval-s", "0.1"]) == 0
+    assert "residual over 5 log steps (0.1 s)" in capsys.readouterr().err
+    model = load_model(tmp_path / "interval")
+    assert model.features.residual_steps == 5
+    CompanionNmpc(settings, model)
+    assert main([*base, "--out", str(tmp_path / "odd"), "--residual-interval-s", "0.05"]) == 2
+    err = [line for line in capsys.readouterr().err.splitlines() if "error" in line]
+    assert len(err) == 1 and "not a whole number of the logs' 0.02 s steps" in err[0]
