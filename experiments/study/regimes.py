@@ -126,6 +126,7 @@ REGIMES: dict[str, dict[str, object]] = {
         "length_range_m": (60.0, 100.0),
         "max_speed_mps": 6.0,
         "max_acc_mps2": 4.0,
+        "ramp_jerk_mps3": 4.0,
         "command_limit_mps": 8.0,
         "feedforward": True,
         "features": "velocity",
