@@ -33,11 +33,11 @@ from planners.reference import ReferenceSample, SampledReference
 _BASIS = np.array([[1, 4, 1, 0], [-3, 0, 3, 0], [3, -6, 3, 0], [-1, 3, -3, 1]]) / 6.0
 _LIMIT_SAMPLES_PER_SEGMENT = 64
 _LIMIT_MARGIN = 1.001
-# The ramps (module docstring): samples per segment time for their limits and jerk (denser
-# than the plain check: a ramp's acceleration peaks within a fraction of a segment), the
+# The ramps (module docstring): samples per ramp for their limits and jerk (on top of the
+# plain check's: a ramp's acceleration peaks within a fraction of a segment), the
 # fixed-point steps fitting their length to the jerk, and the longest ramp in segments (the
 # two ramps meet in the middle at 3/4 of the knot range each).
-_RAMP_SAMPLES_PER_SEGMENT = 512
+_RAMP_SAMPLES = 512
 _RAMP_ITERATIONS = 4
 _RAMP_MAX = 0.75
 _RAMP_PEAK_JERK = 2.04  # peak of d/dx (r^2 + R r'), r = 2x - x^2, R its integral
@@ -101,15 +101,18 @@ class BSplineReference(SampledReference):
         ramp_s = _RAMP_PEAK_JERK * float(np.max(acc_ends)) / plain_s**2 / jerk_mps3
         for _ in range(_RAMP_ITERATIONS):
             self._ramp = min(ramp_s / self.segment_duration_s, _RAMP_MAX * self._n_seg)
-            tau = np.linspace(0.0, self._span(), self._n_seg * _RAMP_SAMPLES_PER_SEGMENT + 1)
+            span = self._span()
+            ramps = np.linspace(0.0, self._ramp, _RAMP_SAMPLES + 1)
+            whole = np.linspace(0.0, span, self._n_seg * _LIMIT_SAMPLES_PER_SEGMENT + 1)
+            tau = np.concatenate([whole, ramps, span - ramps])
             _, d1, d2 = self._warped_derivatives(tau)
             speed = np.max(np.linalg.norm(d1, axis=1))
             acc = np.max(np.linalg.norm(d2, axis=1))
             seg = max(speed / max_speed_mps, np.sqrt(acc / max_acc_mps2))
             self.segment_duration_s = max(plain_s, float(seg * _LIMIT_MARGIN))
-            jerk = np.linalg.norm(np.diff(d2, axis=0), axis=1) / np.diff(tau)
-            in_ramps = (tau[1:] <= self._ramp) | (tau[:-1] >= self._span() - self._ramp)
-            peak_mps3 = float(np.max(jerk[in_ramps])) / self.segment_duration_s**3
+            ramp_d2 = d2[whole.size :].reshape(2, -1, 3)  # start, end ramp
+            jerk = np.linalg.norm(np.diff(ramp_d2, axis=1), axis=2) / (ramps[1] - ramps[0])
+            peak_mps3 = float(np.max(jerk)) / self.segment_duration_s**3
             ramp_s = self._ramp * self.segment_duration_s * peak_mps3 / jerk_mps3
         self.ramp_s = self._ramp * self.segment_duration_s
         self.duration_s = self.segment_duration_s * self._span()
