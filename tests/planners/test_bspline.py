@@ -80,8 +80,6 @@ def test_no_ramp_is_the_plain_spline_bit_for_bit():
     a, b = plain.sample(t), explicit.sample(t)
     for field in ("pos_ned_m", "vel_ned_mps", "acc_ned_mps2"):
         np.testing.assert_array_equal(getattr(a, field), getattr(b, field))
-    knots = plain.segment_duration_s * np.arange(len(WAYPOINTS))
-    np.testing.assert_array_equal(plain.sample(knots[1:-1]).pos_ned_m.shape, (3, 3))
 
 
 def test_ramped_acceleration_rises_from_zero_with_bounded_jerk():
