@@ -14,8 +14,9 @@ time is reparametrised over a ramp at each end: the knot parameter's rate rises 
 cruise value as r(x) = 2x - x^2 over the ramp (x from 0 to 1), and falls symmetrically at the
 end. The path is unchanged (the same control points); velocity and acceleration start and end
 at 0 and are continuous, and the jerk is bounded (it steps where a ramp meets the cruise).
-The ramps' length is the one whose peak jerk is ``ramp_jerk_mps3`` (a few fixed-point steps;
-in the spline's own near-quadratic start the peak is about 2.04 |a_plain(0)| / ramp length).
+The ramps' length is the one whose peak jerk is ``ramp_jerk_mps3`` (four fixed-point steps,
+within about 1 %; in the spline's own near-quadratic start the peak is about
+2.04 |a_plain(0)| / ramp length, one length for both ends, fitted to the larger step).
 Between the ramps the reference is the plain one delayed by a third of a ramp: the segment time
 stays the plain one unless the warped timing needs more to keep the speed and acceleration
 limits (the warp's C'(u) u'' term adds up to 11 % to the acceleration within a ramp). Each
@@ -50,7 +51,7 @@ class BSplineReference(SampledReference):
         waypoints_ned_m: the waypoints, shape (M+1, 3) [m].
         control_points_ned_m: control points, shape (M+3, 3) [m].
         segment_duration_s: time per spline segment [s].
-        duration_s: total time, M * segment_duration_s [s].
+        duration_s: total time, M * segment_duration_s [s], plus 2/3 * ramp_s with ramps.
         yaw_rad: constant yaw of the reference [rad].
         ramp_jerk_mps3: the peak jerk of the ramps at each end [m/s^3] (module docstring);
             None: no ramps.
@@ -98,6 +99,8 @@ class BSplineReference(SampledReference):
         segment time so that the warped timing keeps the limits (never below the plain one)."""
         plain_s = self.segment_duration_s
         acc_ends = np.linalg.norm(self._param_derivatives(np.array([0.0, self._n_seg]))[2], axis=1)
+        if not np.max(acc_ends) > 0:
+            return  # no step in acceleration at either end: nothing to ramp
         ramp_s = _RAMP_PEAK_JERK * float(np.max(acc_ends)) / plain_s**2 / jerk_mps3
         for _ in range(_RAMP_ITERATIONS):
             self._ramp = min(ramp_s / self.segment_duration_s, _RAMP_MAX * self._n_seg)
