@@ -41,6 +41,10 @@ class TrajectorySpec:
         max_climb_m: largest altitude change per leg before scaling [m].
         min_altitude_m: lowest altitude above home (down = 0) any point of a trajectory
             flies at [m]; the start must be at or above it.
+        ramp_jerk_mps3: the peak jerk [m/s^3] of a jerk-limited start and end, the
+            acceleration rising from 0 instead of stepping (planners.bspline; PX4's
+            MPC_JERK_AUTO is 4 m/s^3); None (default): the plain spline, its acceleration
+            stepping at both ends. The path is the same either way.
     """
 
     length_range_m: tuple[float, float] = (40.0, 60.0)
@@ -51,6 +55,7 @@ class TrajectorySpec:
     max_turn_rad: float = 1.2
     max_climb_m: float = 0.5
     min_altitude_m: float = MIS_TAKEOFF_ALT_M
+    ramp_jerk_mps3: float | None = None
 
     def __post_init__(self) -> None:
         lo, hi = self.length_range_m
@@ -88,7 +93,14 @@ def generate_trajectories(
         waypoints = start + target / raw.length_m() * offsets
         if _lowest_altitude_m(waypoints) < spec.min_altitude_m:
             waypoints = _above_floor(waypoints, spec.min_altitude_m, target, spec)
-        out.append(BSplineReference(waypoints, spec.max_speed_mps, spec.max_acc_mps2))
+        out.append(
+            BSplineReference(
+                waypoints,
+                spec.max_speed_mps,
+                spec.max_acc_mps2,
+                ramp_jerk_mps3=spec.ramp_jerk_mps3,
+            )
+        )
     return out
 
 

@@ -22,7 +22,9 @@ class StudyConfig:
             vehicle_sim/presets/iris_study.toml).
         n_trajectories: random trajectories of [Kulathunga23]'s experiment.
         length_range_m: their length range [m]; max_speed_mps: their speed limit [m/s];
-            max_acc_mps2: their acceleration limit [m/s^2].
+            max_acc_mps2: their acceleration limit [m/s^2]; ramp_jerk_mps3: the peak jerk of
+            their jerk-limited start and end [m/s^3] (None: the plain spline, its acceleration
+            stepping at both ends; planners.trajectory_generator.TrajectorySpec).
         repeats: flights per trajectory and planner (nominal seeds 0.., augmented after them).
         selections: inducing-point selections compared at equal ``m``.
         m: inducing points per output.
@@ -70,6 +72,7 @@ class StudyConfig:
     length_range_m: tuple[float, float] = (40.0, 60.0)
     max_speed_mps: float = 1.5
     max_acc_mps2: float = 1.0
+    ramp_jerk_mps3: float | None = None
     repeats: int = 3
     selections: tuple[str, ...] = SELECTIONS
     m: int = 30

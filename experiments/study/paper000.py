@@ -70,6 +70,7 @@ def study_trajectories(config: StudyConfig) -> list[BSplineReference]:
         length_range_m=config.length_range_m,
         max_speed_mps=config.max_speed_mps,
         max_acc_mps2=config.max_acc_mps2,
+        ramp_jerk_mps3=config.ramp_jerk_mps3,
     )
     return generate_trajectories(config.n_trajectories, config.trajectory_seed, spec)
 

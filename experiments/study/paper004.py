@@ -38,6 +38,7 @@ def run_trials(config: StudyConfig, progress: Callable[[str], None]) -> TrialsRe
         length_range_m=config.length_range_m,
         max_speed_mps=config.max_speed_mps,
         max_acc_mps2=config.max_acc_mps2,
+        ramp_jerk_mps3=config.ramp_jerk_mps3,
     )
     seed = config.trajectory_seed + TRIAL_PATH_SEED_OFFSET
     reference = generate_trajectories(1, seed, spec)[0]

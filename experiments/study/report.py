@@ -60,7 +60,13 @@ def render_report(
         "## Paper 000: random trajectories, nominal vs augmented",
         "",
         f"{config.n_trajectories} trajectories ({config.length_range_m[0]:g}-"
-        f"{config.length_range_m[1]:g} m, {config.max_speed_mps:g} m/s), each flown "
+        f"{config.length_range_m[1]:g} m, {config.max_speed_mps:g} m/s"
+        + (
+            f", jerk-limited start and end at {config.ramp_jerk_mps3:g} m/s^3"
+            if config.ramp_jerk_mps3 is not None
+            else ""
+        )
+        + f"), each flown "
         f"{config.repeats}x nominal (seeds 0-{config.repeats - 1}); one residual model per "
         "inducing selection fitted on all nominal flights; each trajectory flown "
         f"{config.repeats}x augmented per selection on other seeds (held-out flights)"

@@ -13,6 +13,8 @@ def test_agile_raises_speeds_and_the_command_limit_and_keeps_the_rest():
     assert agile.regime == "agile" and agile.n_trajectories == 3
     assert agile.max_speed_mps > 3.0 and agile.nmpc.speed_limit_mps > agile.max_speed_mps
     assert agile.nmpc.period_s == base.nmpc.period_s
+    assert agile.ramp_jerk_mps3 == 4.0  # a jerk-limited start, PX4's MPC_JERK_AUTO
+    assert base.ramp_jerk_mps3 is None and with_regime(base, "wind_field").ramp_jerk_mps3 is None
 
 
 def test_wind_field_flies_the_wind_field_vehicle_with_position_features():

@@ -80,3 +80,12 @@ def test_no_reference_flies_below_the_floor_over_many_seeds():
                 lifted += 1
     assert lowest_margin >= -1e-9
     assert lifted > 20  # the floor was met often enough to test it
+
+
+def test_a_jerk_limited_start_keeps_the_paths_and_ramps_the_acceleration():
+    plain = generate_trajectories(2, seed=3)
+    ramped = generate_trajectories(2, seed=3, spec=TrajectorySpec(ramp_jerk_mps3=4.0))
+    for a, b in zip(plain, ramped, strict=True):
+        np.testing.assert_array_equal(a.waypoints_ned_m, b.waypoints_ned_m)
+        assert a.ramp_s == 0.0 and b.ramp_s > 0.0 and b.duration_s > a.duration_s
+        assert np.linalg.norm(b.sample(1e-6).acc_ned_mps2) < 1e-6
