@@ -4,7 +4,7 @@
           [--workers 2 | --scheduler tcp://HOST:8786] [--vehicle iris_study]
           [--learned-model first_order_lag|kinematic_4dof]
           [--features state_input|velocity|velocity_history] [--seed 0] [--compile] [--quick]
-          [--regime paper000|agile|wind_field] [--refit-rounds N] [--closed-loop-check]
+          [--regime paper000|agile|wind_field] [--refit-rounds N] [--no-closed-loop-check]
 
 ``--regime`` picks the task (experiments.study.regimes, physics written down there):
 [Kulathunga23]'s low-speed task (default), an agile task at up to 6 m/s, or repeated paths
@@ -25,6 +25,7 @@ px4_velocity_pi). Exit code 0 on success, 2 with a one-line reason on bad input.
 
 from __future__ import annotations
 
+import argparse
 import sys
 import time
 from dataclasses import replace
@@ -75,9 +76,10 @@ def parse_args(argv: list[str] | None) -> StudyConfig:
     )
     parser.add_argument(
         "--closed-loop-check",
-        action="store_true",
-        help="fly the model that would fly on the training seeds first; refuse it if it tracks "
-        "worse than the model it replaces (on in the agile and wind_field regimes)",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="fly the model that would fly on the training seeds first and refuse it if it "
+        "tracks worse there than the model it replaces (default: on)",
     )
     parser.add_argument("--seed", type=int, default=0, help="trajectory generator seed")
     parser.add_argument(
@@ -103,8 +105,8 @@ def parse_args(argv: list[str] | None) -> StudyConfig:
             config = replace(config, features=args.features)
         if args.refit_rounds is not None:
             config = replace(config, refit_rounds=args.refit_rounds)
-        if args.closed_loop_check:
-            config = replace(config, closed_loop_check=True)
+        if not args.closed_loop_check:
+            config = replace(config, closed_loop_check=False)
         sizes = {field: getattr(args, opt) for opt, field in _SIZE_OPTIONS.items()}
         given = {field: value for field, value in sizes.items() if value is not None}
         config = replace(config, **given)  # after the regime: an explicit --m wins over its m

@@ -7,8 +7,9 @@ augmented flights are held out from the model's training data (and fly other gus
 With the default learned model (first_order_lag, time constants identified from the nominal
 flights, then the GP), an ablation flies the identified lag alone (no GP) on the augmented
 seeds too, so the report separates what the identified structure and the GP each bring.
-With ``closed_loop_check``, the model that would fly is first flown on the training seeds and
-refused if it tracks worse there than the model it replaces (experiments.study.closed_loop).
+With ``closed_loop_check`` (the default), the model that would fly is first flown on the
+training seeds and refused if it tracks worse there than the model it replaces
+(experiments.study.closed_loop).
 """
 
 from __future__ import annotations

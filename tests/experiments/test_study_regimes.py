@@ -29,3 +29,15 @@ def test_wind_field_flies_the_wind_field_vehicle_with_position_features():
 def test_an_unknown_regime_is_refused_with_the_valid_names():
     with pytest.raises(ValueError, match=", ".join(REGIMES)):
         with_regime(StudyConfig(), "fast")
+
+
+@pytest.mark.parametrize("regime", list(REGIMES))
+def test_every_regime_checks_its_learned_model_in_closed_loop_unless_told_not_to(regime, tmp_path):
+    """On by default (the open-loop check alone passed a GP that flew worse than nominal on
+    JSBSim's F450); `--no-closed-loop-check` is the one way off."""
+    from scripts.study import parse_args
+
+    out = ["--out", str(tmp_path), "--regime", regime]
+    assert with_regime(StudyConfig(), regime).closed_loop_check
+    assert parse_args(out).closed_loop_check
+    assert not parse_args([*out, "--no-closed-loop-check"]).closed_loop_check
