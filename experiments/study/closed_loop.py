@@ -59,7 +59,7 @@ class TrackingComparison:
         return (
             f"{self.candidate} {verdict} {self.incumbent} in closed loop on the training seeds: "
             f"tracking RMSE {self.candidate_rmse_m:.4f} m vs {self.incumbent_rmse_m:.4f} m "
-            f"({self.n_flights} flights each)"
+            f"({self.n_flights} flight{'s' if self.n_flights != 1 else ''} each)"
         )
 
     def to_dict(self) -> dict[str, object]:

@@ -3,9 +3,17 @@
 Trial 1 flies the nominal NMPC; after every trial the residual model is refitted on all trials
 so far (the augmented ones too, so the model covers where the augmented planner flies) and the
 next trial flies augmented with it (a new seed each trial), provided it predicts the held-out
-trials better over the NMPC horizon than the model it would replace (gp.prediction_check);
-otherwise the previous model flies again. The tracking error
-per trial shows whether experience pays off, as in [Ostafew16], Fig. 10.
+trials better over the NMPC horizon than the model it would replace (gp.prediction_check)
+and, with ``closed_loop_check`` (the default), tracks no worse in closed loop on the trial
+just flown: it is flown once more on that trial's seed and compared with that trial's flight
+(experiments.study.closed_loop; lockstep, so the same gusts: a difference is the model's).
+Otherwise the previous model flies again. The check's flight is not a trial and teaches the
+model nothing. The tracking error per trial shows whether experience pays off, as in
+[Ostafew16], Fig. 10.
+
+Why the closed-loop check: on the default study's path the refit after trial 5 passed the
+open-loop check and flew trial 6 at 0.021 m where trials 2-5, all flying the fit after trial
+1, flew 0.009-0.014 m (BENCHMARKS.md, session 12).
 """
 
 from __future__ import annotations
@@ -13,9 +21,11 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from experiments.study.closed_loop import compare_tracking
 from experiments.study.config import StudyConfig
 from experiments.study.fitting import fit_residual
 from experiments.study.jobs import FlightJob, FlightSummary, run_flight_job
+from gp.model_io import ResidualModel
 from gp.prediction_check import Predictor, refusal
 from planners.bspline import BSplineReference
 from planners.trajectory_generator import TrajectorySpec, generate_trajectories
@@ -25,11 +35,19 @@ TRIAL_PATH_SEED_OFFSET = 1000  # the repeated path is not one of [Kulathunga23]'
 
 @dataclass(frozen=True, eq=False)
 class TrialsResult:
-    """The repeated path and one flight per trial (trial 1 nominal)."""
+    """The repeated path and one flight per trial (trial 1 nominal).
+
+    Attributes:
+        models: per trial, the name of the model it flew ("nominal", "fit after trial k").
+        checks: per trial after the first, one line: why its model flies (the closed-loop
+            comparison, or which check refused the newer fit).
+    """
 
     reference: BSplineReference
     selection: str
     trials: list[FlightSummary]
+    models: list[str]
+    checks: list[str]
 
 
 def run_trials(config: StudyConfig, progress: Callable[[str], None]) -> TrialsResult:
@@ -44,38 +62,66 @@ def run_trials(config: StudyConfig, progress: Callable[[str], None]) -> TrialsRe
     reference = generate_trajectories(1, seed, spec)[0]
     selection = config.selections[0]
     trials: list[FlightSummary] = []
-    model = None
+    model, name = None, NOMINAL_NAME
+    models: list[str] = []
+    checks: list[str] = []
     for trial in range(1, config.n_trials + 1):
-        planner = "nominal" if model is None else selection
-        job = FlightJob(
-            0,
-            reference,
-            planner,
-            trial,
-            config.vehicle,
-            config.nmpc,
-            model,
-            compile_functions=model is None,
-        )
-        summary = run_flight_job(job)
+        summary = run_flight_job(_trial_job(config, reference, selection, trial, model))
         trials.append(summary)
+        models.append(name)
         progress(
-            f"trial {trial}/{config.n_trials} ({planner}): tracking "
+            f"trial {trial}/{config.n_trials} ({name}): tracking "
             f"{summary.tracking_rmse_m:.3f} m, residual {summary.residual_rmse_mps:.4f} m/s"
         )
-        if trial < config.n_trials:
-            fit = fit_residual(
-                [t.log for t in trials],
-                selection,
-                config.nmpc.period_s,
-                learned_model=config.learned_model,
-                features=config.features,
-                m=config.m,
-                restarts=config.gp_restarts,
-                incumbent=None if model is None else Predictor.as_flown(model),
-            )
-            if fit.may_fly:
-                model = fit.model
+        if trial == config.n_trials:
+            break
+        fit = fit_residual(
+            [t.log for t in trials],
+            selection,
+            config.nmpc.period_s,
+            learned_model=config.learned_model,
+            features=config.features,
+            m=config.m,
+            restarts=config.gp_restarts,
+            incumbent=None if model is None else Predictor.as_flown(model),
+        )
+        candidate = f"fit after trial {trial}"
+        if not fit.may_fly:
+            check = f"{candidate}: {refusal(fit.model)}; {name} flies again"
+        elif not config.closed_loop_check:
+            check, model, name = f"{candidate} flies (no closed-loop check)", fit.model, candidate
+        else:
+            rehearsal = run_flight_job(_trial_job(config, reference, selection, trial, fit.model))
+            comparison = compare_tracking(candidate, [rehearsal], name, [summary])
+            check = comparison.describe()
+            if comparison.passed:
+                model, name = fit.model, candidate
             else:
-                progress(f"trial {trial + 1}: {refusal(fit.model)}; keeping the previous model")
-    return TrialsResult(reference, selection, trials)
+                check += f"; {name} flies again"
+        checks.append(check)
+        progress(f"trial {trial + 1}: {check}")
+    return TrialsResult(reference, selection, trials, models, checks)
+
+
+NOMINAL_NAME = "nominal"
+
+
+def _trial_job(
+    config: StudyConfig,
+    reference: BSplineReference,
+    selection: str,
+    seed: int,
+    model: ResidualModel | None,
+) -> FlightJob:
+    """One flight of the repeated path on ``seed``: nominal without ``model``, else augmented."""
+    planner = NOMINAL_NAME if model is None else selection
+    return FlightJob(
+        0,
+        reference,
+        planner,
+        seed,
+        config.vehicle,
+        config.nmpc,
+        model,
+        compile_functions=model is None,
+    )

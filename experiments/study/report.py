@@ -106,13 +106,15 @@ def render_report(
         "## Paper 004: trial after trial on one path",
         "",
         f"Trial 1 nominal; after each trial the `{trials.selection}` model is refitted on all "
-        "trials so far and flies the next trial (a new seed each time).",
+        "trials so far and flies the next trial (a new seed each time) if it passes the "
+        "checks (before each trial: why its model flies).",
         "",
-        "| trial | planner | tracking RMSE [m] | residual RMSE [m/s] |",
+        "| trial | model | tracking RMSE [m] | residual RMSE [m/s] |",
         "|---|---|---|---|",
     ]
-    for k, t in enumerate(trials.trials, start=1):
-        lines.append(f"| {k} | {t.planner} | {t.tracking_rmse_m:.4f} | {t.residual_rmse_mps:.4f} |")
+    for k, (t, model) in enumerate(zip(trials.trials, trials.models, strict=True), start=1):
+        lines.append(f"| {k} | {model} | {t.tracking_rmse_m:.4f} | {t.residual_rmse_mps:.4f} |")
+    lines += ["", *[f"- before trial {k}: {c}" for k, c in enumerate(trials.checks, start=2)]]
     lines += ["", *[f"![{p}]({p})" for p in images["trials"]], ""]
     return "\n".join(lines)
 

@@ -76,6 +76,7 @@ def test_quick_study_runs_end_to_end_and_writes_report_and_plots(tmp_path, capsy
     assert "identified from the nominal flights" in report
     assert "structure_model = first_order_lag" in stdout
     assert "## Paper 004" in report
+    _trial_models_follow_their_checks(report, n_trials=3)
     pngs = {p.name for p in out.glob("*.png")}
     assert {"paths.png", "trials.png", "gp_low_speed_residual_n.png"} <= pngs
     for png in pngs:
@@ -143,3 +144,21 @@ def test_agile_regime_leads_the_input_and_learns_velocity_from_the_structure():
     assert agile.nmpc.speed_limit_mps == 8.0
     assert (agile.features, agile.learn_from_structure) == ("velocity", True)
     assert not with_regime(base, "wind_field").nmpc.feedforward
+
+
+def _trial_models_follow_their_checks(report: str, n_trials: int) -> None:
+    """Paper 004's table in the report: each trial after the first flies the newest fit when
+    the line before it says so (it tracked no worse in closed loop on the trial just flown),
+    else the model the trial before flew."""
+    rows = [line.split(" | ") for line in report.splitlines() if line.startswith("| ")]
+    models = [r[1] for r in rows if r[0].strip("| ").isdigit() and len(r) == 4]
+    checks = [line for line in report.splitlines() if line.startswith("- before trial ")]
+    assert models[0] == "nominal" and len(models) == n_trials and len(checks) == n_trials - 1
+    for k, check in enumerate(checks, start=1):
+        candidate = f"fit after trial {k}"
+        if "tracks no worse than" in check:
+            assert check.startswith(f"- before trial {k + 1}: {candidate} tracks no worse than")
+            assert models[k] == candidate
+        else:
+            assert "refusing the learned model" in check or "tracks WORSE than" in check, check
+            assert check.endswith(f"; {models[k - 1]} flies again") and models[k] == models[k - 1]
