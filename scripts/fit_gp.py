@@ -39,11 +39,9 @@ import time
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-import numpy as np
-
 from flightlog.atomic_output import OutputError, check_writable_file
 from flightlog.reader import read_log, require_distinct, require_modes, require_rates
-from flightlog.schema import FlightLog, FlightLogError
+from flightlog.schema import FlightLogError
 from flightlog.ulog import damage_note
 from flightlog.vehicle_identity import mixed_vehicle_fields
 from gp.errors import DatasetError, GPInputError, ModelFileError
@@ -53,6 +51,7 @@ from gp.lag_identification import TAU_BOUNDS_S
 from gp.model_io import model_path, save_model
 from gp.plots import plot_residuals
 from gp.prediction_check import refusal
+from gp.residual_interval import residual_steps
 from gp.training import TrainingConfig, train_residual_model
 from planners.nominal_models import MODELS
 from scripts.one_line_parser import OneLineParser, output_path
@@ -165,23 +164,6 @@ def parse_args(argv: list[str] | None) -> FitGpConfig:
     )
 
 
-def residual_steps(logs: list[FlightLog], interval_s: float) -> int:
-    """The whole number of log steps (the logs' median step) that makes ``interval_s`` [s].
-
-    Raises:
-        GPInputError: the interval is not within a fifth of a step of a whole number (>= 1)
-            of steps (one line naming both and the fix).
-    """
-    step_s = float(np.median(np.concatenate([np.diff(log["t_s"]) for log in logs])))
-    steps = round(interval_s / step_s)
-    if steps < 1 or abs(steps * step_s - interval_s) > 0.2 * step_s:
-        raise GPInputError(
-            f"--residual-interval-s {interval_s:g}: not a whole number of the logs' "
-            f"{step_s:.4g} s steps; give a multiple of it (the NMPC's interval is 0.1 s)"
-        )
-    return steps
-
-
 EXIT_DOUBTFUL = 3
 # Held-out RMSE this much above nominal counts as worse (ties are within the split's noise).
 WORSE_MARGIN = 0.02
@@ -245,7 +227,10 @@ def main(argv: list[str] | None = None) -> int:
         check_writable_file(model_path(config.out))  # found now, not after the fit
         training = config.training
         if config.residual_interval_s is not None:
-            steps = residual_steps(logs, config.residual_interval_s)
+            try:
+                steps = residual_steps(logs, config.residual_interval_s)
+            except GPInputError as exc:
+                raise GPInputError(f"--residual-interval-s: {exc}") from None
             progress(f"residual over {steps} log steps ({config.residual_interval_s:g} s)")
             training = replace(training, residual_steps=steps)
         result = train_residual_model(logs, training, progress)
