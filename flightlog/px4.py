@@ -34,9 +34,11 @@ POSITION_CONTROLLED_NAV_STATES_V1_15 = POSITION_CONTROLLED_NAV_STATES | {6}
 
 
 def firmware_tuple(firmware: str | None) -> tuple[int, int, int] | None:
-    """'v1.15.1' -> (1, 15, 1); None for None or an unreadable string."""
+    """'v1.15.1' or 'v1.15.1-rc' (firmware_version) -> (1, 15, 1), the release type left out;
+    None for None or an unreadable string."""
+    number = str(firmware).lstrip("v").partition("-")[0]
     try:
-        major, minor, patch = (int(x) for x in str(firmware).lstrip("v").split("."))
+        major, minor, patch = (int(x) for x in number.split("."))
     except ValueError:
         return None
     return major, minor, patch
@@ -48,7 +50,7 @@ def _v1_15_or_later(firmware: str | None) -> bool:
 
 
 def nav_state_names(firmware: str | None = None) -> dict[int, str]:
-    """nav_state -> mode name for ``firmware`` ('vA.B.C'; None: the pre-v1.15 table)."""
+    """nav_state -> mode name for ``firmware`` ('vA.B.C[-type]'; None: the pre-v1.15 table)."""
     return NAV_STATE_NAMES_V1_15 if _v1_15_or_later(firmware) else NAV_STATE_NAMES
 
 
@@ -96,9 +98,26 @@ def motor_thrust_fraction(command: np.ndarray, thr_mdl_fac: float) -> np.ndarray
     return thr_mdl_fac * u**2 + (1.0 - thr_mdl_fac) * u
 
 
+# ver_sw_release's type byte TT: PX4's FIRMWARE_TYPE (src/lib/version/version.c: dev 0, alpha
+# 64, beta 128, rc 192, release 255), MAVLink's FIRMWARE_VERSION_TYPE, whose values are each
+# type's first (65 would be a second alpha), so read as ranges, as pyulog's get_version_info
+# does. PX4 sets it from characters of its git tag (version_tag_to_number): a 't' anywhere
+# makes beta, so a build of a modified tree ('v1.15.0-dirty') logs as beta too.
+# Named as QGroundControl names them (Vehicle::firmwareVersionTypeString: dev, alpha, beta, rc;
+# nothing for a release), after a dash as PX4's tags carry them ('v1.14.0-beta1', 'v1.14.0-rc2':
+# src/lib/version/px_update_git_header.py), without the number the byte does not keep.
+FIRMWARE_TYPES = ((192, "rc"), (128, "beta"), (64, "alpha"), (0, "dev"))
+FIRMWARE_TYPE_RELEASE = 255
+
+
 def firmware_version(ver_sw_release: int | None) -> str | None:
-    """PX4's ver_sw_release (0xAABBCCTT) -> 'vAA.BB.CC' (None if absent or 0)."""
+    """PX4's ver_sw_release (uint32 0xAABBCCTT) -> 'vA.B.C' for a release, 'vA.B.C-<type>'
+    otherwise (type dev, alpha, beta or rc: FIRMWARE_TYPES); None if absent or 0."""
     if not ver_sw_release:
         return None
     v = int(ver_sw_release)
-    return f"v{(v >> 24) & 0xFF}.{(v >> 16) & 0xFF}.{(v >> 8) & 0xFF}"
+    number = f"v{(v >> 24) & 0xFF}.{(v >> 16) & 0xFF}.{(v >> 8) & 0xFF}"
+    kind = v & 0xFF
+    if kind == FIRMWARE_TYPE_RELEASE:
+        return number
+    return f"{number}-{next(name for first, name in FIRMWARE_TYPES if kind >= first)}"

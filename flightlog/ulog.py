@@ -225,7 +225,8 @@ def flight_log_from_topics(
         topics: first instance of each topic.
         where: file name for error messages.
         params: PX4 parameters (MAV_TYPE, THR_MDL_FAC, PWM_MIN/MAX, ...); may be empty.
-        firmware: 'vA.B.C' (nav_state values differ by version; None: before v1.15).
+        firmware: 'vA.B.C[-type]' (px4.firmware_version; nav_state values differ by version;
+            None: before v1.15).
     """
     params = dict(params or {})
     vehicle = _vehicle(topics, params, where)

@@ -24,7 +24,9 @@ Logs of different vehicles or configs (their metadata disagree on the simulator 
 mass, PX4 airframe, board or velocity-loop gains: flightlog.vehicle_identity) are pooled as
 given, with a one-line warning naming the logs and the field.
 A GP that explains nothing but noise on some axis (signal variance under 1 % of the noise
-variance: it predicts about 0 there; gp.noise_optimum) is said in a one-line warning too.
+variance: it predicts about 0 there; gp.noise_optimum) is said in a one-line warning too, and
+so is training data (the ``--mode`` rows) spanning less than a second of flight per inducing
+point: fly or log more, or lower ``--m``.
 
 Writes MODEL.npz (one self-describing file) and MODEL_residual_{n,e,d}.png, prints the
 held-out nominal and augmented RMSE per axis ([Kulathunga23], Table 2) on stdout; progress goes
@@ -43,9 +45,10 @@ import numpy as np
 
 from flightlog.atomic_output import OutputError, check_writable_file
 from flightlog.reader import read_log, require_distinct, require_modes, require_rates
-from flightlog.schema import FlightLog, FlightLogError
+from flightlog.schema import FlightLogError
 from flightlog.ulog import damage_note
 from flightlog.vehicle_identity import mixed_vehicle_fields
+from gp.datasets import ResidualDataset
 from gp.errors import DatasetError, GPInputError, ModelFileError
 from gp.features import FEATURE_SETS
 from gp.inducing import STRATEGIES
@@ -53,6 +56,7 @@ from gp.lag_identification import TAU_BOUNDS_S
 from gp.model_io import model_path, save_model
 from gp.plots import plot_residuals
 from gp.prediction_check import refusal
+from gp.residual_interval import residual_steps
 from gp.training import TrainingConfig, train_residual_model
 from planners.nominal_models import MODELS
 from scripts.one_line_parser import OneLineParser, output_path
@@ -165,21 +169,30 @@ def parse_args(argv: list[str] | None) -> FitGpConfig:
     )
 
 
-def residual_steps(logs: list[FlightLog], interval_s: float) -> int:
-    """The whole number of log steps (the logs' median step) that makes ``interval_s`` [s].
+# The least training data a fit is quiet about, in seconds of flight per inducing point. Time,
+# not rows: rows logged within the velocity loop's time constant of each other (fit-gp
+# --nominal first_order_lag identifies it: 0.69 s on the simulated Iris's square mission) see about
+# the same velocity, so a log at five times the rate has five times the rows and no more to
+# learn from. A second of flight gives a sample or two of the residual that the last did not;
+# with fewer than one per inducing point, some points sit where no data pins them down and the
+# GP learns the few manoeuvres it saw. 30 s at the default --m 30.
+MIN_FLIGHT_S_PER_INDUCING = 1.0
 
-    Raises:
-        GPInputError: the interval is not within a fifth of a step of a whole number (>= 1)
-            of steps (one line naming both and the fix).
-    """
-    step_s = float(np.median(np.concatenate([np.diff(log["t_s"]) for log in logs])))
-    steps = round(interval_s / step_s)
-    if steps < 1 or abs(steps * step_s - interval_s) > 0.2 * step_s:
-        raise GPInputError(
-            f"--residual-interval-s {interval_s:g}: not a whole number of the logs' "
-            f"{step_s:.4g} s steps; give a multiple of it (the NMPC's interval is 0.1 s)"
-        )
-    return steps
+
+def too_little_data(train: ResidualDataset, m: int, modes: tuple[str, ...] | None) -> str | None:
+    """One line when the training rows (those of ``modes``; None: all) span less flight than
+    MIN_FLIGHT_S_PER_INDUCING [s] per inducing point (``m``), else None."""
+    flown_s = float(np.sum(train.dt_s)) / train.features.residual_steps  # each row's own step
+    if flown_s >= MIN_FLIGHT_S_PER_INDUCING * m:
+        return None
+    where = f" in {'/'.join(modes)}" if modes else ""
+    most = int(flown_s / MIN_FLIGHT_S_PER_INDUCING)
+    lower = f"lower --m (to {most} or fewer)" if most >= 1 else "lower --m"
+    return (
+        f"{flown_s:.1f} s of flight{where} to train on ({train.n_rows} rows) for {m} inducing "
+        f"points, under {MIN_FLIGHT_S_PER_INDUCING:g} s per point: too little to learn the "
+        f"residual from; fly/log more, or {lower}"
+    )
 
 
 EXIT_DOUBTFUL = 3
@@ -245,10 +258,16 @@ def main(argv: list[str] | None = None) -> int:
         check_writable_file(model_path(config.out))  # found now, not after the fit
         training = config.training
         if config.residual_interval_s is not None:
-            steps = residual_steps(logs, config.residual_interval_s)
+            try:
+                steps = residual_steps(logs, config.residual_interval_s)
+            except GPInputError as exc:
+                raise GPInputError(f"--residual-interval-s: {exc}") from None
             progress(f"residual over {steps} log steps ({config.residual_interval_s:g} s)")
             training = replace(training, residual_steps=steps)
         result = train_residual_model(logs, training, progress)
+        little = too_little_data(result.train, training.m, training.modes)
+        if little:
+            print(f"fit-gp: warning: {little}", file=sys.stderr)
         if result.all_noise is not None:
             print(f"fit-gp: warning: {result.all_noise}", file=sys.stderr)
         if not result.may_fly:

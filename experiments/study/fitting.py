@@ -8,6 +8,7 @@ import numpy as np
 
 from flightlog.schema import FlightLog
 from gp.prediction_check import Predictor
+from gp.residual_interval import residual_steps
 from gp.training import TrainingConfig, TrainingResult, train_residual_model
 from planners.nominal_models import make_model
 
@@ -42,6 +43,10 @@ def fit_residual(
     ``structure_params`` fixes the learned model's parameters (e.g. the time constants an
     earlier fit identified) instead of identifying them from ``logs``.
 
+    A learned model that carries the velocity measures its residual over ``planner_dt_s`` [s],
+    a whole number of the logs' steps (gp.residual_interval: GPInputError if it is not one);
+    with None, or under the kinematic model, over one step.
+
     With ``check_horizon_s`` a quarter of the logs (or of each log) is held out and the model's
     position prediction over that horizon is checked against ``incumbent`` (default: the
     nominal kinematic model); ``result.may_fly`` is the verdict (gp.prediction_check).
@@ -51,8 +56,7 @@ def fit_residual(
     regular = [regular_rows(log, period_s) for log in logs]
     steps = 1
     if planner_dt_s is not None and make_model(learned_model).carries_velocity:
-        log_step_s = float(np.median(np.concatenate([np.diff(log["t_s"]) for log in regular])))
-        steps = max(1, int(round(planner_dt_s / log_step_s)))
+        steps = residual_steps(regular, planner_dt_s)
     config = TrainingConfig(
         features=features,
         nominal=learned_model,

@@ -31,7 +31,7 @@ def test_info_names_vehicle_firmware_rates_modes_validity_and_uses(capsys):
     out = capsys.readouterr().out
     for line in (
         "vehicle: quadrotor",
-        "firmware: PX4 v1.15.0 on PX4_SITL",
+        "firmware: PX4 v1.15.0-dev on PX4_SITL",
         "rate local_position: 10 Hz",
         "velocity command from: vehicle_local_position_setpoint",
         "mode TAKEOFF: 0.0 s to",
@@ -47,8 +47,8 @@ def test_info_names_vehicle_firmware_rates_modes_validity_and_uses(capsys):
     "name, lines",
     [
         ("vtol_manual_v1_11.ulg",
-         ["vehicle: VTOL standard", "firmware: PX4 v1.11.2", "mode MANUAL: 0.0 s to 6.5 s"]),
-        ("quad_manual_v1_6.ulg", ["firmware: PX4 v1.6.0", "mode MANUAL: 0.0 s"]),
+         ["vehicle: VTOL standard", "firmware: PX4 v1.11.2-dev on", "mode MANUAL: 0.0 s to 6.5 s"]),
+        ("quad_manual_v1_6.ulg", ["firmware: PX4 v1.6.0-dev on", "mode MANUAL: 0.0 s"]),
     ],
 )  # fmt: skip
 def test_info_describes_a_ulog_no_command_can_use_and_says_why(name, lines, capsys):

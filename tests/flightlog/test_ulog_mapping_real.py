@@ -65,7 +65,7 @@ def test_modes_armed_landed_validity_thrust_and_rates():
     assert meta["rates_hz"]["local_position"] == 10.0
     assert meta["rates_hz"]["velocity_command"] == 10.0
     assert meta["vehicle"] == {"mav_type": 2, "type": "quadrotor", "is_vtol": False}
-    assert meta["firmware"] == "v1.15.0"
+    assert meta["firmware"] == "v1.15.0-dev"  # SITL: a development build
     assert meta["px4_params"]["MPC_THR_HOVER"] == 0.5
 
 

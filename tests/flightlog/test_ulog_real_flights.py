@@ -23,7 +23,7 @@ FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "ulog"
 FLIGHTS = {  # file: (firmware, modes kept)
     "quad_posctl_v1_15.ulg": ("v1.15.1", {"POSCTL"}),
     "quad_offboard_v1_16.ulg": ("v1.16.0", {"OFFBOARD"}),  # its POSCTL is on the ground
-    "quad_mission_rtl_v1_9_esc.ulg": ("v1.9.0", {"MISSION", "RTL"}),
+    "quad_mission_rtl_v1_9_esc.ulg": ("v1.9.0-beta", {"MISSION", "RTL"}),
 }
 
 

@@ -14,12 +14,12 @@ FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "ulog"
 # file: (version, fields present, fields absent), as "topic.field" or "topic" (the topic itself)
 LAYOUTS = {
     "quad_manual_v1_6.ulg": (
-        "v1.6.0",
+        "v1.6.0-dev",
         {"vehicle_status.is_rotary_wing", "actuator_controls_0.control[3]"},
         {"vehicle_status.vehicle_type", "vehicle_angular_velocity", "vehicle_thrust_setpoint"},
     ),
     "quad_mission_rtl_v1_9_esc.ulg": (
-        "v1.9.0",
+        "v1.9.0-beta",
         {
             "vehicle_local_position_setpoint.vx", "vehicle_local_position_setpoint.acc_x",
             "trajectory_setpoint.vx", "vehicle_status.is_rotary_wing",
@@ -31,7 +31,7 @@ LAYOUTS = {
         },
     ),
     "vtol_manual_v1_11.ulg": (
-        "v1.11.2",
+        "v1.11.2-dev",
         {"vehicle_status.vehicle_type", "vehicle_angular_velocity.xyz[0]", "actuator_controls_0"},
         {"vehicle_status.is_rotary_wing", "vehicle_local_position.dead_reckoning",
          "vehicle_thrust_setpoint", "actuator_motors"},

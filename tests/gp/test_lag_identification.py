@@ -119,6 +119,7 @@ def test_study_fit_keeps_the_structure_it_is_given(seed):
         logs, "random", 0.02, m=10, restarts=1, check_horizon_s=None, structure_params=structure
     )
     assert fit.model.features.nominal_params == structure
+    assert fit.model.features.residual_steps == 5  # the NMPC's 0.1 s in the logs' 0.02 s steps
     identified = fit_residual(logs, "random", 0.02, m=10, restarts=1, check_horizon_s=None)
     assert dict(identified.model.features.nominal_params)["tau_s"] == pytest.approx(
         logged[0], rel=0.05
