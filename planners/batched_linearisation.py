@@ -54,7 +54,8 @@ class BatchedLinearisation:
         self._nx, self._nu = model.nx, model.nu
         self._n, self._n_o = cfg.horizon_steps, cfg.n_obstacles
         self._dt = cfg.dt_s
-        self._q, self._r = f.q_diag, f.r_diag
+        self._q_all, self._r_all = np.tile(f.q_diag, self._n), np.tile(f.r_diag, self._n)
+        self._r_diag = np.diag(self._r_all)
         self._u_min, self._u_max = np.tile(f.u_min, self._n), np.tile(f.u_max, self._n)
         self._xrows, self._x_lo, self._x_hi = np.asarray(xrows, dtype=int), x_lo, x_hi
         self._pos_index = [
@@ -130,21 +131,22 @@ class BatchedLinearisation:
         i += nu * n
         slots = p[i:].reshape(n_o * n, OBSTACLE_SLOT_SIZE)  # row j * N + k - 1: node k, slot j
         x_next, a, b = self.step_jacobians(xs[:n], us)
-        c = np.empty((n + 1, nx))  # c_k: the gap carried forward, x_lin_k = x_k + c_k
-        c[0] = x_now - xs[0]
-        sens = np.zeros((n * nx, n * nu))
-        row = np.zeros((nx, n * nu))
+        # Node k's [c_k | S_k] (nx, 1 + N nu): c_k the gap carried forward (x_lin_k = x_k + c_k),
+        # S_k = d x_lin_k / d u; [c, S]_{k+1} = A_k [c, S]_k + [x_next_k - x_{k+1} | B_k in block k]
+        m = np.zeros((n + 1, nx, 1 + n * nu))
+        m[0, :, 0] = x_now - xs[0]
+        m[1:, :, 0] = x_next - xs[1:]
+        nodes = np.arange(n)
+        m[1:, :, 1:].reshape(n, nx, n, nu)[nodes, :, nodes, :] = b
         for k in range(n):
-            c[k + 1] = x_next[k] - xs[k + 1] + a[k] @ c[k]
-            row = a[k] @ row
-            row[:, k * nu : (k + 1) * nu] = b[k]
-            sens[k * nx : (k + 1) * nx] = row
+            m[k + 1] += a[k] @ m[k]
+        c = m[:, :, 0]
+        sens = m[1:, :, 1:].reshape(n * nx, n * nu)
         x_lin = (xs[1:] + c[1:]).ravel()
-        q = np.tile(self._q, n)
         err = x_lin - x_ref[1:].ravel()
-        qs = q[:, None] * sens
-        hess = sens.T @ qs + np.diag(np.tile(self._r, n))
-        grad = qs.T @ err + (np.tile(self._r, n) * (us - u_ref).ravel())
+        qs = self._q_all[:, None] * sens
+        hess = sens.T @ qs + self._r_diag
+        grad = qs.T @ err + (self._r_all * (us - u_ref).ravel())
         u = us.ravel()
         g_h, lba_h = self._obstacle_rows(xs[1:], c[1:], slots)
         return (
@@ -173,17 +175,16 @@ class BatchedLinearisation:
             return g_h, lba_h
         pos = np.zeros((n, 3))
         pos[:, self._pos_axes] = states[:, self._pos_index]
-        node_pos = np.tile(pos, (n_o, 1))  # row j * N + k - 1
-        diff = node_pos - slots[:, 0:3]
-        root = np.sqrt(np.sum(slots[:, 3:6] * diff**2, axis=1) + _DIST_EPS_M2)
-        clearance = root - slots[:, 6]
-        grad_pos = slots[:, 3:6] * diff / root[:, None]  # (N N_o, 3)
-        grad_x = np.zeros((n * n_o, nx))
-        grad_x[:, self._pos_index] = grad_pos[:, self._pos_axes]
-        nodes = np.tile(np.arange(n), n_o)
-        for col in range(nx):
-            g_h[np.arange(n * n_o), nodes * nx + col] = grad_x[:, col]
-        lba_h[:-1] = -clearance - np.sum(grad_x * np.tile(gaps, (n_o, 1)), axis=1)
+        by_node = slots.reshape(n_o, n, OBSTACLE_SLOT_SIZE)  # [j, k - 1]: node k, slot j
+        diff = pos - by_node[:, :, 0:3]
+        root = np.sqrt(np.sum(by_node[:, :, 3:6] * diff**2, axis=2) + _DIST_EPS_M2)
+        clearance = root - by_node[:, :, 6]
+        grad_pos = by_node[:, :, 3:6] * diff / root[:, :, None]  # (N_o, N, 3)
+        grad_x = np.zeros((n_o, n, nx))
+        grad_x[:, :, self._pos_index] = grad_pos[:, :, self._pos_axes]
+        nodes = np.arange(n)
+        g_h[:-1].reshape(n_o, n, n, nx)[:, nodes, nodes, :] = grad_x  # node k's own block
+        lba_h[:-1] = (-clearance - np.sum(grad_x * gaps, axis=2)).ravel()
         return g_h, lba_h
 
 
