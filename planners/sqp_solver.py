@@ -60,7 +60,7 @@ class _Linearisation(NamedTuple):
 
 _SPARSE_OUTPUTS = ("g_h",)  # only a few obstacle rows are picked per iteration: keep it sparse
 LINEARISATIONS: tuple[str, ...] = ("batched", "symbolic")
-_THREADPOOLS: list[ThreadpoolController] = []  # built at the first solve (it scans the libraries)
+_BLAS: list[list] = []  # the BLAS libraries' controllers, found at the first solve (a scan)
 
 
 @dataclass(frozen=True)
@@ -241,12 +241,19 @@ class GaussNewtonSqp:
         the iterate it has (each iteration's QP is feasible; the planner checks the plan)
         instead of overrunning the budget by its last iteration.
         """
-        if not _THREADPOOLS:
-            _THREADPOOLS.append(ThreadpoolController())
+        if not _BLAS:
+            _BLAS.append(ThreadpoolController().select(user_api="blas").lib_controllers)
         # The products are small: BLAS threads would only wait for a core (on a loaded
         # computer, 3x the solve's CPU time, measured); one thread, only inside the solve.
-        with _THREADPOOLS[0].limit(limits=1, user_api="blas"):
+        # (Set on the libraries directly: threadpoolctl's limit() costs 45 us a call.)
+        threaded = [(lib, n) for lib in _BLAS[0] if (n := lib.num_threads) != 1]
+        for lib, _ in threaded:
+            lib.set_num_threads(1)
+        try:
             return self._solve(w0, p, time_budget_s, cold_start)
+        finally:
+            for lib, n in threaded:
+                lib.set_num_threads(n)
 
     def _solve(
         self, w0: np.ndarray, p: np.ndarray, time_budget_s: float, cold_start: bool
