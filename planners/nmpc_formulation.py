@@ -154,10 +154,12 @@ class NmpcFormulation:
         )
         # The plan's simulation, node after node. A residual given as an MX Function (dense
         # matrix operations) is evaluated as such, on MX, not expanded to scalars; otherwise
-        # the step itself, on SX (about 4x faster: no MX virtual machine, and a residual whose
-        # features do not change within the interval is evaluated once, not per RK4 stage).
+        # the step itself, on SX, unrolled over the horizon (about 6x faster: no MX virtual
+        # machine, no call per node, and a residual whose features do not change within the
+        # interval is evaluated once, not per RK4 stage).
         if residual is None or residual.fn.is_a("SXFunction"):
-            rollout = self.step.mapaccum(n)
+            x0, us = ca.SX.sym("x0", nx), ca.SX.sym("u", nu, n)
+            rollout = ca.Function("nmpc_rollout", [x0, us], [self.step.mapaccum(n)(x0, us)])
         else:
             xm, um = ca.MX.sym("x", nx), ca.MX.sym("u", nu)
             x_next_mx = model.interval_step(xm, um, config.dt_s, residual)
