@@ -82,6 +82,9 @@ class BSplineReference(SampledReference):
         self.yaw_rad = float(yaw_rad)
         self.control_points_ned_m = _interpolating_control_points(wp)
         self._n_seg = wp.shape[0] - 1
+        cp = self.control_points_ned_m
+        segments = np.stack([cp[:-3], cp[1:-2], cp[2:-1], cp[3:]], axis=1)  # (M, 4, 3)
+        self._coef = np.einsum("kj,njd->nkd", _BASIS, segments)  # each segment's polynomial
         s = np.linspace(0.0, self._n_seg, self._n_seg * _LIMIT_SAMPLES_PER_SEGMENT + 1)
         _, d1, d2 = self._param_derivatives(s)
         speed = np.max(np.linalg.norm(d1, axis=1))
@@ -152,9 +155,7 @@ class BSplineReference(SampledReference):
         """Position and its first two derivatives w.r.t. the knot parameter u, each (n, 3)."""
         i = np.clip(np.floor(u).astype(int), 0, self._n_seg - 1)
         s = (u - i)[:, None]
-        cp = self.control_points_ned_m
-        pts = np.stack([cp[i], cp[i + 1], cp[i + 2], cp[i + 3]], axis=1)  # (n, 4, 3)
-        coef = np.einsum("kj,njd->nkd", _BASIS, pts)  # (n, 4 powers, 3)
+        coef = self._coef[i]  # (n, 4 powers, 3)
         pos = coef[:, 0] + s * coef[:, 1] + s**2 * coef[:, 2] + s**3 * coef[:, 3]
         d1 = coef[:, 1] + 2 * s * coef[:, 2] + 3 * s**2 * coef[:, 3]
         d2 = 2 * coef[:, 2] + 6 * s * coef[:, 3]

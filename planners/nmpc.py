@@ -79,6 +79,14 @@ class NmpcPlanner:
             for n in ("pos_n_m", "pos_e_m", "pos_d_m")
             if n in model.state_names
         ]
+        f, tol = self.formulation, cfg.clearance_tolerance_m
+        # What _check accepts: inputs (u_lo, u_hi), states after the first (x_lo, x_hi)
+        self._check_bounds = (
+            f.u_min - _BOUND_TOL,
+            f.u_max + _BOUND_TOL,
+            f.x_min - tol,
+            f.x_max + tol,
+        )
         self._warm: tuple[float, np.ndarray, np.ndarray] | None = None
         self.late_plan: PlanResult | None = None
 
@@ -173,21 +181,20 @@ class NmpcPlanner:
 
     def _check(self, predicted: np.ndarray, inputs: np.ndarray, slots: np.ndarray) -> str:
         """Why the simulated plan is unacceptable, or "" if it is fine."""
-        f = self.formulation
-        if not (np.all(np.isfinite(predicted)) and np.all(np.isfinite(inputs))):
+        if not (np.isfinite(predicted).all() and np.isfinite(inputs).all()):
             return "non-finite plan"
-        if np.any(inputs < f.u_min - _BOUND_TOL) or np.any(inputs > f.u_max + _BOUND_TOL):
+        u_lo, u_hi, x_lo, x_hi = self._check_bounds
+        if (inputs < u_lo).any() or (inputs > u_hi).any():
             return "plan violates input bounds"
         later = predicted[1:]
-        if np.any(later < f.x_min - f.config.clearance_tolerance_m) or np.any(
-            later > f.x_max + f.config.clearance_tolerance_m
-        ):
+        if (later < x_lo).any() or (later > x_hi).any():
             return "plan violates state bounds"
-        pos = self._positions(later)
-        if slots.size:  # node i against its own slots (N, N_o, 7)
-            diff = pos[:, None, :] - slots[:, :, 0:3]
-            clear = np.sqrt(np.sum(slots[:, :, 3:6] * diff**2, axis=2)) - slots[:, :, 6]
-            worst = float(np.min(clear))
-            if worst < -f.config.clearance_tolerance_m:
+        if slots.size:  # node i against its own slots (N, N_o, 7), summed axis by axis
+            pos = self._positions(later)
+            sq = np.zeros(slots.shape[:2])
+            for k in range(3):
+                sq += slots[:, :, 3 + k] * (pos[:, k : k + 1] - slots[:, :, k]) ** 2
+            worst = float(np.min(np.sqrt(sq) - slots[:, :, 6]))
+            if worst < -self.formulation.config.clearance_tolerance_m:
                 return f"plan violates obstacle clearance by {-worst:.3f} m"
         return ""

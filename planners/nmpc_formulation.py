@@ -19,6 +19,7 @@ from typing import Literal
 import casadi as ca
 import numpy as np
 
+from planners.buffered_function import BufferedFunction
 from planners.nominal_models import NominalModel
 from planners.residual import ResidualTerm
 
@@ -151,11 +152,19 @@ class NmpcFormulation:
         self.clearance = ca.Function(
             "clearance", [x, slot], [obstacle_distance(position_of(model, x), slot)]
         )
-        # The plan's simulation, node after node: built on MX so that a residual given as an
-        # MX Function (dense matrix operations) is evaluated as such, not expanded to scalars.
-        xm, um = ca.MX.sym("x", nx), ca.MX.sym("u", nu)
-        x_next_mx = model.interval_step(xm, um, config.dt_s, residual)
-        self._rollout = ca.Function("nmpc_step_mx", [xm, um], [x_next_mx]).mapaccum(n)
+        # The plan's simulation, node after node. A residual given as an MX Function (dense
+        # matrix operations) is evaluated as such, on MX, not expanded to scalars; otherwise
+        # the step itself, on SX, unrolled over the horizon (about 6x faster: no MX virtual
+        # machine, no call per node, and a residual whose features do not change within the
+        # interval is evaluated once, not per RK4 stage).
+        if residual is None or residual.fn.is_a("SXFunction"):
+            x0, us = ca.SX.sym("x0", nx), ca.SX.sym("u", nu, n)
+            rollout = ca.Function("nmpc_rollout", [x0, us], [self.step.mapaccum(n)(x0, us)])
+        else:
+            xm, um = ca.MX.sym("x", nx), ca.MX.sym("u", nu)
+            x_next_mx = model.interval_step(xm, um, config.dt_s, residual)
+            rollout = ca.Function("nmpc_step_mx", [xm, um], [x_next_mx]).mapaccum(n)
+        self._rollout = BufferedFunction(rollout)
 
     # -- packing ---------------------------------------------------------------------------
     def split_parameters(self, p: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX, ca.SX]:
@@ -230,5 +239,5 @@ class NmpcFormulation:
     def rollout(self, x_now: np.ndarray, inputs: np.ndarray) -> np.ndarray:
         """Simulate f_d from x_now (nx,) under inputs (N, nu): states (N+1, nx)."""
         x_now = np.asarray(x_now, dtype=float)
-        later = np.asarray(self._rollout(x_now, np.asarray(inputs, dtype=float).T)).T
+        later = self._rollout(x_now, np.asarray(inputs, dtype=float).T)[0].T
         return np.vstack([x_now, later])

@@ -51,6 +51,7 @@ class ObstacleWorld:
         is_box = np.array([isinstance(o, Box) for o in self.obstacles], dtype=bool)
         self._box_index = np.flatnonzero(is_box)
         self._round_index = np.flatnonzero(~is_box)
+        self._round = self._slots[self._round_index]
         self._boxes = np.array(
             [[*o.center_ned_m, *o.half_extents_m] for o in self.obstacles if isinstance(o, Box)]
         ).reshape(-1, 6)
@@ -61,17 +62,18 @@ class ObstacleWorld:
         Negative inside an obstacle.
         """
         pts = np.atleast_2d(np.asarray(points_ned_m, dtype=float))
+        # sqrt(sum_k w_k (p_k - c_k)^2) - r, summed axis by axis (no (n, n_obs, 3) arrays)
+        sq = np.zeros((pts.shape[0], self._round.shape[0]))
+        for k in range(3):
+            sq += self._round[:, 3 + k] * (pts[:, k : k + 1] - self._round[:, k]) ** 2
+        if not self._box_index.size:
+            return np.sqrt(sq) - self._round[:, 6]
         out = np.empty((pts.shape[0], len(self.obstacles)))
-        rnd = self._slots[self._round_index]
-        diff = pts[:, None, :] - rnd[None, :, 0:3]
-        out[:, self._round_index] = (
-            np.sqrt(np.sum(rnd[None, :, 3:6] * diff**2, axis=2)) - rnd[None, :, 6]
-        )
-        if self._box_index.size:
-            q = np.abs(pts[:, None, :] - self._boxes[None, :, 0:3]) - self._boxes[None, :, 3:6]
-            outside = np.linalg.norm(np.maximum(q, 0.0), axis=2)
-            inside = np.minimum(np.max(q, axis=2), 0.0)
-            out[:, self._box_index] = outside + inside
+        out[:, self._round_index] = np.sqrt(sq) - self._round[:, 6]
+        q = np.abs(pts[:, None, :] - self._boxes[None, :, 0:3]) - self._boxes[None, :, 3:6]
+        outside = np.linalg.norm(np.maximum(q, 0.0), axis=2)
+        inside = np.minimum(np.max(q, axis=2), 0.0)
+        out[:, self._box_index] = outside + inside
         return out
 
     def segment_clearance_m(

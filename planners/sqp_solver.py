@@ -3,7 +3,8 @@
 Each iteration linearises the dynamics and obstacle constraints at the current iterate (w, as
 in multiple shooting: states and inputs, gaps allowed), eliminates the state deviations
 (condensing, which also embeds x_0 = x_now), and solves the dense QP in the input steps with
-DAQP, a dual active-set solver that is fast on small dense QPs; the obstacle rows share one
+DAQP, a dual active-set solver that is fast on small dense QPs (planners.condensed_qp); the
+obstacle rows share one
 penalised slack so that a QP linearised at a poor iterate stays feasible. The Hessian is the exact
 Hessian of the least-squares cost (Gauss-Newton: constraint curvature is dropped). With one
 iteration per control step and a shifted warm start this is the real-time iteration scheme.
@@ -27,8 +28,8 @@ import numpy as np
 from threadpoolctl import ThreadpoolController
 
 from planners.batched_linearisation import BatchedLinearisation
-from planners.buffered_function import BufferedFunction
 from planners.compiled_function import compiled
+from planners.condensed_qp import CondensedQp
 from planners.nmpc_formulation import NmpcFormulation
 from planners.solver_output import SolverOutput
 
@@ -59,7 +60,7 @@ class _Linearisation(NamedTuple):
 
 _SPARSE_OUTPUTS = ("g_h",)  # only a few obstacle rows are picked per iteration: keep it sparse
 LINEARISATIONS: tuple[str, ...] = ("batched", "symbolic")
-_THREADPOOLS: list[ThreadpoolController] = []  # built at the first solve (it scans the libraries)
+_BLAS: list[list] = []  # the BLAS libraries' controllers, found at the first solve (a scan)
 
 
 @dataclass(frozen=True)
@@ -133,67 +134,14 @@ class GaussNewtonSqp:
         # One QP step per size of the obstacle-row block (rows padded up to the bucket).
         cap = min(self.options.max_obstacle_rows, n * cfg.n_obstacles)
         self._buckets = sorted({min(cap, b) for b in range(0, cap + _BUCKET, _BUCKET)})
-        self._steps = {b: BufferedFunction(self._build_qp_step(b)) for b in self._buckets}
-        self._pad_row = n * cfg.n_obstacles  # index of the all-zero row lin appends
-
-    def _build_qp_step(self, n_rows: int) -> ca.Function:
-        """One SQP step with ``n_rows`` obstacle rows: QP assembly, DAQP, expansion.
-
-        Inputs: the outputs of the linearisation (with G_h and lba_h cut to the chosen rows),
-        w and x_now. Outputs: w_next, step = max(|du|, |gap|), and the QP solution's largest
-        violation of its own constraints (a failed QP shows up there).
-        """
-        f = self.formulation
-        nx, n_u, split = self._nx, self._nu * self._n, self._nx * (self._n + 1)
-        n_x_rows = len(self._xrows)
-        ins = {
-            "hess": ca.MX.sym("hess", n_u, n_u),
-            "grad": ca.MX.sym("grad", n_u),
-            "a_x": ca.MX.sym("a_x", n_x_rows, n_u),
-            "lba_x": ca.MX.sym("lba_x", n_x_rows),
-            "uba_x": ca.MX.sym("uba_x", n_x_rows),
-            "g_h": ca.MX.sym("g_h", n_rows, nx * self._n),
-            "lba_h": ca.MX.sym("lba_h", n_rows),
-            "lbx": ca.MX.sym("lbx", n_u),
-            "ubx": ca.MX.sym("ubx", n_u),
-            "x_lin": ca.MX.sym("x_lin", nx * self._n),
-            "sens": ca.MX.sym("sens", nx * self._n, n_u),
-            "w": ca.MX.sym("w", f.n_w),
-            "x_now": ca.MX.sym("x_now", nx),
+        n_u, opts = nu * n, self.options
+        self._qps = {
+            b: CondensedQp(
+                n_u, len(self._xrows), b, opts.slack_weight_linear, opts.slack_weight_quadratic
+            )
+            for b in self._buckets
         }
-        v = ins
-        opts = self.options
-        a = ca.vertcat(
-            ca.horzcat(v["a_x"], ca.MX.zeros(n_x_rows, 1)),
-            ca.horzcat(v["g_h"] @ v["sens"], ca.MX.ones(n_rows, 1)),
-        )
-        lba = ca.vertcat(v["lba_x"], v["lba_h"])
-        uba = ca.vertcat(v["uba_x"], ca.DM.inf(n_rows))
-        lbz = ca.vertcat(v["lbx"], 0.0)
-        ubz = ca.vertcat(v["ubx"], ca.inf)
-        qp = ca.conic(
-            f"gn_sqp_qp_{n_rows}",
-            "daqp",
-            {"h": ca.Sparsity.dense(n_u + 1, n_u + 1), "a": a.sparsity()},
-            {"error_on_fail": False},
-        )
-        z = qp(
-            h=ca.diagcat(v["hess"], opts.slack_weight_quadratic),
-            g=ca.vertcat(v["grad"], opts.slack_weight_linear),
-            a=a,
-            lba=lba,
-            uba=uba,
-            lbx=lbz,
-            ubx=ubz,
-        )["x"]
-        az = a @ z
-        violation = ca.mmax(ca.vertcat(lba - az, az - uba, lbz - z, z - ubz, 0.0))
-        du = z[:n_u]
-        w = v["w"]
-        gap = ca.mmax(ca.fabs(v["x_lin"] - w[nx:split]))
-        w_next = ca.vertcat(v["x_now"], v["x_lin"] + v["sens"] @ du, w[split:] + du)
-        step = ca.fmax(ca.mmax(ca.fabs(du)), gap)
-        return ca.Function(f"gn_sqp_step_{n_rows}", list(ins.values()), [w_next, step, violation])
+        self._pad_row = n * cfg.n_obstacles  # index of the all-zero row lin appends
 
     def _build_linearisation(self) -> ca.Function:
         """(w, p) -> the condensed QP at w, built block-wise in O(N^2) (no dense products).
@@ -293,12 +241,19 @@ class GaussNewtonSqp:
         the iterate it has (each iteration's QP is feasible; the planner checks the plan)
         instead of overrunning the budget by its last iteration.
         """
-        if not _THREADPOOLS:
-            _THREADPOOLS.append(ThreadpoolController())
+        if not _BLAS:
+            _BLAS.append(ThreadpoolController().select(user_api="blas").lib_controllers)
         # The products are small: BLAS threads would only wait for a core (on a loaded
         # computer, 3x the solve's CPU time, measured); one thread, only inside the solve.
-        with _THREADPOOLS[0].limit(limits=1, user_api="blas"):
+        # (Set on the libraries directly: threadpoolctl's limit() costs 45 us a call.)
+        threaded = [(lib, n) for lib in _BLAS[0] if (n := lib.num_threads) != 1]
+        for lib, _ in threaded:
+            lib.set_num_threads(1)
+        try:
             return self._solve(w0, p, time_budget_s, cold_start)
+        finally:
+            for lib, n in threaded:
+                lib.set_num_threads(n)
 
     def _solve(
         self, w0: np.ndarray, p: np.ndarray, time_budget_s: float, cold_start: bool
@@ -308,7 +263,9 @@ class GaussNewtonSqp:
         opts = self.options
         w = np.asarray(w0, dtype=float)
         p = np.asarray(p, dtype=float)
-        x_now = p[: self._nx]
+        nx = self._nx
+        split = nx * (self._n + 1)
+        x_now = p[:nx]
         iterations = max(opts.max_iterations, opts.cold_start_iterations if cold_start else 1)
         for it in range(1, iterations + 1):
             iteration_start = time.perf_counter()
@@ -320,26 +277,23 @@ class GaussNewtonSqp:
                 near = near[np.argsort(clearance[near])[: self._buckets[-1]]]
             bucket = next(b for b in self._buckets if b >= near.size)
             rows = [int(i) for i in near] + [self._pad_row] * (bucket - near.size)
-            w_next, step, violation = self._steps[bucket](
+            du, violation = self._qps[bucket].solve(
                 lin.hess,
                 lin.grad,
                 lin.a_x,
                 lin.lba_x,
                 lin.uba_x,
-                lin.g_h[rows, :],
+                lin.g_h[rows, :] @ lin.sens,
                 lin.lba_h[rows],
                 lin.lbx,
                 lin.ubx,
-                lin.x_lin,
-                lin.sens,
-                w,
-                x_now,
             )
-            step, violation = float(step[0, 0]), float(violation[0, 0])
+            gap = np.max(np.abs(lin.x_lin - w[nx:split]))
+            step = float(max(np.max(np.abs(du)), gap))
             if not (np.isfinite(step) and violation <= opts.qp_feasibility_tol):
                 reason = f"QP failed (constraint violation {violation:.3g})"
                 return SolverOutput(w, False, reason, it)
-            w = w_next.ravel(order="F").copy()
+            w = np.concatenate([x_now, lin.x_lin + lin.sens @ du, w[split:] + du])
             now = time.perf_counter()
             slowest_s = max(slowest_s, now - iteration_start)
             if step < opts.step_tol or now - start + slowest_s > time_budget_s:
