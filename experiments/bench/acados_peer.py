@@ -20,7 +20,9 @@ import contextlib
 import ctypes
 import io
 import os
+import sys
 import tempfile
+from collections.abc import Iterator
 from pathlib import Path
 
 import casadi as ca
@@ -45,6 +47,24 @@ def acados_unavailable() -> str:
     if not ca.has_nlpsol("ipopt"):
         return "the slim CasADi of comma-deps-acados replaced the full one; run `make acados`"
     return ""
+
+
+@contextlib.contextmanager
+def c_stdout_to_stderr() -> Iterator[None]:
+    """Inside, what C code writes to the standard output goes to the standard error: acados
+    prints a line there for every QP its HPIPM fails ("SQP_RTI: QP solver returned error
+    status 3"), which would break `bench --json`'s output."""
+    sys.stdout.flush()
+    libc = ctypes.CDLL(None)
+    libc.fflush(None)
+    saved = os.dup(1)
+    os.dup2(2, 1)
+    try:
+        yield
+    finally:
+        libc.fflush(None)
+        os.dup2(saved, 1)
+        os.close(saved)
 
 
 def _prepare_environment() -> None:

@@ -71,7 +71,7 @@ import numpy as np
 from companion.nmpc_planner import CompanionNmpc, NmpcSettings, load_nmpc
 from companion.realtime import realtime_section
 from companion.runner import COMPANION_RT_PRIORITY
-from experiments.bench.acados_peer import AcadosSolver, acados_unavailable
+from experiments.bench.acados_peer import AcadosSolver, acados_unavailable, c_stdout_to_stderr
 from gp.features import feature_definition
 from gp.model_io import ResidualModel, save_model
 from gp.posterior import Posterior
@@ -265,13 +265,14 @@ def _acados_figures(model, base, residual, world, problems, ipopt_res, progress)
     build_s = time.perf_counter() - start
     reference = generate_trajectories(1, seed=11)[0]
     x = reference.x_ref(0.0)
-    peer.plan(PlannerState(x[:3], np.zeros(3), x[3]), reference, 0.0)  # first call, as fast
-    peer.reset()
-    progress(f"nmpc: acados on the same {len(problems)} problems")
     res, solve_ms = [], []
-    for state, t in problems:
-        res.append(peer.plan(state, reference, t))
-        solve_ms.append(1e3 * solvers[0].last_solve_s)
+    with c_stdout_to_stderr():  # acados prints its failed QPs on the C stdout
+        peer.plan(PlannerState(x[:3], np.zeros(3), x[3]), reference, 0.0)  # first call, as fast
+        peer.reset()
+        progress(f"nmpc: acados on the same {len(problems)} problems")
+        for state, t in problems:
+            res.append(peer.plan(state, reference, t))
+            solve_ms.append(1e3 * solvers[0].last_solve_s)
     ms = 1e3 * np.array([r.solve_time_s for r in res])
     return {
         "nmpc_acados_median_ms": float(np.median(ms)),

@@ -41,3 +41,20 @@ def test_quick_nmpc_part_reports_augmented_acados_and_model_ready_figures():
         assert all(math.isfinite(v) and v > 0 for v in acados)
         assert figures["nmpc_acados_ok_fraction"] > 0.9
         assert figures["nmpc_acados_cmd_diff_median_mps"] < 1e-3
+
+
+def test_what_c_code_prints_inside_goes_to_stderr_so_json_stays_clean(capfd):
+    """acados prints its failed QPs with C's printf; `bench --json` must keep stdout JSON."""
+    import ctypes
+
+    from experiments.bench.acados_peer import c_stdout_to_stderr
+
+    libc = ctypes.CDLL(None)
+    print("before", flush=True)
+    with c_stdout_to_stderr():
+        libc.printf(b"SQP_RTI: QP solver returned error status 3\n")
+    libc.fflush(None)
+    print("after", flush=True)
+    out, err = capfd.readouterr()
+    assert out == "before\nafter\n"
+    assert "QP solver returned error status 3" in err
