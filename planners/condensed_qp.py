@@ -63,7 +63,8 @@ class CondensedQp:
     ) -> tuple[np.ndarray, float]:
         """(du (n_u,), the solution's largest violation of its own constraints): H (n_u, n_u),
         g (n_u,), A_x (n_x_rows, n_u), lba_x, uba_x (n_x_rows,), A_h (n_rows, n_u), lba_h
-        (n_rows,), lbx, ubx (n_u,). A failed solve shows up as a large or NaN violation."""
+        (n_rows,), lbx, ubx (n_u,). A failed solve shows up as a large or NaN violation (NaN
+        du too when DAQP could not start: bounds NaN or crossed, a Hessian it cannot factor)."""
         n_u, n_x_rows = self._n_u, self._n_x_rows
         self._h[:n_u, :n_u] = hess
         self._g[:n_u] = grad
@@ -74,7 +75,13 @@ class CondensedQp:
         self._uba[:n_x_rows] = uba_x
         self._lbz[:n_u] = lbx
         self._ubz[:n_u] = ubx
-        self._qp.evaluate()
+        # DAQP leaves x unwritten when it cannot factor H (not positive definite): NaN then,
+        # not the previous call's answer
+        self._x.fill(np.nan)
+        try:
+            self._qp.evaluate()
+        except RuntimeError:  # CasADi refuses ill-posed bounds (NaN, lower > upper, lower inf)
+            return np.full(n_u, np.nan), float("nan")
         z = self._x.copy()
         az = self._a @ z
         violation = np.max(  # >= 0 (the initial values); NaN propagates
