@@ -4,10 +4,10 @@ Each iteration linearises the dynamics and obstacle constraints at the current i
 in multiple shooting: states and inputs, gaps allowed), eliminates the state deviations
 (condensing, which also embeds x_0 = x_now), and solves the dense QP in the input steps with
 DAQP, a dual active-set solver that is fast on small dense QPs (planners.condensed_qp); the
-obstacle rows share one
-penalised slack so that a QP linearised at a poor iterate stays feasible. The Hessian is the exact
-Hessian of the least-squares cost (Gauss-Newton: constraint curvature is dropped). With one
-iteration per control step and a shifted warm start this is the real-time iteration scheme.
+obstacle rows share one penalised slack so that a QP linearised at a poor iterate stays
+feasible. The Hessian is the exact Hessian of the least-squares cost (Gauss-Newton: constraint
+curvature is dropped). With one iteration per control step and a shifted warm start this is the
+real-time iteration scheme.
 
 The linearisation is evaluated node-parallel in NumPy by default
 (:mod:`planners.batched_linearisation`: the RK4 step's Jacobians through the chain rule, the
@@ -37,7 +37,7 @@ _BUCKET = 8  # obstacle rows come in blocks of this many (padded), one QP size p
 
 
 class _Linearisation(NamedTuple):
-    """The QP data of one Gauss-Newton SQP iteration at the current iterate (CasADi DM each).
+    """The QP data of one Gauss-Newton SQP iteration at the current iterate (NumPy arrays).
 
     hess, grad: Gauss-Newton Hessian and gradient of the cost in the inputs; a_x, lba_x, uba_x:
     state-bound rows (sensitivity and bounds relative to the linearised trajectory); g_h, lba_h:
@@ -131,7 +131,7 @@ class GaussNewtonSqp:
             lin = self._build_linearisation()
             lin = compiled(lin) if self.options.compile else lin
             self._lin = lambda w, p: [_numpy(out) for out in lin(w, p)]
-        # One QP step per size of the obstacle-row block (rows padded up to the bucket).
+        # One QP per size of the obstacle-row block (rows padded up to the bucket).
         cap = min(self.options.max_obstacle_rows, n * cfg.n_obstacles)
         self._buckets = sorted({min(cap, b) for b in range(0, cap + _BUCKET, _BUCKET)})
         n_u, opts = nu * n, self.options

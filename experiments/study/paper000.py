@@ -285,6 +285,11 @@ def _confirm_in_closed_loop(
         else:
             checked[sel] = models
     lag = identified_lag_settings(config, next(iter(lineage.values()))[0].fit)
+    if checked and lag is None:
+        progress(
+            f"closed-loop check: none, {config.learned_model} has no identified structure to "
+            "fly alone against"
+        )
     if not checked or lag is None:
         return {sel: models[-1].fit for sel, models in lineage.items()}
     jobs = [] if structure_flights else _structure_jobs(config, refs, lag)

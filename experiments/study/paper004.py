@@ -31,6 +31,7 @@ from planners.bspline import BSplineReference
 from planners.trajectory_generator import TrajectorySpec, generate_trajectories
 
 TRIAL_PATH_SEED_OFFSET = 1000  # the repeated path is not one of [Kulathunga23]'s trajectories
+NOMINAL_NAME = "nominal"  # how the trials name the planner without a learned model
 
 
 @dataclass(frozen=True, eq=False)
@@ -101,9 +102,6 @@ def run_trials(config: StudyConfig, progress: Callable[[str], None]) -> TrialsRe
         checks.append(check)
         progress(f"trial {trial + 1}: {check}")
     return TrialsResult(reference, selection, trials, models, checks)
-
-
-NOMINAL_NAME = "nominal"
 
 
 def _trial_job(
