@@ -233,19 +233,28 @@ def check_prediction(
 
 
 def split_logs(
-    logs: Sequence[FlightLog], fraction: float = 0.25, modes: tuple[str, ...] | None = None
+    logs: Sequence[FlightLog],
+    fraction: float = 0.25,
+    modes: tuple[str, ...] | None = None,
+    rotate: bool = False,
 ) -> tuple[list[FlightLog], list[FlightLog]]:
     """(training, held-out) logs: every round(1/fraction)-th log is held out when there are at
-    least 1/fraction + 1 of them; otherwise each log is cut in time, the last ``fraction`` of
-    its rows in ``modes`` (all rows if None) held out (a single flight still gets a check it was
-    not trained on)."""
+    least 1/fraction + 1 of them; otherwise each log is cut in time, a ``fraction`` of its rows
+    in ``modes`` (all rows if None) held out (a single flight still gets a check it was not
+    trained on): the last of them, or with ``rotate`` the i-th log's i-th part counted back
+    from its end (log 0: the last, log 1: the one before, ...).
+
+    Why ``rotate``: logs of one repeated path all cut at their last part hold out the same
+    stretch of the path, which no model trained on the rest ever sees, so the check judges
+    every fit on an extrapolation; rotated, each held-out part is a stretch the other logs
+    train on (up to 1/fraction logs)."""
     every = max(2, int(round(1.0 / fraction)))
     if len(logs) > every:
         held = [log for i, log in enumerate(logs) if i % every == every - 1]
         train = [log for i, log in enumerate(logs) if i % every != every - 1]
         return train, held
     train, held = [], []
-    for log in logs:
+    for i, log in enumerate(logs):
         rows = np.arange(log.n_rows)
         if modes is not None and log.has("mode"):
             rows = np.flatnonzero(np.isin(log["mode"], modes))
@@ -253,9 +262,14 @@ def split_logs(
             train.append(log)
             continue
         first, last = int(rows[0]), int(rows[-1]) + 1
-        cut = first + int(round((1.0 - fraction) * (last - first)))
-        train.append(log.slice(0, cut))
-        held.append(log.slice(cut, log.n_rows))
+        back = i % every if rotate else 0  # parts counted back from the end
+        start = first + int(round((1.0 - (back + 1) * fraction) * (last - first)))
+        stop = first + int(round((1.0 - back * fraction) * (last - first))) if back else log.n_rows
+        if start > first:  # a part before the held-out one
+            train.append(log.slice(0, start))
+        if stop < log.n_rows:
+            train.append(log.slice(stop, log.n_rows))
+        held.append(log.slice(start, stop))
     return train, held
 
 

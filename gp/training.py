@@ -47,6 +47,8 @@ class TrainingConfig:
             horizon [s] against the incumbent (default: [Kulathunga23]'s kinematic model) on
             them before it may fly; the verdict goes into the model file.
         check_fraction: share of the logs held out for that check.
+        check_rotate: when each log is cut in time for that check, hold out a different part
+            of each (gp.prediction_check.split_logs: logs of one repeated path).
         residual_steps: log steps the residual is measured over (gp.datasets); the planner's
             interval divided by the log step learns what one step hides under noise.
     """
@@ -63,6 +65,7 @@ class TrainingConfig:
     seed: int = 0
     check_horizon_s: float | None = None
     check_fraction: float = 0.25
+    check_rotate: bool = False
     residual_steps: int = 1
 
 
@@ -103,7 +106,9 @@ def train_residual_model(
     with ``config.check_horizon_s``, check it against ``incumbent`` on held-out logs."""
     check_logs: list[FlightLog] = []
     if config.check_horizon_s is not None:
-        logs, check_logs = split_logs(logs, config.check_fraction, config.modes)
+        logs, check_logs = split_logs(
+            logs, config.check_fraction, config.modes, config.check_rotate
+        )
     features, identified = resolve_features(logs, config)
     if identified is not None:
         progress(f"identified {identified.describe()}")

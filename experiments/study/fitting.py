@@ -32,6 +32,7 @@ def fit_residual(
     check_horizon_s: float | None = CHECK_HORIZON_S,
     planner_dt_s: float | None = PLANNER_DT_S,
     structure_params: tuple[tuple[str, float], ...] = (),
+    rotate_held_out: bool = False,
 ) -> TrainingResult:
     """A residual model from the following phase (OFFBOARD rows) of ``logs``, flown with a
     control period of ``period_s`` [s], with ``m`` inducing points chosen by ``inducing``
@@ -50,6 +51,8 @@ def fit_residual(
     With ``check_horizon_s`` a quarter of the logs (or of each log) is held out and the model's
     position prediction over that horizon is checked against ``incumbent`` (default: the
     nominal kinematic model); ``result.may_fly`` is the verdict (gp.prediction_check).
+    ``rotate_held_out``: each log cut in time holds out a different quarter (logs of one
+    repeated path, gp.prediction_check.split_logs).
     """
     params = {"residual_dt_s": period_s} if learned_model == "kinematic_4dof" else {}
     params.update(dict(structure_params))
@@ -68,6 +71,7 @@ def fit_residual(
         seed=seed,
         check_horizon_s=check_horizon_s,
         residual_steps=steps,
+        check_rotate=rotate_held_out,
     )
     return train_residual_model(regular, config, progress, incumbent)
 

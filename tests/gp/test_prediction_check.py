@@ -68,6 +68,22 @@ def test_split_logs_holds_out_whole_logs_or_each_log_tail(hidden_plant_logs):
     assert held[0]["t_s"][0] > train[0]["t_s"][-1]
 
 
+def test_split_logs_rotated_holds_out_a_different_quarter_of_each_log(hidden_plant_logs):
+    logs = hidden_plant_logs[:4]
+    train, held = split_logs(logs, 0.25, rotate=True)
+    assert len(held) == 4
+    for i, (log, part) in enumerate(zip(logs, held, strict=True)):
+        t, quarter = log["t_s"], log.n_rows / 4
+        first, last = np.searchsorted(t, part["t_s"][[0, -1]])
+        assert abs(first - (3 - i) * quarter) <= 1 and abs(last + 1 - (4 - i) * quarter) <= 1
+    # every row is either trained on or held out, exactly once
+    assert sum(log.n_rows for log in train + held) == sum(log.n_rows for log in logs)
+    (_, [tail]), (_, [plain]) = split_logs(logs[:1], 0.25, rotate=True), split_logs(logs[:1])
+    np.testing.assert_array_equal(tail["t_s"], plain["t_s"])  # one log: its tail, as before
+    five = split_logs(hidden_plant_logs, 0.25, rotate=True)
+    assert [len(x) for x in five] == [4, 1]  # enough logs: whole logs, as without rotation
+
+
 def test_the_companion_refuses_a_model_file_that_failed_its_check(hidden_plant_logs):
     from dataclasses import replace
 
