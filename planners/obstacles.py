@@ -45,9 +45,17 @@ class ObstacleWorld:
     """A fixed set of obstacles with vectorised distance queries."""
 
     def __init__(self, obstacles: tuple[Obstacle, ...] | list[Obstacle]) -> None:
+        """Raises ValueError (one line) for an obstacle with a non-finite centre or size: its
+        clearance would be NaN, which no constraint or plan check can compare."""
         self.obstacles = tuple(obstacles)
         rows = [_slot_of(o) for o in self.obstacles]
         self._slots = np.array(rows).reshape(len(rows), OBSTACLE_SLOT_SIZE)
+        bad = np.flatnonzero(~np.isfinite(self._slots).all(axis=1))
+        if bad.size:
+            raise ValueError(
+                f"obstacle {int(bad[0])} ({self.obstacles[bad[0]]}) has a non-finite centre or "
+                "size; give finite metres"
+            )
         is_box = np.array([isinstance(o, Box) for o in self.obstacles], dtype=bool)
         self._box_index = np.flatnonzero(is_box)
         self._round_index = np.flatnonzero(~is_box)

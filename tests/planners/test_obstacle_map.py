@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from planners.nmpc_formulation import UNUSED_SLOT
 from planners.obstacle_map import PointObstacleMap
@@ -53,3 +54,14 @@ def test_an_empty_map_is_free_space():
     np.testing.assert_array_equal(
         m.slots(np.zeros((1, 3)), 2, 0.5), np.tile(UNUSED_SLOT, (1, 2, 1))
     )
+
+
+@pytest.mark.parametrize(
+    "obstacle",
+    [Cylinder((float("nan"), 0.0), 0.4), Cylinder((3.0, 0.0), float("inf"))],
+)
+def test_a_world_refuses_an_obstacle_it_could_not_measure_a_clearance_to(obstacle):
+    """A NaN clearance passes every comparison; the world says which obstacle, in one line."""
+    with pytest.raises(ValueError, match=r"^obstacle 1 \(Cylinder.*non-finite") as err:
+        ObstacleWorld([Cylinder((0.0, 7.0), 0.4), obstacle])
+    assert "\n" not in str(err.value)
