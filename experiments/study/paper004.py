@@ -36,7 +36,7 @@ from experiments.study.config import StudyConfig
 from experiments.study.fitting import fit_residual
 from experiments.study.jobs import FlightJob, FlightSummary, run_flight_job
 from gp.model_io import ResidualModel
-from gp.prediction_check import Predictor, refusal
+from gp.prediction_check import Predictor, refusal, structure_only
 from planners.bspline import BSplineReference
 from planners.trajectory_generator import TrajectorySpec, generate_trajectories
 
@@ -49,7 +49,8 @@ class TrialsResult:
     """The repeated path and one flight per trial (trial 1 nominal).
 
     Attributes:
-        models: per trial, the name of the model it flew ("nominal", "fit after trial k").
+        models: per trial, the name of the model it flew ("nominal", "fit after trial k", with
+            " (its structure alone)" when that fit flies without its GP).
         checks: per trial after the first, one line: why its model flies (the closed-loop
             comparison, or which check refused the newer fit).
     """
@@ -94,10 +95,10 @@ def run_trials(config: StudyConfig, progress: Callable[[str], None]) -> TrialsRe
             features=config.features,
             m=config.m,
             restarts=config.gp_restarts,
-            incumbent=None if model is None else Predictor.as_flown(model),
+            incumbent=None if model is None else Predictor.as_flown(model, name),
             rotate_held_out=True,
         )
-        candidate = f"fit after trial {trial}"
+        candidate = _as_flown(f"fit after trial {trial}", fit.model)
         if not fit.may_fly:
             check = f"{candidate}: {refusal(fit.model)}; {name} flies again"
         elif not config.closed_loop_check:
@@ -134,3 +135,9 @@ def _trial_job(
         model,
         compile_functions=model is None,
     )
+
+
+def _as_flown(name: str, model: ResidualModel) -> str:
+    """How the checks name the model ``name`` as it flies: its structure alone when its GP was
+    refused (gp.prediction_check.structure_only)."""
+    return f"{name} (its structure alone)" if structure_only(model) else name
