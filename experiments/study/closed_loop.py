@@ -40,6 +40,7 @@ class TrackingComparison:
         candidate, incumbent: the models' names.
         candidate_rmse_m, incumbent_rmse_m: pooled tracking RMSE [m].
         n_flights: flights per model (the same (trajectory, seed) pairs).
+        flown_on: where, in words ("the training seeds"; the trial view: "trial 3's seed").
     """
 
     candidate: str
@@ -47,6 +48,7 @@ class TrackingComparison:
     candidate_rmse_m: float
     incumbent_rmse_m: float
     n_flights: int
+    flown_on: str = "the training seeds"
 
     @property
     def passed(self) -> bool:
@@ -57,7 +59,7 @@ class TrackingComparison:
         """One line: the verdict and both RMSEs."""
         verdict = "tracks no worse than" if self.passed else "tracks WORSE than"
         return (
-            f"{self.candidate} {verdict} {self.incumbent} in closed loop on the training seeds: "
+            f"{self.candidate} {verdict} {self.incumbent} in closed loop on {self.flown_on}: "
             f"tracking RMSE {self.candidate_rmse_m:.4f} m vs {self.incumbent_rmse_m:.4f} m "
             f"({self.n_flights} flight{'s' if self.n_flights != 1 else ''} each)"
         )
@@ -122,8 +124,10 @@ def compare_tracking(
     candidate_flights: Sequence[FlightSummary],
     incumbent: str,
     incumbent_flights: Sequence[FlightSummary],
+    flown_on: str = "the training seeds",
 ) -> TrackingComparison:
-    """Compare two models flown on the same (trajectory, seed) pairs.
+    """Compare two models flown on the same (trajectory, seed) pairs (``flown_on``: where,
+    in words, for the comparison's line).
 
     Raises:
         ValueError: the two sets of flights are not the same pairs (one line).
@@ -140,7 +144,7 @@ def compare_tracking(
         chosen = [flights[p] for p in pairs]
         return pooled_rmse([f.tracking_rmse_m for f in chosen], [f.n_residuals for f in chosen])
 
-    return TrackingComparison(candidate, incumbent, pooled(cand), pooled(inc), len(pairs))
+    return TrackingComparison(candidate, incumbent, pooled(cand), pooled(inc), len(pairs), flown_on)
 
 
 def confirm_lineage(

@@ -105,7 +105,9 @@ def run_trials(config: StudyConfig, progress: Callable[[str], None]) -> TrialsRe
             check, model, name = f"{candidate} flies (no closed-loop check)", fit.model, candidate
         else:
             rehearsal = run_flight_job(_trial_job(config, reference, selection, trial, fit.model))
-            comparison = compare_tracking(candidate, [rehearsal], name, [summary])
+            comparison = compare_tracking(
+                candidate, [rehearsal], name, [summary], flown_on=f"trial {trial}'s seed"
+            )
             check = comparison.describe()
             if comparison.passed:
                 model, name = fit.model, candidate
