@@ -10,9 +10,11 @@ on ``f450_jsbsim``: each trajectory flown nominal, the model learned (identified
 low_speed, gated by its multi-step prediction on held-out flights, then by a closed-loop
 check: flown on the training seeds, it must track better than the identified lag alone, or
 the lag flies without it), then flown augmented on other seeds. The closed-loop check is
-the study's default because of this bench: on the F450 the GP passed the open-loop check
-(0.024 vs 0.045 m over 2 s) and flew 0.041-0.049 m where the lag alone flies 0.021-0.029 m
-and nominal 0.034-0.045 m (BENCHMARKS.md, session 11). Per trajectory, the gain
+the study's default because of this bench: on the F450 a GP on the velocity and the command
+(state_input, the regime's features then) passed the open-loop check (0.024 vs 0.045 m over
+2 s) and flew 0.041-0.049 m where the lag alone flies 0.021-0.029 m and nominal 0.034-0.045 m
+(BENCHMARKS.md, session 11); refused, the lag flew: 1.59 / 1.41. The regime's GP now gets the
+velocity only and earns its place here (BENCHMARKS.md, session 12). Per trajectory, the gain
 is the nominal tracking RMSE divided by the learned one; the figures are their mean and minimum.
 """
 

@@ -172,7 +172,7 @@ def run(progress: Callable[[str], None] = print, quick: bool = False) -> dict[st
 
 # Each study regime's learned model: (features, m per output) (experiments.study.regimes)
 REGIME_SHAPES: dict[str, tuple[str, int]] = {
-    "paper000": ("state_input", 30),
+    "paper000": ("velocity", 30),
     "agile": ("velocity", 30),
     "wind_field": ("position_velocity", 60),
 }

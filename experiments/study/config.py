@@ -38,9 +38,12 @@ class StudyConfig:
         learned_model: the nominal model under the learned residual: "first_order_lag" (its
             time constants identified from the flights, then the GP on what is left; see
             gp.lag_identification) or "kinematic_4dof" ([Kulathunga23]'s GP alone).
-        features: GP feature set ("state_input" needs first_order_lag; "velocity" is paper
-            000's; "velocity_history" adds the velocity one planner interval ago, which the
-            NMPC carries along its horizon, on a model with a velocity state).
+        features: GP feature set: "velocity" (paper 000's, the default in every regime but
+            wind_field's), "state_input" (the velocity and the command, on first_order_lag: the
+            NMPC's optimiser exploits a GP on its own decision variable, see
+            experiments.study.regimes), "velocity_history" (adds the velocity one planner
+            interval ago, which the NMPC carries along its horizon, on a model with a velocity
+            state).
         gp_restarts: hyperparameter restarts per fit.
         compile_augmented: compile each augmented planner's symbolic linearisation to C
             (cached on disk; over 6 minutes and 3 GB per model). The planner the companion and
@@ -85,7 +88,7 @@ class StudyConfig:
     scheduler: str | None = None
     nmpc: NmpcSettings = NmpcSettings(speed_limit_mps=2.5)
     learned_model: str = "first_order_lag"
-    features: str = "state_input"
+    features: str = "velocity"
     gp_restarts: int = 2
     compile_augmented: bool = False
     regime: str = "paper000"

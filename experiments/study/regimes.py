@@ -22,7 +22,14 @@ GP that flew 0.041-0.049 m where nominal flew 0.034-0.045 m and the lag alone 0.
         loop is close to linear (PX4's velocity P of 1.8 1/s, no tilt or acceleration limit
         reached) and the drag is small and removed by the velocity integrator, so a
         first-order lag with identified time constants explains most of what the kinematic
-        model misses.
+        model misses. The GP gets the velocity only (features velocity, as in agile): with
+        the command among its inputs (state_input, this regime's features until session 12)
+        it passed the open-loop check on JSBSim's F450 and flew 0.041-0.049 m where the lag
+        alone flies 0.021-0.029 m (refused in closed loop); on the velocity it flies 0.0143 m
+        there, 1.68x better than the lag alone and 3.3x better than nominal (`study --vehicle
+        f450_jsbsim --trajectories 4 --repeats 2`). On iris_study both tie with the lag
+        alone (held-out tracking 0.0138 m on the velocity, 0.0138-0.0139 m with the command,
+        the lag 0.0140 m: BENCHMARKS.md).
     agile: 60-100 m random B-splines at up to 6 m/s with accelerations up to 4 m/s^2, command
         limit 8 m/s, on iris_study. Now the response is nonlinear: quadratic body drag
         (0.05 N/(m/s)^2: 1.8 N at 6 m/s) on top of rotor drag (2.1 N at 6 m/s) needs
@@ -141,7 +148,6 @@ REGIMES: dict[str, dict[str, object]] = {
         "ramp_jerk_mps3": 4.0,
         "command_limit_mps": 8.0,
         "feedforward": True,
-        "features": "velocity",
         "learn_from_structure": True,
     },
     "wind_field": {
