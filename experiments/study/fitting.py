@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -11,6 +12,9 @@ from gp.prediction_check import Predictor
 from gp.residual_interval import residual_steps
 from gp.training import TrainingConfig, TrainingResult, train_residual_model
 from planners.nominal_models import make_model
+
+if TYPE_CHECKING:
+    from experiments.study.config import StudyConfig
 
 FOLLOWING_MODES = ("OFFBOARD",)
 CHECK_HORIZON_S = 2.0  # the NMPC's horizon, N x dt = 20 x 0.1 s ([Kulathunga23])
@@ -74,6 +78,24 @@ def fit_residual(
         check_rotate=rotate_held_out,
     )
     return train_residual_model(regular, config, progress, incumbent)
+
+
+def fit_for_study(
+    config: StudyConfig, logs: Sequence[FlightLog], inducing: str, **options: Any
+) -> TrainingResult:
+    """:func:`fit_residual` with the study's settings (the NMPC's period, learned model,
+    features, m and restarts of ``config``); ``options``: its others (incumbent,
+    structure_params, rotate_held_out)."""
+    return fit_residual(
+        logs,
+        inducing,
+        config.nmpc.period_s,
+        learned_model=config.learned_model,
+        features=config.features,
+        m=config.m,
+        restarts=config.gp_restarts,
+        **options,
+    )
 
 
 def regular_rows(log: FlightLog, period_s: float, min_fraction: float = 0.5) -> FlightLog:

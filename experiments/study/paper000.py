@@ -21,7 +21,7 @@ from dataclasses import dataclass, replace
 from companion.nmpc_planner import NmpcSettings
 from experiments.study.closed_loop import confirm_lineage
 from experiments.study.config import StudyConfig
-from experiments.study.fitting import FOLLOWING_MODES, fit_residual, regular_rows
+from experiments.study.fitting import FOLLOWING_MODES, fit_for_study, regular_rows
 from experiments.study.jobs import FlightJob, FlightSummary, run_flight_job, warm_up_planner
 from flightlog.schema import FlightLog
 from gp.lag_identification import identify_velocity_lag
@@ -209,14 +209,10 @@ def _refit_on_augmented(
         flown.setdefault(summary.planner, []).append(summary)
     futures = {
         sel: pool.submit(
-            fit_residual,
+            fit_for_study,
+            config,
             [*nominal_logs, *augmented_logs[sel], *(s.log for s in flown[sel])],
             sel,
-            config.nmpc.period_s,
-            learned_model=config.learned_model,
-            features=config.features,
-            m=config.m,
-            restarts=config.gp_restarts,
             incumbent=Predictor.as_flown(fits[sel].model),
             structure_params=structure,
         )
@@ -341,14 +337,10 @@ def _fit_selections(
     when empty): selection -> fit."""
     futures = {
         sel: pool.submit(
-            fit_residual,
+            fit_for_study,
+            config,
             logs,
             sel,
-            config.nmpc.period_s,
-            learned_model=config.learned_model,
-            features=config.features,
-            m=config.m,
-            restarts=config.gp_restarts,
             structure_params=structure,
         )
         for sel in config.selections

@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 from experiments.study.closed_loop import compare_tracking
 from experiments.study.config import StudyConfig
-from experiments.study.fitting import fit_residual
+from experiments.study.fitting import fit_for_study
 from experiments.study.jobs import FlightJob, FlightSummary, run_flight_job
 from gp.model_io import ResidualModel
 from gp.prediction_check import Predictor, refusal, structure_only
@@ -87,14 +87,10 @@ def run_trials(config: StudyConfig, progress: Callable[[str], None]) -> TrialsRe
         )
         if trial == config.n_trials:
             break
-        fit = fit_residual(
+        fit = fit_for_study(
+            config,
             [t.log for t in trials],
             selection,
-            config.nmpc.period_s,
-            learned_model=config.learned_model,
-            features=config.features,
-            m=config.m,
-            restarts=config.gp_restarts,
             incumbent=None if model is None else Predictor.as_flown(model, name),
             rotate_held_out=True,
         )
