@@ -21,6 +21,7 @@ def test_quick_nmpc_part_reports_augmented_acados_and_model_ready_figures():
         "nmpc_augmented_median_ms",
         "nmpc_augmented_p99_ms",
         "nmpc_augmented_ipopt_median_ms",
+        "nmpc_augmented_ipopt_paced_median_ms",
         "nmpc_augmented_cpu_p99_ms",
         "nmpc_augmented_normal_priority_median_ms",
         "nmpc_augmented_normal_priority_p99_ms",
@@ -34,7 +35,9 @@ def test_quick_nmpc_part_reports_augmented_acados_and_model_ready_figures():
             assert math.isfinite(figures[f"{prefix}_{name}"]) and figures[f"{prefix}_{name}"] > 0
         assert figures[f"{prefix}_cmd_diff_max_mps"] < 1e-5
     assert figures["nmpc_cmd_diff_median_mps"] < 1e-3
-    acados = [figures[n] for n in ("nmpc_acados_median_ms", "nmpc_acados_solve_median_ms")]
+    acados = [
+        figures[f"nmpc_acados_{n}"] for n in ("median_ms", "solve_median_ms", "paced_median_ms")
+    ]
     if acados_unavailable():
         assert all(math.isnan(v) for v in acados)
     else:
