@@ -43,6 +43,8 @@ def all_noise_note(
         f"the GP explains nothing but noise on {', '.join(names[i] for i in found)} (signal "
         f"variance under {SIGNAL_TO_NOISE_FLOOR:.0%} of the noise variance: {each}), so it "
         "predicts about 0 there: either nothing is left to learn, or the fit missed it (an "
-        "input spanning a much wider range than the rest, outliers in it, or too few inducing "
-        "points: check the features' ranges, try a larger --m or --inducing random)"
+        "input spanning a much wider range than the rest, outliers in it, too little flight, "
+        "or too few inducing points: check the features' ranges; with enough flight (fit-gp "
+        "warns when there is too little for --m, and then log more first), try a larger --m "
+        "or --inducing random)"
     )

@@ -38,6 +38,8 @@ def test_an_input_with_far_outliers_drives_the_fit_to_all_noise_and_it_is_found(
         note = all_noise_note(("y",), signal, gp.noise_variances_)
         assert note is not None and note.startswith("the GP explains nothing but noise on y")
         assert "\n" not in note
+        # its "larger --m" never contradicts fit-gp's too-little-flight warning ("lower --m")
+        assert "with enough flight" in note and note.index("enough flight") < note.index("--m")
     else:
         assert found == [] and np.std(mean) > 0.5
 
