@@ -200,14 +200,16 @@ EXIT_DOUBTFUL = 3
 WORSE_MARGIN = 0.02
 
 
-def model_doubts(metrics: dict[str, list[float]], lag: dict[str, object] | None) -> list[str]:
+def model_doubts(
+    metrics: dict[str, list[float]], lag: dict[str, object] | None, gp_flies: bool = True
+) -> list[str]:
     """Why the fitted model should not be trusted: worse than nominal on held-out rows on
-    some axis (by more than WORSE_MARGIN), or an identified time constant on its search
-    bound (TAU_BOUNDS_S)."""
+    some axis (by more than WORSE_MARGIN; not asked when ``gp_flies`` is False: the check
+    against the structure alone left the GP out, so the structure flies without it), or an
+    identified time constant on its search bound (TAU_BOUNDS_S)."""
     doubts = []
-    for axis, nom, aug in zip(
-        "ned", metrics["nominal_rmse_mps"], metrics["augmented_rmse_mps"], strict=False
-    ):
+    held_out = zip("ned", metrics["nominal_rmse_mps"], metrics["augmented_rmse_mps"], strict=False)
+    for axis, nom, aug in held_out if gp_flies else ():
         if aug > nom * (1.0 + WORSE_MARGIN):
             doubts.append(
                 f"axis {axis}: held-out RMSE {aug:.4f} m/s with the GP, {nom:.4f} m/s without; "
@@ -273,7 +275,15 @@ def main(argv: list[str] | None = None) -> int:
         if not result.may_fly:
             print(f"fit-gp: {refusal(result.model)}", file=sys.stderr)
             return 1
-        doubts = model_doubts(result.metrics, result.model.training.get("identified_lag"))
+        lag = result.model.training.get("identified_lag")
+        doubts = model_doubts(result.metrics, lag, result.gp_earns_its_place)
+        if not result.gp_earns_its_place:
+            structure = result.model.features.nominal_model
+            print(
+                f"fit-gp: the GP does not beat {structure} alone (see the check above): the "
+                f"companion flies {structure} without it (the file keeps the GP to inspect)",
+                file=sys.stderr,
+            )
         for doubt in doubts:
             print(f"fit-gp: warning: {doubt}", file=sys.stderr)
         if doubts and not config.force:

@@ -218,23 +218,42 @@ def _report(
 ) -> str:
     features = fit.model.features
     lag = fit.model.training.get("identified_lag")
-    learned = (
+    structure = (
         f"the velocity lag identified from the first flight (tau_s={lag['tau_s']:.3f} s, "
-        f"tau_d_s={lag['tau_d_s']:.3f} s) plus"
+        f"tau_d_s={lag['tau_d_s']:.3f} s)"
         if lag is not None
-        else f"`{features.nominal_model}` plus"
+        else f"`{features.nominal_model}`"
     )
+    checks = [c for c in (fit.check, fit.structure_check) if c is not None]
     lines = [
         "# Demo: the learning loop over MAVLink",
         "",
         f"Mission `{config.mission_path.name}`, vehicle `{config.vehicle}` behind a `vehicle-sim` "
         f"MAVLink endpoint, companion over MAVSDK at {config.rate_hz:g} Hz with the NMPC: first "
-        f"nominal ([Kulathunga23]'s kinematic model), then augmented with `{model_path.name}`: "
-        f"{learned} a sparse GP on `{features.name}` features, fitted from the first flight.",
+        f"nominal ([Kulathunga23]'s kinematic model), then "
+        f"{what_flew_second(fit, model_path.name, structure)}",
         "",
         comparison_table(figures),
         "",
+        *(["Checked before the second flight:", *[f"- {c.describe()}" for c in checks], ""]),
         *[f"![{p}]({p})" for p in images],
         "",
     ]
     return "\n".join(lines)
+
+
+def what_flew_second(fit: TrainingResult, model_file: str, structure: str) -> str:
+    """One sentence: the model the second flight flew and why, from the fit's two checks
+    (``structure``: how the report names the learned model's nominal model)."""
+    gp = f"a sparse GP on `{fit.model.features.name}` features"
+    if not fit.may_fly:
+        return (
+            f"with the nominal planner again: the learned model (`{model_file}`: {structure} "
+            f"plus {gp}) was refused, since it did not predict better than nominal."
+        )
+    if not fit.gp_earns_its_place:
+        return (
+            f"augmented with {structure} alone (from `{model_file}`): {gp} was fitted on top "
+            "but left out, since it did not predict better than the structure without it."
+        )
+    return f"augmented with `{model_file}`: {structure} plus {gp}, fitted from the first flight."

@@ -35,3 +35,28 @@ def record_log(n_rows=400, dt_s=0.05, seed=0, noise_mps=0.0, gap_at=None, modes=
         rec.append(row)
         vel = cmd + dt_s * drag_residual(vel) + noise_mps * rng.normal(size=3)
     return rec.to_log()
+
+
+def lag_plant_log(seed, tau_s, drag_per_m, n_rows=900, dt_s=0.02, noise_mps=0.005):
+    """A velocity loop with lag ``tau_s`` and quadratic drag, positions integrated: what the
+    check must predict. Commands: random smooth sweeps up to about 3 m/s."""
+    rng = np.random.default_rng(seed)
+    amp, freq, phase = rng.uniform(1.0, 3.0, 3), rng.uniform(0.2, 0.6, 3), rng.uniform(0, 6, 3)
+    amp[2] *= 0.2
+    rec = FlightLogRecorder({"source": "synthetic-lag"})
+    pos, vel = np.array([0.0, 0.0, -5.0]), np.zeros(3)
+    decay = np.exp(-dt_s / tau_s)
+    for k in range(n_rows):
+        cmd = amp * np.sin(freq * k * dt_s + phase)
+        rec.append({
+            "t_s": k * dt_s,
+            "pos_n_m": pos[0], "pos_e_m": pos[1], "pos_d_m": pos[2],
+            "vel_n_mps": vel[0], "vel_e_mps": vel[1], "vel_d_mps": vel[2],
+            "q_w": 1.0, "q_x": 0.0, "q_y": 0.0, "q_z": 0.0,
+            "cmd_vel_n_mps": cmd[0], "cmd_vel_e_mps": cmd[1], "cmd_vel_d_mps": cmd[2],
+            "cmd_yaw_rate_radps": 0.0,
+        })  # fmt: skip
+        new = cmd + (vel - cmd) * decay - dt_s * drag_per_m * vel * np.abs(vel)
+        pos = pos + dt_s * 0.5 * (vel + new)
+        vel = new + noise_mps * rng.normal(size=3)
+    return rec.to_log()

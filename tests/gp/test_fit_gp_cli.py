@@ -2,11 +2,13 @@
 
 import numpy as np
 import pytest
-from gp_synthetic_logs import record_log
+from gp_synthetic_logs import lag_plant_log, record_log
 
 from flightlog.schema import write_flight_log
 from gp.features import feature_definition
 from gp.model_io import load_model, read_model_header
+from gp.prediction_check import structure_only
+from scripts import fit_gp as fit_gp_cli
 from scripts.fit_gp import main
 
 
@@ -138,3 +140,32 @@ def test_a_history_model_from_fit_gp_flies_with_the_nmpcs_interval(tmp_path, cap
     assert main([*base, "--out", str(tmp_path / "odd"), "--residual-interval-s", "0.05"]) == 2
     err = [line for line in capsys.readouterr().err.splitlines() if "error" in line]
     assert len(err) == 1 and "not a whole number of the logs' 0.02 s steps" in err[0]
+
+
+def test_a_gp_that_does_not_beat_the_lag_is_written_and_said_to_be_left_out(tmp_path, capsys):
+    """A pure velocity lag with sensor noise leaves the GP nothing to learn: the check against
+    the lag alone fails, fit-gp writes the file (the companion flies the lag from it) and says
+    so in one line; the GP's own held-out doubts no longer block what will not fly."""
+    logs = [
+        str(write_flight_log(tmp_path / f"f{i}.csv", lag_plant_log(i, 0.4, 0.0, n_rows=1500)))
+        for i in range(2)
+    ]
+    args = ["--nominal", "first_order_lag", "--features", "velocity", "--check-horizon-s", "2"]
+    code = fit_gp_cli.main([*logs, *args, "--out", str(tmp_path / "m")])
+    err = capsys.readouterr().err
+    assert "does NOT beat first_order_lag alone" in err
+    assert code == 0 and (tmp_path / "m.npz").exists()
+    said = [line for line in err.splitlines() if line.startswith("fit-gp: the GP does not beat")]
+    assert said == [
+        "fit-gp: the GP does not beat first_order_lag alone (see the check above): the companion "
+        "flies first_order_lag without it (the file keeps the GP to inspect)"
+    ]
+    assert structure_only(load_model(tmp_path / "m.npz"))
+
+
+def test_held_out_doubts_about_a_gp_left_out_are_not_asked_but_the_lags_bound_is():
+    metrics = {"nominal_rmse_mps": [0.001, 0.001, 0.001], "augmented_rmse_mps": [0.002] * 3}
+    on_bound = {"tau_s": fit_gp_cli.TAU_BOUNDS_S[1], "tau_d_s": 0.5}
+    assert len(fit_gp_cli.model_doubts(metrics, on_bound)) == 4
+    (doubt,) = fit_gp_cli.model_doubts(metrics, on_bound, gp_flies=False)
+    assert doubt.startswith("identified tau_s=")
