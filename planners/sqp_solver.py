@@ -289,7 +289,7 @@ class GaussNewtonSqp:
                 lin.ubx,
             )
             gap = np.max(np.abs(lin.x_lin - w[nx:split]))
-            step = float(max(np.max(np.abs(du)), gap))
+            step = float(np.maximum(np.max(np.abs(du)), gap))  # NaN in either stays NaN
             if not (np.isfinite(step) and violation <= opts.qp_feasibility_tol):
                 reason = f"QP failed (constraint violation {violation:.3g})"
                 return SolverOutput(w, False, reason, it)
