@@ -105,3 +105,4 @@ def test_sqp_whose_step_is_nan_only_in_an_untracked_state_reports_failure(linear
     w0 = formulation.pack_w(states, u_ref)
     out = GaussNewtonSqp(formulation, SqpOptions(linearisation=linearisation)).solve(w0, p, 1.0)
     assert not out.ok, "a NaN iterate came back as a converged plan"
+    assert "non-finite step" in out.reason or "QP failed" in out.reason, out.reason
