@@ -76,8 +76,10 @@ class BSplineReference(SampledReference):
                 f"limits must be > 0, got max_speed_mps={max_speed_mps}, "
                 f"max_acc_mps2={max_acc_mps2}"
             )
-        if ramp_jerk_mps3 is not None and not ramp_jerk_mps3 > 0:
-            raise ValueError(f"ramp_jerk_mps3 must be > 0, got {ramp_jerk_mps3}")
+        if ramp_jerk_mps3 is not None and not 0 < ramp_jerk_mps3 < np.inf:
+            raise ValueError(
+                f"ramp_jerk_mps3 must be finite and > 0 (None: no ramps), got {ramp_jerk_mps3}"
+            )
         self.waypoints_ned_m = wp
         self.yaw_rad = float(yaw_rad)
         self.control_points_ned_m = _interpolating_control_points(wp)

@@ -23,7 +23,12 @@ from collections.abc import Callable
 import numpy as np
 
 from planners.model_vectors import angle_indices, reference_vectors, state_vector
-from planners.nmpc_formulation import UNUSED_SLOT, NmpcConfig, NmpcFormulation
+from planners.nmpc_formulation import (
+    UNUSED_SLOT,
+    NmpcConfig,
+    NmpcFormulation,
+    slot_clearance_m,
+)
 from planners.nmpc_solvers import NlpSolver, make_solver
 from planners.nominal_models import NominalModel
 from planners.obstacles import ObstacleWorld
@@ -189,12 +194,8 @@ class NmpcPlanner:
         later = predicted[1:]
         if (later < x_lo).any() or (later > x_hi).any():
             return "plan violates state bounds"
-        if slots.size:  # node i against its own slots (N, N_o, 7), summed axis by axis
-            pos = self._positions(later)
-            sq = np.zeros(slots.shape[:2])
-            for k in range(3):
-                sq += slots[:, :, 3 + k] * (pos[:, k : k + 1] - slots[:, :, k]) ** 2
-            worst = float(np.min(np.sqrt(sq) - slots[:, :, 6]))
+        if slots.size:  # node i against its own slots (N, N_o, 7)
+            worst = float(np.min(slot_clearance_m(self._positions(later)[:, None, :], slots)))
             if worst < -self.formulation.config.clearance_tolerance_m:
                 return f"plan violates obstacle clearance by {-worst:.3f} m"
         return ""

@@ -114,6 +114,16 @@ def obstacle_distance(pos: ca.SX, slot: ca.SX) -> ca.SX:
     return ca.sqrt(ca.sum1(slot[3:6] * diff**2) + _DIST_EPS_M2) - slot[6]
 
 
+def slot_clearance_m(pos_ned_m: np.ndarray, slots: np.ndarray) -> np.ndarray:
+    """The slots' clearance sqrt(sum_k w_k (p_k - c_k)^2) - r [m] in NumPy: positions
+    (..., 3) [m] against slots (..., 7), broadcast over the leading axes (e.g. (n, 1, 3)
+    against (n_obs, 7) gives (n, n_obs)); summed axis by axis, with no (..., 3) temporaries."""
+    sq = slots[..., 3] * (pos_ned_m[..., 0] - slots[..., 0]) ** 2
+    for k in (1, 2):
+        sq += slots[..., 3 + k] * (pos_ned_m[..., k] - slots[..., k]) ** 2
+    return np.sqrt(sq) - slots[..., 6]
+
+
 class NmpcFormulation:
     """The NLP of [Kulathunga23] eq. 2-4 for one model, residual and configuration.
 

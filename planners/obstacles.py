@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from planners.nmpc_formulation import OBSTACLE_SLOT_SIZE, UNUSED_SLOT
+from planners.nmpc_formulation import OBSTACLE_SLOT_SIZE, UNUSED_SLOT, slot_clearance_m
 
 
 @dataclass(frozen=True)
@@ -70,14 +70,11 @@ class ObstacleWorld:
         Negative inside an obstacle.
         """
         pts = np.atleast_2d(np.asarray(points_ned_m, dtype=float))
-        # sqrt(sum_k w_k (p_k - c_k)^2) - r, summed axis by axis (no (n, n_obs, 3) arrays)
-        sq = np.zeros((pts.shape[0], self._round.shape[0]))
-        for k in range(3):
-            sq += self._round[:, 3 + k] * (pts[:, k : k + 1] - self._round[:, k]) ** 2
+        rounds = slot_clearance_m(pts[:, None, :], self._round)  # (n, n_round)
         if not self._box_index.size:
-            return np.sqrt(sq) - self._round[:, 6]
+            return rounds
         out = np.empty((pts.shape[0], len(self.obstacles)))
-        out[:, self._round_index] = np.sqrt(sq) - self._round[:, 6]
+        out[:, self._round_index] = rounds
         q = np.abs(pts[:, None, :] - self._boxes[None, :, 0:3]) - self._boxes[None, :, 3:6]
         outside = np.linalg.norm(np.maximum(q, 0.0), axis=2)
         inside = np.minimum(np.max(q, axis=2), 0.0)

@@ -289,9 +289,12 @@ class GaussNewtonSqp:
                 lin.ubx,
             )
             gap = np.max(np.abs(lin.x_lin - w[nx:split]))
-            step = float(max(np.max(np.abs(du)), gap))
-            if not (np.isfinite(step) and violation <= opts.qp_feasibility_tol):
+            step = float(np.maximum(np.max(np.abs(du)), gap))  # NaN in either stays NaN
+            if not violation <= opts.qp_feasibility_tol:
                 reason = f"QP failed (constraint violation {violation:.3g})"
+                return SolverOutput(w, False, reason, it)
+            if not np.isfinite(step):
+                reason = "non-finite step (NaN or inf in the linearisation at the iterate)"
                 return SolverOutput(w, False, reason, it)
             w = np.concatenate([x_now, lin.x_lin + lin.sens @ du, w[split:] + du])
             now = time.perf_counter()

@@ -125,10 +125,12 @@ def parse_args(argv: list[str] | None) -> FitGpConfig:
         help="write the model even if it is worse than nominal or a time constant is on its bound",
     )
     args = parser.parse_args(argv)
-    if args.residual_interval_s is not None and not args.residual_interval_s > 0:
-        parser.error(f"--residual-interval-s must be > 0 s, got {args.residual_interval_s}")
-    if args.check_horizon_s is not None and not args.check_horizon_s > 0:
-        parser.error(f"--check-horizon-s must be > 0 s, got {args.check_horizon_s}")
+    for option, value in (
+        ("--residual-interval-s", args.residual_interval_s),
+        ("--check-horizon-s", args.check_horizon_s),
+    ):  # inf passes "> 0" and then cannot become a number of log steps
+        if value is not None and not 0 < value < np.inf:
+            parser.error(f"{option} must be finite and > 0 s, got {value}")
     params = []
     for item in args.nominal_param:
         name, sep, value = item.partition("=")

@@ -49,6 +49,8 @@ def test_fit_gp_writes_model_plots_and_reports_rmse(tmp_path, capsys):
         ),
         (["LOG", "--seed", "-1"], "--seed must be >= 0, got -1"),
         (["LOG", "--restarts", "-1"], "--restarts must be >= 1 starting point(s), got -1"),
+        (["LOG", "--residual-interval-s", "inf"], "--residual-interval-s must be finite and > 0"),
+        (["LOG", "--check-horizon-s", "inf"], "--check-horizon-s must be finite and > 0"),
     ],
 )
 def test_bad_input_exits_non_zero_with_one_line(tmp_path, capsys, args, message):

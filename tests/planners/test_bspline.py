@@ -129,6 +129,8 @@ def test_ramped_reference_respects_limits(max_speed_mps, max_acc_mps2):
     assert np.linalg.norm(smp.acc_ned_mps2, axis=1).max() <= max_acc_mps2 + 1e-9
 
 
-def test_bad_ramp_jerk_raises():
+@pytest.mark.parametrize("jerk", [0.0, float("nan"), float("inf")])
+def test_bad_ramp_jerk_raises(jerk):
+    """An infinite jerk passed "> 0" and made a zero-length ramp: a NaN duration."""
     with pytest.raises(ValueError, match="ramp_jerk_mps3"):
-        BSplineReference(WAYPOINTS, ramp_jerk_mps3=0.0)
+        BSplineReference(WAYPOINTS, ramp_jerk_mps3=jerk)

@@ -9,11 +9,12 @@ refuses (NaN, crossed) make a failed QP too, not an exception out of the SQP.
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from planners.condensed_qp import CondensedQp
 from planners.nmpc_formulation import NmpcConfig, NmpcFormulation
-from planners.nominal_models import kinematic_4dof
-from planners.sqp_solver import GaussNewtonSqp, SqpOptions
+from planners.nominal_models import kinematic_4dof, px4_velocity_pi
+from planners.sqp_solver import LINEARISATIONS, GaussNewtonSqp, SqpOptions
 
 N_U, N_X_ROWS, N_ROWS = 6, 2, 3
 
@@ -87,3 +88,21 @@ def test_sqp_on_a_nan_state_with_state_bounds_reports_failure_without_raising():
     out = GaussNewtonSqp(formulation).solve(formulation.pack_w(x_ref, u_ref), p, 1.0, True)
     assert not out.ok
     assert "QP failed" in out.reason
+
+
+@pytest.mark.parametrize("linearisation", LINEARISATIONS)
+def test_sqp_whose_step_is_nan_only_in_an_untracked_state_reports_failure(linearisation):
+    """A warm start NaN in an untracked state (cost weight 0) at the last node leaves the QP
+    finite on the symbolic path (its cost drops the zero-weight row) but the dynamics gap
+    NaN: the step is NaN, so the solve fails instead of returning a NaN iterate as ok."""
+    model = px4_velocity_pi()
+    formulation = NmpcFormulation(model, NmpcConfig(n_obstacles=0))
+    n = formulation.config.horizon_steps
+    x_ref, u_ref = np.zeros((n + 1, model.nx)), np.zeros((n, model.nu))
+    p = formulation.pack_parameters(np.zeros(model.nx), x_ref, u_ref, np.zeros((n, 0, 7)))
+    states = x_ref.copy()
+    states[n, model.state_names.index("vel_int_n_mps2")] = np.nan
+    w0 = formulation.pack_w(states, u_ref)
+    out = GaussNewtonSqp(formulation, SqpOptions(linearisation=linearisation)).solve(w0, p, 1.0)
+    assert not out.ok, "a NaN iterate came back as a converged plan"
+    assert "non-finite step" in out.reason or "QP failed" in out.reason, out.reason
