@@ -174,8 +174,9 @@ def read_ulog(path: str | Path) -> FlightLog:
 
 def summarise_ulog(path: str | Path) -> dict[str, object]:
     """What a ULog holds, read without mapping it (for ``flightlog info`` on a log the mapping
-    refuses): firmware, hardware, vehicle type, duration [s], the mapped topics present with
-    their rates [Hz], and the modes flown as (name, start_s, end_s) from the log's start.
+    refuses): firmware, hardware, vehicle type (name and MAV_TYPE), duration [s], the mapped
+    topics present with their rates [Hz], the modes flown as (name, start_s, end_s) from the
+    log's start, and the initial PX4 parameters (``px4_params``).
 
     Raises:
         FlightLogError: not a ULog, or pyulog cannot read even its header.
@@ -207,9 +208,11 @@ def summarise_ulog(path: str | Path) -> dict[str, object]:
         "firmware": firmware,
         "hardware": ulog.msg_info_dict.get("ver_hw"),
         "vehicle": px4.MAV_TYPE_NAMES.get(mav_type, f"MAV_TYPE {mav_type}") if mav_type else None,
+        "mav_type": mav_type,
         "duration_s": (t1 - t0) * 1e-6,
         "rates_hz": {name: _rate(topic, span) for name, topic in sorted(topics.items())},
         "modes": modes,
+        "px4_params": {k: float(v) for k, v in params.items()},
     }
 
 
@@ -278,7 +281,8 @@ def flight_log_from_topics(
     if keep.sum() < 2:
         counts = ", ".join(f"{n} {why}" for why, n in dropped.items() if n) or "none usable"
         raise FlightLogError(
-            f"{where}: no valid motion: of {len(t_all)} rows, dropped {counts}; {FLY_HINT}"
+            f"{where}: no valid motion: of {len(t_all)} rows, dropped {counts}"
+            f"{_modes_flown(topics, firmware)}; {FLY_HINT}"
         )
     cols = {k: v[keep] for k, v in cols.items()}
     t0 = cols["t_s"][0]

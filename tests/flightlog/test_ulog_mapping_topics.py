@@ -74,7 +74,9 @@ def test_estimator_invalid_rows_are_dropped_with_a_count(flight):
     assert log.n_rows == len(pos["timestamp"]) - 35
     for flag in ("xy_valid", "z_valid", "v_xy_valid", "v_z_valid"):
         pos[flag] = np.zeros(len(pos["timestamp"]))
-    with pytest.raises(FlightLogError, match=r"no valid motion: .* estimator_invalid; fly") as err:
+    with pytest.raises(
+        FlightLogError, match=r"no valid motion: .* estimator_invalid; flown in OFFBOARD; fly"
+    ) as err:
         flight_log_from_topics(topics)
     assert "\n" not in str(err.value)
 

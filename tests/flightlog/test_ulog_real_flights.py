@@ -108,6 +108,9 @@ REFUSED = {  # file: (command, pattern of its one line)
     "fixedwing_v1_17rc_status.ulg": r"a fixed wing log \(MAV_TYPE 1\), not a multirotor",
     "quad_mission_rtl_v1_9_esc.ulg": r"needs faster signals: local_position at 7.96 Hz "
     r"\(needs >= 10 Hz\)",
+    # flown in STAB without GPS: the line names the mode as well as the estimator
+    "quad_stab_nogps_v1_16_1.ulg": r"no valid motion: of \d+ rows, dropped \d+ estimator_invalid; "
+    r"flown in STAB; fly a multirotor in a position-controlled mode",
 }
 
 
