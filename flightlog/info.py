@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from flightlog import px4
 from flightlog.reader import NEEDS_HZ, log_rates_hz, rate_shortfalls
 from flightlog.schema import FlightLog
 from flightlog.ulog import damage_note
@@ -92,8 +93,9 @@ def describe_log(log: FlightLog) -> list[str]:
 
 
 def describe_unusable_ulog(summary: dict, reason: str) -> list[str]:
-    """Lines for a ULog the mapping refuses: what it holds (``ulog.summarise_ulog``) and why no
-    command can use it."""
+    """Lines for a ULog the mapping refuses: what it holds (``ulog.summarise_ulog``), why no
+    command can use its flight, and, for a multirotor, that config-from-log can use its
+    parameters."""
     lines = ["source: px4_ulog"]
     if summary.get("vehicle"):
         lines.append(f"vehicle: {summary['vehicle']}")
@@ -107,4 +109,10 @@ def describe_unusable_ulog(summary: dict, reason: str) -> list[str]:
     if not summary["modes"]:
         lines.append("modes: not recorded")
     lines.append(f"fit-gp, diagnose, convert: cannot use this log: {reason}")
+    params = summary.get("px4_params") or {}
+    if summary.get("mav_type") in px4.MAV_TYPE_MULTIROTOR and "MPC_THR_HOVER" in params:
+        lines.append(
+            "config-from-log: from its PX4 parameters only (hover thrust: the MPC_THR_HOVER "
+            "parameter, not measured)"
+        )
     return lines

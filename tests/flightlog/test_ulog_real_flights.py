@@ -141,6 +141,13 @@ def test_octocopter_is_a_multirotor_refused_only_for_its_modes(capsys):
     out = capsys.readouterr().out
     assert "vehicle: octorotor" in out and "mode ALTCTL:" in out
     assert "cannot use this log: no valid motion" in out
+    assert "config-from-log: from its PX4 parameters only" in out
+
+
+def test_a_fixed_wing_log_is_not_offered_to_config_from_log(capsys):
+    assert flightlog_cli.main(["info", str(FIXTURES / "fixedwing_v1_17rc_status.ulg")]) == 0
+    out = capsys.readouterr().out
+    assert "not a multirotor" in out and "config-from-log" not in out
 
 
 @pytest.mark.parametrize("name", ["quad_posctl_v1_15.ulg", "quad_offboard_v1_16.ulg"])
