@@ -32,8 +32,8 @@ def describe_log(log: FlightLog) -> list[str]:
     if isinstance(vehicle, dict):
         vtol = " (VTOL)" if vehicle.get("is_vtol") else ""
         lines.append(f"vehicle: {vehicle.get('type')}{vtol}")
-    if meta.get("firmware"):
-        lines.append(f"firmware: PX4 {meta['firmware']} on {meta.get('hardware')}")
+    if meta.get("source") == "px4_ulog":
+        lines += _firmware_and_dropouts(meta)
     if "duration_s" in meta:
         lines.append(f"log duration: {meta['duration_s']:.1f} s")
     damaged = damage_note(log)
@@ -99,8 +99,7 @@ def describe_unusable_ulog(summary: dict, reason: str) -> list[str]:
     lines = ["source: px4_ulog"]
     if summary.get("vehicle"):
         lines.append(f"vehicle: {summary['vehicle']}")
-    if summary.get("firmware"):
-        lines.append(f"firmware: PX4 {summary['firmware']} on {summary.get('hardware')}")
+    lines += _firmware_and_dropouts(summary)
     lines.append(f"log duration: {summary['duration_s']:.1f} s")
     for name, hz in summary["rates_hz"].items():
         lines.append(f"topic {name}: {hz:g} Hz")
@@ -114,5 +113,24 @@ def describe_unusable_ulog(summary: dict, reason: str) -> list[str]:
         lines.append(
             "config-from-log: from its PX4 parameters only (hover thrust: the MPC_THR_HOVER "
             "parameter, not measured)"
+        )
+    return lines
+
+
+def _firmware_and_dropouts(meta: dict) -> list[str]:
+    """A ULog's firmware line (also when the log records no version) and, if its logger dropped
+    messages, how many and for how long."""
+    if meta.get("firmware"):
+        lines = [f"firmware: PX4 {meta['firmware']} on {meta.get('hardware')}"]
+    else:
+        lines = [
+            f"firmware: PX4, version not logged (no ver_sw_release), on {meta.get('hardware')}; "
+            "flight modes read with the numbering before v1.15"
+        ]
+    count, total_s, longest_s = meta.get("logger_dropouts") or (0, 0.0, 0.0)
+    if count:
+        lines.append(
+            f"logger dropouts: {count:g}, {total_s:g} s in all, longest {longest_s * 1e3:g} ms "
+            "(no topic has data in them)"
         )
     return lines

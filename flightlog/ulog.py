@@ -151,6 +151,7 @@ def read_ulog(path: str | Path) -> FlightLog:
         "sys_name": info.get("sys_name"),
         "hardware": info.get("ver_hw"),
         "duration_s": round((ulog.last_timestamp - ulog.start_timestamp) * 1e-6, 3),
+        "logger_dropouts": logger_dropouts(ulog),
     }
     if damage is not None and damage.kind == "truncated":
         meta["truncated_at_byte"] = [damage.at_byte, damage.file_bytes]
@@ -176,7 +177,8 @@ def summarise_ulog(path: str | Path) -> dict[str, object]:
     """What a ULog holds, read without mapping it (for ``flightlog info`` on a log the mapping
     refuses): firmware, hardware, vehicle type (name and MAV_TYPE), duration [s], the mapped
     topics present with their rates [Hz], the modes flown as (name, start_s, end_s) from the
-    log's start, and the initial PX4 parameters (``px4_params``).
+    log's start, the initial PX4 parameters (``px4_params``) and the logger's dropouts
+    (:func:`logger_dropouts`).
 
     Raises:
         FlightLogError: not a ULog, or pyulog cannot read even its header.
@@ -213,7 +215,15 @@ def summarise_ulog(path: str | Path) -> dict[str, object]:
         "rates_hz": {name: _rate(topic, span) for name, topic in sorted(topics.items())},
         "modes": modes,
         "px4_params": {k: float(v) for k, v in params.items()},
+        "logger_dropouts": logger_dropouts(ulog),
     }
+
+
+def logger_dropouts(ulog) -> list[float]:
+    """[count, total s, longest s] of the gaps PX4's logger recorded in pyulog's ``ulog``
+    (messages it could not write, e.g. to a slow SD card: no topic has data in them)."""
+    ms = [float(d.duration) for d in ulog.dropouts]
+    return [len(ms), round(sum(ms) * 1e-3, 3), round(max(ms, default=0.0) * 1e-3, 3)]
 
 
 def flight_log_from_topics(

@@ -217,3 +217,18 @@ def test_a_replay_that_cannot_be_examined_gives_no_gain_and_says_so_in_the_headl
     doc = json.loads((out / "report.json").read_text())
     assert doc["baseline"]["replay_vel_rmse_mps"] is None
     assert doc["extended"]["gain"] is None
+
+
+def test_info_says_when_the_version_is_not_logged_and_counts_the_loggers_dropouts(capsys):
+    """pyulog's sample log (AUAV-X2.1, before PX4 logged ver_sw_release), whose logger dropped
+    messages four times: info says both, with the dropouts pyulog reads."""
+    path = FIXTURES / "quad_manual_dropouts_nover.ulg"
+    assert flightlog_cli.main(["info", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "firmware: PX4, version not logged (no ver_sw_release), on AUAV_X21" in out
+    ms = [d.duration for d in ULog(str(path), message_name_filter_list=[]).dropouts]
+    assert len(ms) == 4
+    line = f"logger dropouts: 4, {sum(ms) / 1e3:g} s in all, longest {max(ms):g} ms"
+    assert line in out
+    assert flightlog_cli.main(["info", str(FIXTURES / "quad_posctl_v1_15.ulg")]) == 0
+    assert "logger dropouts" not in capsys.readouterr().out
