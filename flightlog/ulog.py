@@ -340,12 +340,21 @@ def _vehicle(topics: Topics, params: Mapping[str, float], where: str) -> dict[st
     refuse = mav_type is not None and not is_vtol and mav_type not in px4.MAV_TYPE_MULTIROTOR
     if not is_vtol and "vehicle_type" in status:
         vt = np.asarray(status["vehicle_type"])
-        refuse |= bool(np.all(vt == px4.VEHICLE_TYPE_FIXED_WING))
-        name = name or "fixed wing"
+        for kind, kind_name in ((px4.VEHICLE_TYPE_FIXED_WING, "fixed wing"),
+                                (px4.VEHICLE_TYPE_ROVER, "ground rover")):  # fmt: skip
+            if np.all(vt == kind):
+                refuse, name = True, name or kind_name
     if refuse:
+        known = f" (MAV_TYPE {mav_type})" if mav_type is not None else ""
+        rover = mav_type == px4.MAV_TYPE_GROUND_ROVER or name == "ground rover"
         raise FlightLogError(
-            f"{where}: a {name} log (MAV_TYPE {mav_type}), not a multirotor; these tools model "
-            "multirotors: use a log of a quad/hexa/octocopter (or a VTOL in multicopter phase)"
+            f"{where}: a {name} log{known}, not a multirotor; these tools model multirotors: "
+            + (
+                "a PX4 rover's ULog is not read (the ground rovers are learned only on the "
+                "simulated ones: python -m scripts.rover --help)"
+                if rover
+                else "use a log of a quad/hexa/octocopter (or a VTOL in multicopter phase)"
+            )
         )
     return {
         "mav_type": mav_type,
