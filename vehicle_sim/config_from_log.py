@@ -27,6 +27,7 @@ from vehicle_sim.config import GRAVITY_MPS2, config_from_mapping, load_sim_confi
 from vehicle_sim.params import PX4_PARAMS
 
 HOVER_SPEED_MPS = 0.3  # rows slower than this (and not landed) count as hovering
+HOVER_PARAMETER = "MPC_THR_HOVER parameter"  # how the hover thrust was found, when not measured
 
 
 @dataclass(frozen=True)
@@ -75,15 +76,13 @@ def config_from_log_file(path: str | Path, preset: str = "iris") -> ConfigFromLo
         params = summary["px4_params"]
         if summary["mav_type"] not in px4.MAV_TYPE_MULTIROTOR or "MPC_THR_HOVER" not in params:
             raise refused from None
-        why = str(refused).removeprefix(f"{path}: ").removesuffix(f"; {FLY_HINT}")
+        why = str(refused).removeprefix(f"{path}: ").replace(f"; {FLY_HINT}", "")
         hover = float(params["MPC_THR_HOVER"])
         note = (
             f"parameters only: its flight cannot be read ({why}), so the hover thrust is the "
             "MPC_THR_HOVER parameter, not measured"
         )
-        if hover == PX4_PARAMS["MPC_THR_HOVER"].default:
-            note += " (PX4's default, likely never set for this vehicle: the mass is a guess)"
-        return _build(str(path), params, hover, "MPC_THR_HOVER parameter", preset, (note,))
+        return _build(str(path), params, hover, HOVER_PARAMETER, preset, (note,))
 
 
 def _build(
@@ -99,6 +98,9 @@ def _build(
     of what came from the log."""
     base = load_sim_config(preset)
     v = base.vehicle
+    if hover_how == HOVER_PARAMETER and hover == PX4_PARAMS["MPC_THR_HOVER"].default:
+        unset = f"MPC_THR_HOVER = {hover:g} is PX4's default: it may never have been set for "
+        notes = (*notes, unset + "this vehicle, so the mass may be off")
     mass_kg = hover * 4 * v.max_rotor_thrust_n / GRAVITY_MPS2
     tuned = {n: float(f"{float(params[n]):.7g}") for n in sorted(PX4_PARAMS) if n in params}
     tuned.pop("MPC_THR_HOVER", None)
@@ -202,5 +204,5 @@ def _hover_thrust(log: FlightLog, params: Mapping[str, float]) -> tuple[float | 
         if rows.sum() >= 10:
             return float(np.median(log["thrust_norm"][rows])), "median produced thrust in hover"
     if "MPC_THR_HOVER" in params:
-        return float(params["MPC_THR_HOVER"]), "MPC_THR_HOVER parameter"
+        return float(params["MPC_THR_HOVER"]), HOVER_PARAMETER
     return None, ""
