@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from flightlog import px4
 from flightlog.reader import NEEDS_HZ, log_rates_hz, rate_shortfalls
 from flightlog.schema import FlightLog
 from flightlog.ulog import damage_note
@@ -31,8 +32,8 @@ def describe_log(log: FlightLog) -> list[str]:
     if isinstance(vehicle, dict):
         vtol = " (VTOL)" if vehicle.get("is_vtol") else ""
         lines.append(f"vehicle: {vehicle.get('type')}{vtol}")
-    if meta.get("firmware"):
-        lines.append(f"firmware: PX4 {meta['firmware']} on {meta.get('hardware')}")
+    if meta.get("source") == "px4_ulog":
+        lines += _firmware_and_dropouts(meta)
     if "duration_s" in meta:
         lines.append(f"log duration: {meta['duration_s']:.1f} s")
     damaged = damage_note(log)
@@ -92,13 +93,13 @@ def describe_log(log: FlightLog) -> list[str]:
 
 
 def describe_unusable_ulog(summary: dict, reason: str) -> list[str]:
-    """Lines for a ULog the mapping refuses: what it holds (``ulog.summarise_ulog``) and why no
-    command can use it."""
+    """Lines for a ULog the mapping refuses: what it holds (``ulog.summarise_ulog``), why no
+    command can use its flight, and, for a multirotor, that config-from-log can use its
+    parameters."""
     lines = ["source: px4_ulog"]
     if summary.get("vehicle"):
         lines.append(f"vehicle: {summary['vehicle']}")
-    if summary.get("firmware"):
-        lines.append(f"firmware: PX4 {summary['firmware']} on {summary.get('hardware')}")
+    lines += _firmware_and_dropouts(summary)
     lines.append(f"log duration: {summary['duration_s']:.1f} s")
     for name, hz in summary["rates_hz"].items():
         lines.append(f"topic {name}: {hz:g} Hz")
@@ -107,4 +108,29 @@ def describe_unusable_ulog(summary: dict, reason: str) -> list[str]:
     if not summary["modes"]:
         lines.append("modes: not recorded")
     lines.append(f"fit-gp, diagnose, convert: cannot use this log: {reason}")
+    params = summary.get("px4_params") or {}
+    if summary.get("mav_type") in px4.MAV_TYPE_MULTIROTOR and "MPC_THR_HOVER" in params:
+        lines.append(
+            "config-from-log: from its PX4 parameters only (hover thrust: the MPC_THR_HOVER "
+            "parameter, not measured)"
+        )
+    return lines
+
+
+def _firmware_and_dropouts(meta: dict) -> list[str]:
+    """A ULog's firmware line (also when the log records no version) and, if its logger dropped
+    messages, how many and for how long."""
+    if meta.get("firmware"):
+        lines = [f"firmware: PX4 {meta['firmware']} on {meta.get('hardware')}"]
+    else:
+        lines = [
+            f"firmware: PX4, version not logged (no ver_sw_release), on {meta.get('hardware')}; "
+            "flight modes read with the numbering before v1.15"
+        ]
+    count, total_s, longest_s = meta.get("logger_dropouts") or (0, 0.0, 0.0)
+    if count:
+        lines.append(
+            f"logger dropouts: {count:g}, {total_s:g} s in all, longest {longest_s * 1e3:g} ms "
+            "(no topic has data in them)"
+        )
     return lines

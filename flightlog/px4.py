@@ -68,6 +68,8 @@ ARMING_STATE_ARMED = 2
 # vehicle_status.vehicle_type (v1.10+; up to v1.9 is_rotary_wing instead).
 VEHICLE_TYPE_ROTARY_WING = 1
 VEHICLE_TYPE_FIXED_WING = 2
+VEHICLE_TYPE_ROVER = 3
+MAV_TYPE_GROUND_ROVER = 10
 
 # [MAVLink] MAV_TYPE (parameter MAV_TYPE in PX4): multirotors and VTOLs.
 MAV_TYPE_MULTIROTOR: dict[int, str] = {

@@ -151,6 +151,7 @@ def read_ulog(path: str | Path) -> FlightLog:
         "sys_name": info.get("sys_name"),
         "hardware": info.get("ver_hw"),
         "duration_s": round((ulog.last_timestamp - ulog.start_timestamp) * 1e-6, 3),
+        "logger_dropouts": logger_dropouts(ulog),
     }
     if damage is not None and damage.kind == "truncated":
         meta["truncated_at_byte"] = [damage.at_byte, damage.file_bytes]
@@ -174,8 +175,10 @@ def read_ulog(path: str | Path) -> FlightLog:
 
 def summarise_ulog(path: str | Path) -> dict[str, object]:
     """What a ULog holds, read without mapping it (for ``flightlog info`` on a log the mapping
-    refuses): firmware, hardware, vehicle type, duration [s], the mapped topics present with
-    their rates [Hz], and the modes flown as (name, start_s, end_s) from the log's start.
+    refuses): firmware, hardware, vehicle type (name and MAV_TYPE), duration [s], the mapped
+    topics present with their rates [Hz], the modes flown as (name, start_s, end_s) from the
+    log's start, the initial PX4 parameters (``px4_params``) and the logger's dropouts
+    (:func:`logger_dropouts`).
 
     Raises:
         FlightLogError: not a ULog, or pyulog cannot read even its header.
@@ -207,10 +210,20 @@ def summarise_ulog(path: str | Path) -> dict[str, object]:
         "firmware": firmware,
         "hardware": ulog.msg_info_dict.get("ver_hw"),
         "vehicle": px4.MAV_TYPE_NAMES.get(mav_type, f"MAV_TYPE {mav_type}") if mav_type else None,
+        "mav_type": mav_type,
         "duration_s": (t1 - t0) * 1e-6,
         "rates_hz": {name: _rate(topic, span) for name, topic in sorted(topics.items())},
         "modes": modes,
+        "px4_params": {k: float(v) for k, v in params.items()},
+        "logger_dropouts": logger_dropouts(ulog),
     }
+
+
+def logger_dropouts(ulog) -> list[float]:
+    """[count, total s, longest s] of the gaps PX4's logger recorded in pyulog's ``ulog``
+    (messages it could not write, e.g. to a slow SD card: no topic has data in them)."""
+    ms = [float(d.duration) for d in ulog.dropouts]
+    return [len(ms), round(sum(ms) * 1e-3, 3), round(max(ms, default=0.0) * 1e-3, 3)]
 
 
 def flight_log_from_topics(
@@ -278,7 +291,8 @@ def flight_log_from_topics(
     if keep.sum() < 2:
         counts = ", ".join(f"{n} {why}" for why, n in dropped.items() if n) or "none usable"
         raise FlightLogError(
-            f"{where}: no valid motion: of {len(t_all)} rows, dropped {counts}; {FLY_HINT}"
+            f"{where}: no valid motion: of {len(t_all)} rows, dropped {counts}"
+            f"{_modes_flown(topics, firmware)}; {FLY_HINT}"
         )
     cols = {k: v[keep] for k, v in cols.items()}
     t0 = cols["t_s"][0]
@@ -326,12 +340,21 @@ def _vehicle(topics: Topics, params: Mapping[str, float], where: str) -> dict[st
     refuse = mav_type is not None and not is_vtol and mav_type not in px4.MAV_TYPE_MULTIROTOR
     if not is_vtol and "vehicle_type" in status:
         vt = np.asarray(status["vehicle_type"])
-        refuse |= bool(np.all(vt == px4.VEHICLE_TYPE_FIXED_WING))
-        name = name or "fixed wing"
+        for kind, kind_name in ((px4.VEHICLE_TYPE_FIXED_WING, "fixed wing"),
+                                (px4.VEHICLE_TYPE_ROVER, "ground rover")):  # fmt: skip
+            if np.all(vt == kind):
+                refuse, name = True, name or kind_name
     if refuse:
+        known = f" (MAV_TYPE {mav_type})" if mav_type is not None else ""
+        rover = mav_type == px4.MAV_TYPE_GROUND_ROVER or name == "ground rover"
         raise FlightLogError(
-            f"{where}: a {name} log (MAV_TYPE {mav_type}), not a multirotor; these tools model "
-            "multirotors: use a log of a quad/hexa/octocopter (or a VTOL in multicopter phase)"
+            f"{where}: a {name} log{known}, not a multirotor; these tools model multirotors: "
+            + (
+                "a PX4 rover's ULog is not read (the ground rovers are learned only on the "
+                "simulated ones: python -m scripts.rover --help)"
+                if rover
+                else "use a log of a quad/hexa/octocopter (or a VTOL in multicopter phase)"
+            )
         )
     return {
         "mav_type": mav_type,

@@ -17,11 +17,10 @@ from flightlog.atomic_output import (
     check_writable_file,
     write_text_atomic,
 )
-from flightlog.reader import read_log
 from flightlog.schema import FlightLogError
 from scripts.one_line_parser import OneLineParser, output_path
 from vehicle_sim.config import PRESET_NAMES
-from vehicle_sim.config_from_log import config_from_log
+from vehicle_sim.config_from_log import config_from_log_file
 from vehicle_sim.effects.base import SimConfigError
 
 
@@ -49,7 +48,7 @@ def main(argv: list[str] | None = None) -> int:
     except SystemExit as exc:
         return int(exc.code or 0)
     try:
-        built = config_from_log(read_log(args.log), args.preset)
+        built = config_from_log_file(args.log, args.preset)
         check_not_an_input(args.out, [args.log])
         check_writable_file(args.out)
         write_text_atomic(args.out, built.toml)

@@ -5,7 +5,9 @@ The log tells: the flight-control parameters ([PX4-params] MPC_*, MC_*) and the 
 (MPC_THR_HOVER, or the median produced thrust while hovering). It cannot tell inertia, rotor
 geometry, rotor speed or thrust coefficient: those come from the preset, and the mass follows
 from hover thrust x the preset's maximum thrust / g, so the simulated vehicle hovers at the
-log's hover thrust.
+log's hover thrust. A multirotor ULog whose flight no command can read (flown in STAB, no
+position estimate) still gives its parameters; the hover thrust is then MPC_THR_HOVER, and the
+config says so.
 """
 
 from __future__ import annotations
@@ -13,14 +15,19 @@ from __future__ import annotations
 import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
-from flightlog.schema import FlightLog
+from flightlog import px4
+from flightlog.reader import read_log
+from flightlog.schema import FlightLog, FlightLogError
+from flightlog.ulog import FLY_HINT, is_ulog, summarise_ulog
 from vehicle_sim.config import GRAVITY_MPS2, config_from_mapping, load_sim_config
 from vehicle_sim.params import PX4_PARAMS
 
 HOVER_SPEED_MPS = 0.3  # rows slower than this (and not landed) count as hovering
+HOVER_PARAMETER = "MPC_THR_HOVER parameter"  # how the hover thrust was found, when not measured
 
 
 @dataclass(frozen=True)
@@ -40,20 +47,67 @@ def config_from_log(log: FlightLog, preset: str = "iris") -> ConfigFromLog:
     """
     params = log.metadata.get("px4_params")
     params = dict(params) if isinstance(params, Mapping) else {}
-    base = load_sim_config(preset)
     hover, hover_how = _hover_thrust(log, params)
     if hover is None:
         raise ValueError(
             f"{log.where}: no MPC_THR_HOVER parameter and no produced thrust while "
             "hovering; use a PX4 ULog (it records parameters) or log actuator_motors"
         )
+    return _build(log.where, params, hover, hover_how, preset, ())
+
+
+def config_from_log_file(path: str | Path, preset: str = "iris") -> ConfigFromLog:
+    """Build a sim config from the log at ``path``: from its flight and parameters when its
+    flight can be read (:func:`config_from_log`); else, for a multirotor ULog whose flight the
+    mapping refuses (flown in STAB or MANUAL, no position estimate, never armed), from its PX4
+    parameters alone, the hover thrust being MPC_THR_HOVER, with a line saying why.
+
+    Raises:
+        FlightLogError: the log cannot be read, or is not a multirotor's ULog with parameters.
+        ValueError: as :func:`config_from_log`.
+    """
+    path = Path(path)
+    try:
+        return config_from_log(read_log(path), preset)
+    except FlightLogError as refused:
+        if not is_ulog(path):
+            raise
+        summary = summarise_ulog(path)
+        params = summary["px4_params"]
+        if summary["mav_type"] not in px4.MAV_TYPE_MULTIROTOR or "MPC_THR_HOVER" not in params:
+            raise refused from None
+        why = str(refused).removeprefix(f"{path}: ").replace(f"; {FLY_HINT}", "")
+        hover = float(params["MPC_THR_HOVER"])
+        note = (
+            f"parameters only: its flight cannot be read ({why}), so the hover thrust is the "
+            "MPC_THR_HOVER parameter, not measured"
+        )
+        return _build(str(path), params, hover, HOVER_PARAMETER, preset, (note,))
+
+
+def _build(
+    where: str,
+    params: Mapping[str, float],
+    hover: float,
+    hover_how: str,
+    preset: str,
+    notes: tuple[str, ...],
+) -> ConfigFromLog:
+    """The config TOML: mass from ``hover`` (normalised thrust) x the preset's maximum thrust,
+    the PX4 parameters ``params`` it knows, the rest from ``preset``; ``notes`` lead the lines
+    of what came from the log."""
+    base = load_sim_config(preset)
     v = base.vehicle
+    if hover_how == HOVER_PARAMETER and hover == PX4_PARAMS["MPC_THR_HOVER"].default:
+        unset = f"MPC_THR_HOVER = {hover:g} is PX4's default: it may never have been set for "
+        notes = (*notes, unset + "this vehicle, so the mass may be off")
     mass_kg = hover * 4 * v.max_rotor_thrust_n / GRAVITY_MPS2
     tuned = {n: float(f"{float(params[n]):.7g}") for n in sorted(PX4_PARAMS) if n in params}
     tuned.pop("MPC_THR_HOVER", None)
     clamped = _clamp_to_px4_ranges(tuned)
     defaults = [n for n in sorted(PX4_PARAMS) if n not in params and n != "MPC_THR_HOVER"]
     from_log = [
+        *notes,
         f"mass_kg = {mass_kg:.4f}: hover thrust {hover:.3f} ({hover_how}) x the preset's "
         f"maximum thrust {4 * v.max_rotor_thrust_n:.2f} N / g",
         f"{len(tuned)} PX4 parameters: {', '.join(tuned) or 'none'}",
@@ -71,7 +125,7 @@ def config_from_log(log: FlightLog, preset: str = "iris") -> ConfigFromLog:
     ]
     if defaults:
         assumed.append(f"PX4 defaults for {', '.join(defaults)} (not in the log)")
-    lines = [f"# Built from {log.where} by vehicle-sim config-from-log.", "# From the log:"]
+    lines = [f"# Built from {where} by vehicle-sim config-from-log.", "# From the log:"]
     lines += [f"#   {s}" for s in from_log]
     lines += ["# Assumed (the log cannot tell):"] + [f"#   {s}" for s in assumed]
     lines += [
@@ -150,5 +204,5 @@ def _hover_thrust(log: FlightLog, params: Mapping[str, float]) -> tuple[float | 
         if rows.sum() >= 10:
             return float(np.median(log["thrust_norm"][rows])), "median produced thrust in hover"
     if "MPC_THR_HOVER" in params:
-        return float(params["MPC_THR_HOVER"]), "MPC_THR_HOVER parameter"
+        return float(params["MPC_THR_HOVER"]), HOVER_PARAMETER
     return None, ""

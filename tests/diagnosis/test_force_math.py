@@ -12,7 +12,14 @@ from diagnosis.force_model import (
     flight_time_from_voltage,
     predicted_residual,
 )
-from diagnosis.forces import ForceData, acceleration, neighbour_mean, rotation_matrices
+from diagnosis.forces import (
+    ForceData,
+    ForceDataError,
+    acceleration,
+    force_data,
+    neighbour_mean,
+    rotation_matrices,
+)
 from flightlog.schema import FlightLog
 
 BATTERY = BatteryModel(full_v=16.8, empty_v=14.0)
@@ -74,6 +81,21 @@ def test_acceleration_is_differentiated_when_not_logged():
     inner = slice(20, -20)
     np.testing.assert_allclose(acc[inner, 0], np.cos(t[inner]), atol=5e-3)
     np.testing.assert_allclose(acc[inner, 1], 0.5, atol=1e-9)
+
+
+def test_a_log_never_airborne_is_refused_saying_which_condition_failed():
+    """A log recorded disarmed on the ground (a v1.8 SITL log kept after its RTL): the refusal
+    counts the rows that fail each airborne condition, so the user learns it never flew."""
+    n = 50
+    cols = {"t_s": np.arange(n) * 0.1, "armed": np.zeros(n), "thrust_n": np.zeros(n)}
+    cols |= {k: np.zeros(n) for k in ("vel_n_mps", "vel_e_mps", "vel_d_mps", "pos_n_m", "pos_e_m")}
+    cols |= {"pos_d_m": np.full(n, -0.5), "q_w": np.ones(n), "q_x": np.zeros(n)}
+    cols |= {"q_y": np.zeros(n), "q_z": np.zeros(n)}
+    with pytest.raises(ForceDataError) as err:
+        force_data([FlightLog(cols)], mass_kg=1.5)
+    assert "of 50 rows, 50 disarmed, 0 at or below 1 cm, 50 without thrust; use a log of a" in str(
+        err.value
+    )
 
 
 def test_rotor_drag_residual_is_linear_in_body_air_velocity():

@@ -74,9 +74,27 @@ def test_estimator_invalid_rows_are_dropped_with_a_count(flight):
     assert log.n_rows == len(pos["timestamp"]) - 35
     for flag in ("xy_valid", "z_valid", "v_xy_valid", "v_z_valid"):
         pos[flag] = np.zeros(len(pos["timestamp"]))
-    with pytest.raises(FlightLogError, match=r"no valid motion: .* estimator_invalid; fly") as err:
+    with pytest.raises(
+        FlightLogError, match=r"no valid motion: .* estimator_invalid; flown in OFFBOARD; fly"
+    ) as err:
         flight_log_from_topics(topics)
     assert "\n" not in str(err.value)
+
+
+def test_rover_log_refused_saying_rover_ulogs_are_not_read(flight):
+    """A PX4 ground rover (MAV_TYPE 10, or vehicle_type ROVER when MAV_TYPE is not logged): one
+    line that says rover ULogs are not read and where the ground rovers are learned."""
+    topics = topics_of(flight)
+    vehicle = flight_log_from_topics(topics).metadata["vehicle"]  # a multirotor's vehicle_type
+    assert vehicle["type"] == "multirotor (MAV_TYPE not logged)"  # was labelled "fixed wing"
+    said = "a PX4 rover's ULog is not read .* python -m scripts.rover --help"
+    with pytest.raises(FlightLogError, match=rf"a ground rover log \(MAV_TYPE 10\), .*{said}"):
+        flight_log_from_topics(topics, params={"MAV_TYPE": 10})
+    topics["vehicle_status"]["vehicle_type"] = np.full(
+        len(topics["vehicle_status"]["nav_state"]), 3
+    )
+    with pytest.raises(FlightLogError, match=rf"a ground rover log, not a multirotor; .*{said}"):
+        flight_log_from_topics(topics)
 
 
 def test_fixed_wing_refused_vtol_multicopter_phase_kept_with_segments(flight):

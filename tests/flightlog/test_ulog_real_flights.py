@@ -108,6 +108,9 @@ REFUSED = {  # file: (command, pattern of its one line)
     "fixedwing_v1_17rc_status.ulg": r"a fixed wing log \(MAV_TYPE 1\), not a multirotor",
     "quad_mission_rtl_v1_9_esc.ulg": r"needs faster signals: local_position at 7.96 Hz "
     r"\(needs >= 10 Hz\)",
+    # flown in STAB without GPS: the line names the mode as well as the estimator
+    "quad_stab_nogps_v1_16_1.ulg": r"no valid motion: of \d+ rows, dropped \d+ estimator_invalid; "
+    r"flown in STAB; fly a multirotor in a position-controlled mode",
 }
 
 
@@ -138,6 +141,13 @@ def test_octocopter_is_a_multirotor_refused_only_for_its_modes(capsys):
     out = capsys.readouterr().out
     assert "vehicle: octorotor" in out and "mode ALTCTL:" in out
     assert "cannot use this log: no valid motion" in out
+    assert "config-from-log: from its PX4 parameters only" in out
+
+
+def test_a_fixed_wing_log_is_not_offered_to_config_from_log(capsys):
+    assert flightlog_cli.main(["info", str(FIXTURES / "fixedwing_v1_17rc_status.ulg")]) == 0
+    out = capsys.readouterr().out
+    assert "not a multirotor" in out and "config-from-log" not in out
 
 
 @pytest.mark.parametrize("name", ["quad_posctl_v1_15.ulg", "quad_offboard_v1_16.ulg"])
@@ -207,3 +217,18 @@ def test_a_replay_that_cannot_be_examined_gives_no_gain_and_says_so_in_the_headl
     doc = json.loads((out / "report.json").read_text())
     assert doc["baseline"]["replay_vel_rmse_mps"] is None
     assert doc["extended"]["gain"] is None
+
+
+def test_info_says_when_the_version_is_not_logged_and_counts_the_loggers_dropouts(capsys):
+    """pyulog's sample log (AUAV-X2.1, before PX4 logged ver_sw_release), whose logger dropped
+    messages four times: info says both, with the dropouts pyulog reads."""
+    path = FIXTURES / "quad_manual_dropouts_nover.ulg"
+    assert flightlog_cli.main(["info", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "firmware: PX4, version not logged (no ver_sw_release), on AUAV_X21" in out
+    ms = [d.duration for d in ULog(str(path), message_name_filter_list=[]).dropouts]
+    assert len(ms) == 4
+    line = f"logger dropouts: 4, {sum(ms) / 1e3:g} s in all, longest {max(ms):g} ms"
+    assert line in out
+    assert flightlog_cli.main(["info", str(FIXTURES / "quad_posctl_v1_15.ulg")]) == 0
+    assert "logger dropouts" not in capsys.readouterr().out

@@ -36,6 +36,13 @@ LAYOUTS = {
         {"vehicle_status.is_rotary_wing", "vehicle_local_position.dead_reckoning",
          "vehicle_thrust_setpoint", "actuator_motors"},
     ),
+    "quad_stab_ground_v1_12.ulg": (
+        "v1.12.3-dev",
+        {"vehicle_status.vehicle_type", "vehicle_angular_velocity.xyz[0]",
+         "esc_status.esc[0].esc_rpm", "actuator_outputs.output[0]"},
+        {"vehicle_status.is_rotary_wing", "vehicle_local_position.dead_reckoning",
+         "vehicle_local_position_setpoint", "trajectory_setpoint", "actuator_motors"},
+    ),
     "octo_altctl_v1_14.ulg": (
         "v1.14.0",
         {
@@ -50,6 +57,12 @@ LAYOUTS = {
         {"vehicle_local_position.dead_reckoning", "trajectory_setpoint.velocity[0]",
          "actuator_motors.control[0]", "vehicle_status.vehicle_type"},
         {"actuator_controls_0"},
+    ),
+    "quad_stab_nogps_v1_16_1.ulg": (
+        "v1.16.1-rc",
+        {"vehicle_local_position.dead_reckoning", "trajectory_setpoint.velocity[0]",
+         "actuator_motors.control[0]", "vehicle_thrust_setpoint.xyz[2]"},
+        {"actuator_controls_0", "esc_status"},
     ),
     "quad_offboard_v1_16.ulg": (
         "v1.16.0",

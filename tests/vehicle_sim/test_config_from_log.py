@@ -49,6 +49,41 @@ def test_bad_log_one_line_exit_2_nothing_written(tmp_path, capsys):
     assert not out.exists()
 
 
+def test_multirotor_log_whose_flight_is_unusable_gives_a_config_from_its_parameters(
+    tmp_path, capsys
+):
+    """A real v1.12 quadrotor armed on the ground in STAB: no velocity command, so no command
+    reads its flight, but its parameters are the vehicle's tuning; the config says it was built
+    from them alone and that the hover thrust is PX4's default, not measured."""
+    log = FIXTURES / "quad_stab_ground_v1_12.ulg"
+    out = tmp_path / "v.toml"
+    assert vehicle_sim_cli.main(["config-from-log", str(log), "--out", str(out)]) == 0
+    err = capsys.readouterr().err
+    note = (
+        "parameters only: its flight cannot be read (ULog lacks topic(s) "
+        "vehicle_local_position_setpoint or trajectory_setpoint (no velocity command; flown in "
+        "STAB)), so the hover thrust is the MPC_THR_HOVER parameter, not measured"
+    )
+    default = "MPC_THR_HOVER = 0.5 is PX4's default: it may never have been set for this vehicle"
+    assert note in err and note in out.read_text()
+    assert default in err and default in out.read_text()
+    config = load_sim_config(out)
+    assert config.vehicle.hover_thrust_norm == pytest.approx(0.5, rel=0.02)
+    assert config.vehicle.battery_full_v == pytest.approx(4 * 4.05)  # BAT1_N_CELLS 4
+
+
+def test_truncated_log_names_its_damage_without_the_fly_hint(tmp_path, capsys):
+    """The mapping's refusal of a truncated ULog ends with the damage after the hint to fly
+    otherwise; the parameters-only note keeps the reason and the damage, not the hint."""
+    out = tmp_path / "v.toml"
+    log = FIXTURES / "truncated.ulg"
+    assert vehicle_sim_cli.main(["config-from-log", str(log), "--out", str(out)]) == 0
+    (note,) = [s for s in capsys.readouterr().err.splitlines() if "parameters only" in s]
+    assert (
+        "flown in HOLD; the file is truncated (at byte" in note and "fly a multirotor" not in note
+    )
+
+
 def test_px4_params_section_is_validated():
     base = {
         "vehicle": {
