@@ -144,7 +144,7 @@ def _markdown(
     for c in d.causes:
         params = ", ".join(f"{k} = {v:.4g}" for k, v in c.params.items()) or "-"
         lines.append(
-            f"| `{c.name}` | {params} | {round(100 * c.explained_fraction):d} % | "
+            f"| `{c.name}` | {params} | {_percent(c.explained_fraction)} | "
             f"{c.confidence:.2f} | {c.evidence} |"
         )
     if d.not_identifiable:
@@ -199,3 +199,8 @@ def _closed_loop_markdown(doc: dict[str, Any], plot: Path) -> str:
 
 def _num(value: float) -> float | None:
     return float(value) if math.isfinite(value) else None
+
+
+def _percent(fraction: float) -> str:
+    """A fraction as a whole percentage ("37 %"), "n/a" when it is not a number."""
+    return f"{round(100 * fraction):d} %" if math.isfinite(fraction) else "n/a"

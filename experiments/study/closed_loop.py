@@ -104,7 +104,7 @@ class ClosedLoopVerdict:
             )
             instead = candidates[k + 1] if k + 1 < len(candidates) else self.flies_name
             lines.append(
-                f"refusing {name}: it tracks worse in closed loop on the training seeds than "
+                f"refusing {name}: it tracks worse in closed loop on {lost[0].flown_on} than "
                 f"{against} over {lost[0].n_flights} flights; {instead} flies in its place"
             )
         return lines
@@ -136,7 +136,7 @@ def compare_tracking(
     if set(cand) != set(inc) or not cand:
         raise ValueError(
             f"{candidate} and {incumbent} were not flown on the same (trajectory, seed) pairs "
-            f"({sorted(cand)} vs {sorted(inc)}); fly both on the training seeds"
+            f"({sorted(cand)} vs {sorted(inc)}); fly both on {flown_on}"
         )
     pairs = sorted(cand)
 

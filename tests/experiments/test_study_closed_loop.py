@@ -8,7 +8,12 @@ from dataclasses import replace
 import pytest
 
 from companion.nmpc_planner import NmpcSettings
-from experiments.study.closed_loop import STRUCTURE, compare_tracking, confirm_lineage
+from experiments.study.closed_loop import (
+    STRUCTURE,
+    ClosedLoopVerdict,
+    compare_tracking,
+    confirm_lineage,
+)
 from experiments.study.jobs import FlightJob, FlightSummary, run_flight_job
 from experiments.study.metrics import pooled_rmse
 from gp.model_io import load_model
@@ -100,6 +105,17 @@ def test_flights_on_other_seeds_are_not_compared(flights):
     moved = [replace(f, seed=f.seed + len(SEEDS)) for f in flights["best"]]
     with pytest.raises(ValueError, match="same \\(trajectory, seed\\) pairs"):
         compare_tracking("refit", flights["middle"], "first fit", moved)
+
+
+def test_lines_name_where_the_models_were_flown(flights):
+    """The trial view flies each refit on the just-flown trial's seed, and says so."""
+    where = "trial 3's seed"
+    lost = compare_tracking("refit", flights["worst"], "first fit", flights["best"], where)
+    [line] = ClosedLoopVerdict(None, STRUCTURE, (lost,)).refusals()
+    assert line.startswith(f"refusing refit: it tracks worse in closed loop on {where} than")
+    moved = [replace(f, seed=f.seed + len(SEEDS)) for f in flights["best"]]
+    with pytest.raises(ValueError, match=f"fly both on {where}$"):
+        compare_tracking("refit", flights["middle"], "first fit", moved, where)
 
 
 @pytest.mark.slow
