@@ -102,7 +102,8 @@ def describe_unusable_ulog(summary: dict, reason: str) -> list[str]:
     lines += _firmware_and_dropouts(summary)
     lines.append(f"log duration: {summary['duration_s']:.1f} s")
     for name, hz in summary["rates_hz"].items():
-        lines.append(f"topic {name}: {hz:g} Hz")
+        count = summary["messages"][name]
+        lines.append(f"topic {name}: {hz:g} Hz" if count > 1 else f"topic {name}: {count} message")
     for mode, a, b in summary["modes"]:
         lines.append(f"mode {mode}: {a:.1f} s to {b:.1f} s")
     if not summary["modes"]:

@@ -213,6 +213,7 @@ def summarise_ulog(path: str | Path) -> dict[str, object]:
         "mav_type": mav_type,
         "duration_s": (t1 - t0) * 1e-6,
         "rates_hz": {name: _rate(topic, span) for name, topic in sorted(topics.items())},
+        "messages": {name: len(topic["timestamp"]) for name, topic in sorted(topics.items())},
         "modes": modes,
         "px4_params": {k: float(v) for k, v in params.items()},
         "logger_dropouts": logger_dropouts(ulog),

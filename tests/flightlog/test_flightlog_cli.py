@@ -48,7 +48,8 @@ def test_info_names_vehicle_firmware_rates_modes_validity_and_uses(capsys):
     [
         ("vtol_manual_v1_11.ulg",
          ["vehicle: VTOL standard", "firmware: PX4 v1.11.2-dev on", "mode MANUAL: 0.0 s to 6.5 s"]),
-        ("quad_manual_v1_6.ulg", ["firmware: PX4 v1.6.0-dev on", "mode MANUAL: 0.0 s"]),
+        ("quad_manual_v1_6.ulg", ["firmware: PX4 v1.6.0-dev on", "mode MANUAL: 0.0 s",
+                                  "topic vehicle_land_detected: 1 message\n"]),  # not "0 Hz"
     ],
 )  # fmt: skip
 def test_info_describes_a_ulog_no_command_can_use_and_says_why(name, lines, capsys):
