@@ -9,7 +9,10 @@ DIR/extended_config.toml (the config plus the accepted effects with fitted param
 With ``--batch`` every log is diagnosed on its own (one job each, on ``--workers`` local
 processes or on the workers of the Dask cluster at ``--scheduler tcp://HOST:8786``) and DIR
 holds one such report set per log, in DIR/<log name>/, plus DIR/batch.json (verdict and gain
-per log). Progress goes to stderr. Exit codes: 0 done, 2 bad input (one line saying why).
+per log). A log the batch cannot diagnose (unreadable, too slow a rate, never airborne) is
+skipped with one line saying why, here and in batch.json, and the others are diagnosed.
+Progress goes to stderr. Exit codes: 0 done, 2 bad input (one line saying why; in a batch,
+when no log at all can be diagnosed).
 """
 
 from __future__ import annotations
@@ -103,14 +106,11 @@ def main(argv: list[str] | None = None) -> int:
     try:
         check_writable_dir(args.out_dir)  # before minutes of work, not after
         sim_config = load_sim_config(args.sim_config)
-        if not args.batch:  # one diagnosis of all logs: a flight given twice would count twice
-            require_distinct(args.logs)
-        logs = [read_log(p) for p in args.logs]
-        for log in logs:
-            require_rates(log, "diagnose")
-        progress(f"read {len(logs)} log(s), {sum(log.n_rows for log in logs)} rows")
         if args.batch:
-            return _run_batch(args, logs, sim_config, progress)
+            return _run_batch(args, sim_config, progress)
+        require_distinct(args.logs)  # one diagnosis of all logs: a flight twice counts twice
+        logs = [_read_for_diagnosis(p) for p in args.logs]
+        progress(f"read {len(logs)} log(s), {sum(log.n_rows for log in logs)} rows")
         result = diagnose(logs, sim_config, progress=progress)
     except (SimConfigError, FlightLogError, ForceDataError, SchedulerError) as exc:
         print(f"diagnose: {exc}", file=sys.stderr)
@@ -132,20 +132,51 @@ def main(argv: list[str] | None = None) -> int:
     return EXIT_OK
 
 
-def _run_batch(
-    args: DiagnoseArgs, logs: list[FlightLog], sim_config: SimConfig, progress: Progress
-) -> int:
-    """Diagnose each log on its own on the chosen executor; write the report sets atomically."""
+def _read_for_diagnosis(path: Path) -> FlightLog:
+    log = read_log(path)
+    require_rates(log, "diagnose")
+    return log
+
+
+def _run_batch(args: DiagnoseArgs, sim_config: SimConfig, progress: Progress) -> int:
+    """Diagnose each log on its own on the chosen executor, skipping (one line each) the logs
+    that cannot be diagnosed; write the report sets and batch.json atomically."""
     names = _unique_names(args.logs)
-    jobs = [DiagnosisJob(n, log, sim_config) for n, log in zip(names, logs, strict=True)]
+    path_of = dict(zip(names, args.logs, strict=True))
+    skipped: dict[str, str] = {}  # name -> why
+    jobs = []
+    for name, path in path_of.items():
+        try:
+            jobs.append(DiagnosisJob(name, _read_for_diagnosis(path), sim_config))
+        except FlightLogError as exc:
+            skipped[name] = str(exc)
+            print(f"diagnose: skipping {path}: {exc}", file=sys.stderr)
     where = args.scheduler or f"{args.workers} local processes"
     progress(f"batch: {len(jobs)} diagnoses on {where}")
-    with job_executor(args.workers, args.scheduler) as pool:
-        results = diagnose_each(jobs, pool, progress)
+    outcomes = []
+    if jobs:
+        with job_executor(args.workers, args.scheduler) as pool:
+            outcomes = diagnose_each(jobs, pool, progress)
+    results = {o.name: o.diagnosis for o in outcomes if o.diagnosis is not None}
+    for outcome in outcomes:
+        if outcome.diagnosis is None:
+            skipped[outcome.name] = str(outcome.skipped)
+            print(f"diagnose: skipping {path_of[outcome.name]}: {outcome.skipped}", file=sys.stderr)
+    if not results:
+        print(
+            f"diagnose: none of the {len(names)} logs can be diagnosed (each skipped above "
+            "with its reason)",
+            file=sys.stderr,
+        )
+        return EXIT_BAD_INPUT
     summary = []
     try:
         with atomic_output_dir(args.out_dir) as tmp:
-            for name, path, result in zip(names, args.logs, results, strict=True):
+            for name, path in path_of.items():
+                if name in skipped:  # as given, and why
+                    summary.append({"log": str(path), "skipped": skipped[name]})
+                    continue
+                result = results[name]
                 (tmp / name).mkdir()
                 extended = write_extended_config(
                     args.sim_config, result.added_effects, tmp / name / EXTENDED_CONFIG_NAME
@@ -165,7 +196,8 @@ def _run_batch(
     except OutputError as exc:
         print(f"diagnose: --out {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    progress(f"batch: {len(results)} report sets in {args.out_dir}")
+    left_out = f"; {len(skipped)} log(s) skipped ({BATCH_SUMMARY_NAME} says why)" if skipped else ""
+    progress(f"batch: {len(results)} report sets in {args.out_dir}{left_out}")
     return EXIT_OK
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -71,3 +72,40 @@ def test_batch_summary_names_each_log_by_the_path_given(tmp_path):
     )
     summary = json.loads((out / "batch.json").read_text())["logs"]
     assert [e["log"] for e in summary] == logs
+
+
+def test_batch_skips_each_log_it_cannot_diagnose_with_its_reason_and_diagnoses_the_rest(
+    tmp_path, capsys
+):
+    """A folder off an SD card: a MANUAL flight (no velocity command), a log at 8 Hz, one
+    recorded on the ground, and one usable offboard flight."""
+    from dataclasses import replace
+
+    from flightlog.reader import read_log
+    from flightlog.schema import write_flight_log
+
+    fixtures = Path(__file__).resolve().parents[1] / "fixtures" / "ulog"
+    usable = read_log(fixtures / "quad_offboard_v1_16.ulg")
+    grounded = replace(usable, columns={**usable.columns, "pos_d_m": 0.0 * usable["pos_d_m"]})
+    logs = [
+        str(fixtures / "quad_manual_v1_6.ulg"),
+        str(fixtures / "quad_mission_rtl_v1_9_esc.ulg"),
+        str(write_flight_log(tmp_path / "grounded.csv", grounded)),
+        str(fixtures / "quad_offboard_v1_16.ulg"),
+    ]
+    out = tmp_path / "out"
+    args = [*logs, "--sim-config", "iris", "--batch", "--workers", "1", "--out", str(out)]
+    assert main(args) == 0
+    err = capsys.readouterr().err
+    skips = [line for line in err.splitlines() if line.startswith("diagnose: skipping ")]
+    assert [line.split(": ")[1].removeprefix("skipping ") for line in skips] == logs[:3]
+    assert "no velocity command" in skips[0] and "needs faster signals" in skips[1]
+    assert "no airborne rows" in skips[2]
+    assert "1 report sets in" in err and "3 log(s) skipped (batch.json says why)" in err
+    summary = json.loads((out / "batch.json").read_text())["logs"]
+    assert [e["log"] for e in summary] == logs
+    assert [("skipped" in e) for e in summary] == [True, True, True, False]
+    assert (out / summary[3]["report"]).is_file()
+    assert main([*logs[:3], *args[4:-1], str(tmp_path / "none")]) == 2
+    assert capsys.readouterr().err.splitlines()[-1].startswith("diagnose: none of the 3 logs")
+    assert not (tmp_path / "none").exists()
