@@ -6,7 +6,7 @@ parses arguments into a :class:`CompanionConfig` and maps the outcome to an exit
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal, get_args
@@ -102,8 +102,12 @@ def run_companion(config: CompanionConfig, progress: Callable[[str], None]) -> C
         link = open_link(config, world)
     except ValueError as exc:  # MissionError, SimConfigError, unknown planner or URL
         raise CompanionInputError(str(exc)) from None
+    flown = {}
+    if hasattr(planner, "flown_model"):  # the NMPCs: which model flies, e.g. a GP left out
+        flown = {"planner_model": planner.flown_model}
+        progress(f"planner model: {planner.flown_model}")
     try:
-        live, kept = _open_log(config, mission, link, progress)
+        live, kept = _open_log(config, mission, link, progress, flown)
     except OutputError as exc:  # refused before take-off, not after landing
         link.close()
         raise CompanionInputError(f"--log {exc}") from None
@@ -134,12 +138,17 @@ def run_companion(config: CompanionConfig, progress: Callable[[str], None]) -> C
 
 
 def _open_log(
-    config: CompanionConfig, mission: Mission, link: Link, progress: Callable[[str], None]
+    config: CompanionConfig,
+    mission: Mission,
+    link: Link,
+    progress: Callable[[str], None],
+    extra: Mapping[str, object],
 ) -> tuple[LiveFlightLog, Path | None]:
     """The live log, before take-off: a new file without ``--log``; at ``--log`` otherwise,
     where a log already there is first kept under a numbered name (returned, else None).
-    Undoes both on an OutputError (one line), so nothing is lost or left behind."""
-    metadata = _log_metadata(config, mission, link)
+    ``extra``: more metadata for its sidecar. Undoes both on an OutputError (one line), so
+    nothing is lost or left behind."""
+    metadata = _log_metadata(config, mission, link) | dict(extra)
     if config.log_path is None:
         path = claim_new_log_path()
         try:

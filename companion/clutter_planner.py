@@ -133,6 +133,11 @@ class ClutterNmpc:
     def augmented(self) -> bool:
         return self._nmpc.augmented
 
+    @property
+    def flown_model(self) -> str:
+        """What its NMPC plans with, in words (CompanionNmpc.flown_model)."""
+        return self._nmpc.flown_model
+
     def one_step_velocity(
         self,
         vel_ned_mps: np.ndarray,

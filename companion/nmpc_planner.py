@@ -126,6 +126,9 @@ class CompanionNmpc:
     Attributes:
         model: the nominal model the NMPC plans with.
         residual_model: the learned residual, or None for the nominal planner.
+        flown_model: what it plans with, in words (the flight log records it): the nominal
+            model and its parameters, "+ GP on <features>" when the file's GP flies, "alone"
+            when the file says it does not beat its structure.
     """
 
     def __init__(self, settings: NmpcSettings, residual_model: ResidualModel | None = None):
@@ -136,11 +139,15 @@ class CompanionNmpc:
             if settings.nominal_model == "kinematic_4dof":
                 params.setdefault("residual_dt_s", settings.period_s)
             self.model = make_model(settings.nominal_model, **params)
+            self.flown_model = _named(settings.nominal_model, params)
         else:
             check_residual_model(residual_model, settings.period_s, settings.dt_s)
             features = residual_model.features
             self.model = features.nominal()
+            structure = _named(features.nominal_model, dict(features.nominal_params))
+            self.flown_model = f"{structure} alone (the file's GP does not beat it)"
             if not structure_only(residual_model):
+                self.flown_model = f"{structure} + GP on {features.name}"
                 self.model = features.planner_model()
                 residual = ResidualTerm(
                     residual_model.flight_mean_function(expand=False),
@@ -393,6 +400,12 @@ def check_feature_set(features: str, nominal_model: str) -> None:
 
     definition = feature_definition(features, nominal_model)
     definition.planner_map(definition.planner_model())
+
+
+def _named(model: str, params: dict[str, float]) -> str:
+    """ "first_order_lag(tau_d_s=0.72, tau_s=0.72)"; a model without parameters by its name."""
+    listed = ", ".join(f"{k}={v:.3g}" for k, v in sorted(params.items()))
+    return f"{model}({listed})" if listed else model
 
 
 def load_nmpc(settings: NmpcSettings, gp_model_path: Path | None) -> CompanionNmpc:

@@ -59,8 +59,9 @@ class DemoConfig:
 
 @dataclass(frozen=True)
 class FlightFigures:
-    """One demo flight's figures (residual [m/s], tracking [m], solve times [ms]) and the
-    computer's 1-minute load average when it landed (timings are read against it)."""
+    """One demo flight's figures (residual [m/s], tracking [m], solve times [ms]), the
+    computer's 1-minute load average when it landed (timings are read against it) and the
+    model its planner flew, as its log records it (CompanionNmpc.flown_model)."""
 
     name: str
     status: str
@@ -71,6 +72,7 @@ class FlightFigures:
     deadline_misses: int
     ticks: int
     load_average: float
+    planner_model: str = ""
 
 
 class DemoError(RuntimeError):
@@ -164,6 +166,7 @@ def _figures(name: str, log: FlightLog, load_average: float) -> FlightFigures:
         deadline_misses=int(log.metadata.get("loop_deadline_misses", 0)),
         ticks=int(log.metadata.get("loop_ticks", 0)),
         load_average=load_average,
+        planner_model=str(log.metadata.get("planner_model", "")),
     )
 
 
@@ -171,14 +174,14 @@ def comparison_table(figures: list[FlightFigures]) -> str:
     """The two flights side by side (Markdown)."""
     lines = [
         "| flight | residual RMSE [m/s] | tracking RMSE [m] | solve median / p99 [ms] "
-        "| deadline misses | load average |",
-        "|---|---|---|---|---|---|",
+        "| deadline misses | load average | planner model |",
+        "|---|---|---|---|---|---|---|",
     ]
     for f in figures:
         lines.append(
             f"| {f.name} | {f.residual_rmse_mps:.4f} | {f.tracking_rmse_m:.4f} "
             f"| {f.solve_median_ms:.2f} / {f.solve_p99_ms:.2f} | {f.deadline_misses} / {f.ticks} "
-            f"| {f.load_average:.1f} |"
+            f"| {f.load_average:.1f} | {f.planner_model} |"
         )
     return "\n".join(lines)
 

@@ -52,6 +52,9 @@ def test_integrator_is_integrated_from_the_commands_and_measured_velocity(model_
         residual = _residual_on(params, rng, gp_refused=model_file == "gp_refused")
     planner = CompanionNmpc(settings, residual)
     learned = model_file == "gp_flies"
+    said = {None: "px4_velocity_pi(", "gp_flies": " + GP on velocity", "gp_refused": " alone ("}
+    assert planner.flown_model.startswith("px4_velocity_pi(vel_i_xy=")
+    assert said[model_file] in planner.flown_model  # what the flight log records
     ref = BSplineReference(
         np.array([[0.0, 0.0, -3.0], [4.0, 2.0, -3.0], [8.0, 0.0, -3.5], [12.0, -1.0, -3.0]]), 2.0
     )

@@ -54,6 +54,7 @@ def test_nmpc_flies_a_mission_in_process_and_logs_its_one_step_predictions(tmp_p
     assert result.outcome.status == "completed", result.outcome.detail
     log = read_flight_log(result.log_path)
     assert log.metadata["planner"] == "nmpc" and log.metadata["gp_model"] is None
+    assert log.metadata["planner_model"] == "kinematic_4dof(residual_dt_s=0.02)"
     assert log.has(*PRED) and np.all(log["planner_ok"][log["mode"] == "OFFBOARD"] > 0.5)
     # the nominal kinematic model predicts that the vehicle flies the command it was sent
     np.testing.assert_allclose(log.stack(*PRED), log.stack(*CMD), atol=1e-9)

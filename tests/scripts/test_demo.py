@@ -49,15 +49,19 @@ def test_demo_flies_nominal_learns_and_flies_augmented_over_mavsdk(tmp_path, cap
         for m in re.finditer(r"^\| (nominal|augmented) \| ([\d.]+) \| ([\d.]+) \|", stdout, re.M)
     }
     assert set(rows) == {"nominal", "augmented"}
+    flown = re.search(r"^\| augmented \|.*\| (first_order_lag\(.*) \|$", stdout, re.M)
+    assert flown is not None, stdout  # the model the augmented flight's planner flew
     (nom_residual, nom_tracking), (aug_residual, aug_tracking) = rows["nominal"], rows["augmented"]
     assert aug_residual < 0.25 * nom_residual
     assert aug_tracking < nom_tracking
     report = (out / "report.md").read_text()
     assert "identified" in report and "Checked before the second flight:" in report
-    if "flies the identified lag without the GP" in captured.err:  # what flew, as the check decided
+    lag_alone = "flies the identified lag without the GP" in captured.err  # the check decided
+    if lag_alone:  # the report and the log say what flew, as the check decided
         assert "augmented with the velocity lag identified" in report and "alone" in report
     else:
         assert "plus a sparse GP" in report
+    assert ("alone" in flown.group(1)) == lag_alone
     for name in (
         "paths.png",
         "gp_low_speed_residual_n.png",
