@@ -7,11 +7,15 @@ regeneration), OMPL's RRT* and the PD regulator (experiments/clutter).
 Figures:
     clutter_success_fraction         proposed: goal reached without contact / pairs [-]
     clutter_mean_cycle_ms            proposed: mean computation time per planning cycle [ms]
-                                     (map + replanner + NMPC with the GP)
+                                     (map + replanner + NMPC with the learned model)
     clutter_distance_mean_m          proposed: mean travelled distance, successful flights [m]
     clutter_rrtstar_distance_mean_m  RRT* (OMPL) in the known forest, its path tracked by the
                                      NMPC: the same [m]
     clutter_contacts                 proposed: contacts summed over every flight [count]
+    clutter_learned_model_flown      1 when the proposed planner flies the learned model (0: its
+                                     check against nominal refused it, nominal flies)
+    clutter_gp_flown                 1 when that model's GP flies too (0: it did not beat the
+                                     identified lag alone, which flies without it)
 and, for the table in BENCHMARKS.md, the paper's own RRT* row (``rrtstar_online``: re-planned
 in the sensed map), the other planners' rows and the residual RMSE with
 obstacles. The forest with every flown path goes to out/bench/clutter_forest.png.
@@ -51,6 +55,7 @@ def run(
             "clutter_distance_max_m": p["distance_max_m"],
             "clutter_distance_min_m": p["distance_min_m"],
             "clutter_residual_rmse_mps": residual_rmse(result.flights["proposed"]),
+            "clutter_learned_model_flown": float(result.learned_flown),
             "clutter_gp_flown": float(result.gp_flown),
         }
     if "rrtstar" in rows:

@@ -27,7 +27,7 @@ def fit_residual(
     period_s: float,
     *,
     learned_model: str = "first_order_lag",
-    features: str = "state_input",
+    features: str = "velocity",
     m: int = 30,
     seed: int = 0,
     restarts: int = 2,
@@ -40,7 +40,9 @@ def fit_residual(
 ) -> TrainingResult:
     """A residual model from the following phase (OFFBOARD rows) of ``logs``, flown with a
     control period of ``period_s`` [s], with ``m`` inducing points chosen by ``inducing``
-    ("low_speed", "cluster" or "random").
+    ("low_speed", "cluster" or "random"), on ``features`` (gp.features; the default is paper
+    000's velocity, as StudyConfig's: a GP on the command, the NMPC's own decision variable,
+    is exploited by its optimiser, see experiments.study.regimes).
 
     ``learned_model`` is the nominal model under the residual: "first_order_lag" has its
     time constants identified from the logs first (the model file records them);

@@ -34,7 +34,8 @@ def test_two_pairs_in_a_small_forest(tmp_path):
     assert all(math.isfinite(figures[name]) for name in FIGURES)
     assert figures["clutter_success_fraction"] == 1.0
     assert figures["clutter_contacts"] == 0.0
-    assert figures["clutter_gp_flown"] == 1.0
+    assert figures["clutter_learned_model_flown"] == 1.0
+    assert figures["clutter_gp_flown"] in (0.0, 1.0)  # 0: the identified lag flies alone
     assert math.isfinite(figures["clutter_rrtstar_online_mean_cycle_ms"])
     # the PD regulator on the straight reference meets a trunk at least once
     assert figures["clutter_pd_contacts"] >= 1.0
