@@ -10,6 +10,11 @@ speed; in MAV_FRAME_LOCAL_NED the speed is (vx, vy) projected on the heading. Te
 MAVSDK's health check wants (SYS_STATUS with healthy sensors and the pre-arm bit, GPS_RAW_INT,
 GLOBAL_POSITION_INT and HOME_POSITION about a fixed origin, flat-earth). Offboard without
 a setpoint for ``setpoint_timeout_s`` stops the rover (PX4's offboard loss failsafe, here: hold).
+A malformed message never stops the endpoint: a mode that is not a number is DENIED, a setpoint
+with a non-finite speed or yaw rate, or without a velocity (a position setpoint, which this
+rover does not fly), is refused with a STATUSTEXT (and is no proof of life), an
+unknown command is UNSUPPORTED; whatever else fails in a handler is counted in
+``handler_errors`` and the message dropped.
 
 World frame mapping: the rover's x is north, its y is west (heading counter-clockwise from x),
 so NED north = x_m, east = -y_m, yaw = -heading_rad.
@@ -31,7 +36,7 @@ _PX4_MAIN_AUTO = 4
 _MAV = mavutil.mavlink
 _ORIGIN_LAT_DEG, _ORIGIN_LON_DEG, _ORIGIN_ALT_M = 47.397742, 8.545594, 488.0  # PX4 SITL home
 _M_PER_DEG_LAT = 111_320.0
-_IGNORE_YAW, _IGNORE_YAW_RATE = 0x400, 0x800  # POSITION_TARGET_TYPEMASK bits
+_IGNORE_VELOCITY, _IGNORE_YAW, _IGNORE_YAW_RATE = 0x38, 0x400, 0x800  # POSITION_TARGET_TYPEMASK
 _YAW_P = 2.0
 _SENSORS = (
     _MAV.MAV_SYS_STATUS_SENSOR_3D_GYRO
@@ -76,6 +81,8 @@ class RoverMavlinkEndpoint:
         self._timeout = setpoint_timeout_s
         self.offboard = False
         self._last_sp = -math.inf
+        self.handler_errors = 0
+        self._refused_at: dict[bytes, float] = {}  # refusal text -> when last said [s]
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, daemon=True)
 
@@ -92,7 +99,10 @@ class RoverMavlinkEndpoint:
         t_prev = time.monotonic()
         while not self._stop.is_set():
             while (msg := self._conn.recv_match(blocking=False)) is not None:
-                self._handle(msg)
+                try:
+                    self._handle(msg)
+                except Exception:  # a hostile message must never stop the rover's loop
+                    self.handler_errors += 1
             now = time.monotonic()
             if self.offboard and now - self._last_sp > self._timeout:
                 self.sim.set_setpoint(0.0, 0.0)
@@ -106,11 +116,14 @@ class RoverMavlinkEndpoint:
                 next_slow = now + 1.0
             time.sleep(self._period)
 
-    def _ack(self, command: int, ok: bool) -> None:
-        result = _MAV.MAV_RESULT_ACCEPTED if ok else _MAV.MAV_RESULT_DENIED
-        self._conn.mav.command_ack_send(command, result)
+    def _ack(self, msg: object, result: int) -> None:
+        """COMMAND_ACK for ``msg``'s command with ``result`` (MAV_RESULT); the link may speak
+        MAVLink 1 (no target fields) until a MAVLink 2 peer switches it."""
+        self._conn.mav.command_ack_send(msg.command, result)
 
-    def _set_mode(self, main_mode: int) -> bool:
+    def _set_mode(self, main_mode: float) -> bool:
+        if not math.isfinite(main_mode):
+            return False
         if main_mode == _PX4_MAIN_OFFBOARD:
             if time.monotonic() - self._last_sp > self._timeout:
                 return False  # PX4 refuses OFFBOARD without a setpoint stream
@@ -131,23 +144,39 @@ class RoverMavlinkEndpoint:
                 else:
                     self.sim.disarm()
                     self.offboard = False
-                self._ack(msg.command, True)
+                self._ack(msg, _MAV.MAV_RESULT_ACCEPTED)
             elif msg.command == _MAV.MAV_CMD_DO_SET_MODE:
-                self._ack(msg.command, self._set_mode(int(msg.param2)))
+                ok = self._set_mode(msg.param2)
+                self._ack(msg, _MAV.MAV_RESULT_ACCEPTED if ok else _MAV.MAV_RESULT_DENIED)
             else:
-                self._ack(msg.command, False)
+                self._ack(msg, _MAV.MAV_RESULT_UNSUPPORTED)
         elif kind == "SET_MODE":
             self._set_mode((msg.custom_mode >> 16) & 0xFF)
         elif kind == "SET_POSITION_TARGET_LOCAL_NED":
-            self._last_sp = time.monotonic()
+            if msg.type_mask & _IGNORE_VELOCITY == _IGNORE_VELOCITY:
+                self._refuse_setpoint(b"Offboard: rover flies velocity setpoints only")
+                return
             heading = self.sim.state.heading_rad
             if msg.coordinate_frame == _MAV.MAV_FRAME_BODY_NED:
                 speed = msg.vx
             else:  # LOCAL_NED: project the ground velocity on the heading (north, east)
                 speed = msg.vx * math.cos(-heading) + msg.vy * math.sin(-heading)
             yaw_rate = self._yaw_rate_sp(msg, heading)
+            if not (math.isfinite(speed) and math.isfinite(yaw_rate)):
+                self._refuse_setpoint(b"Offboard: setpoint refused: not finite")
+                return
+            self._last_sp = time.monotonic()
             if self.offboard and self.sim.armed:
                 self.sim.set_setpoint(float(speed), float(yaw_rate))
+
+    def _refuse_setpoint(self, text: bytes) -> None:
+        """Say why a setpoint is not flown (STATUSTEXT of at most 50 characters, each text at
+        most once a second, as PX4 limits its messages); it is no proof of life, so OFFBOARD
+        is not entered on it and its loss failsafe still runs."""
+        now = time.monotonic()
+        if now - self._refused_at.get(text, -math.inf) >= 1.0:
+            self._refused_at[text] = now
+            self._conn.mav.statustext_send(_MAV.MAV_SEVERITY_WARNING, text)
 
     @staticmethod
     def _yaw_rate_sp(msg: object, heading_rad: float) -> float:
