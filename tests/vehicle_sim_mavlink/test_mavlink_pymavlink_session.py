@@ -119,6 +119,9 @@ def test_requests_and_small_services(endpoint, client):
     client.mav.file_transfer_protocol_send(0, 1, 1, [1, 0, 0, 4] + [0] * 247)
     nak = client.recv("FILE_TRANSFER_PROTOCOL", 2.0)
     assert nak.payload[3] == 129 and nak.payload[5] == 4
+    client.mav.log_request_list_send(1, 1, 0, 0xFFFF)  # MAVSDK's log_files.get_entries()
+    entry = client.recv("LOG_ENTRY", 2.0)
+    assert entry is not None and entry.num_logs == 0  # no logs: said at once, as PX4 does
 
 
 def test_set_message_interval_stops_and_restores_a_stream(endpoint, client):

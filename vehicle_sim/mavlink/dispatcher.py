@@ -110,6 +110,7 @@ class Dispatcher:
             "MISSION_CLEAR_ALL": self._mission(self.missions.on_clear_all),
             "MISSION_SET_CURRENT": self._mission(self.missions.on_set_current),
             "FILE_TRANSFER_PROTOCOL": self._ftp,
+            "LOG_REQUEST_LIST": self._log_request_list,
             "SET_MODE": self._set_mode_message,
         }
         # Services with their own addressing rules (a PING to 0 is a request to all).
@@ -305,6 +306,9 @@ class Dispatcher:
 
     def _ftp(self, msg, _scheduler, _now_ns) -> list[Outgoing]:
         return [Outgoing(services.ftp_nak_reply(msg))]
+
+    def _log_request_list(self, msg, _scheduler, _now_ns) -> list[Outgoing]:
+        return [Outgoing(services.empty_log_list_reply(msg))]
 
     def _notices(self, notices: tuple[Notice, ...]) -> list[Outgoing]:
         return [Outgoing(notice=notice, broadcast=True) for notice in notices]

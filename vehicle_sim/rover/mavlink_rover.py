@@ -152,6 +152,8 @@ class RoverMavlinkEndpoint:
                 self._ack(msg, _MAV.MAV_RESULT_UNSUPPORTED)
         elif kind == "SET_MODE":
             self._set_mode((msg.custom_mode >> 16) & 0xFF)
+        elif kind == "LOG_REQUEST_LIST":  # no logs, said at once as PX4 does (num_logs 0)
+            self._conn.mav.log_entry_send(0, 0, 0, 0, 0)
         elif kind == "SET_POSITION_TARGET_LOCAL_NED":
             if msg.type_mask & _IGNORE_VELOCITY == _IGNORE_VELOCITY:
                 self._refuse_setpoint(b"Offboard: rover flies velocity setpoints only")
