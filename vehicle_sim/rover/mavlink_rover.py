@@ -89,6 +89,11 @@ class RoverMavlinkEndpoint:
     def start(self) -> None:
         self._thread.start()
 
+    @property
+    def running(self) -> bool:
+        """True while the endpoint's loop runs (started and not closed)."""
+        return self._thread.is_alive()
+
     def close(self) -> None:
         self._stop.set()
         self._thread.join(timeout=5.0)
@@ -117,9 +122,13 @@ class RoverMavlinkEndpoint:
             time.sleep(self._period)
 
     def _ack(self, msg: object, result: int) -> None:
-        """COMMAND_ACK for ``msg``'s command with ``result`` (MAV_RESULT); the link may speak
-        MAVLink 1 (no target fields) until a MAVLink 2 peer switches it."""
-        self._conn.mav.command_ack_send(msg.command, result)
+        """COMMAND_ACK for ``msg``'s command with ``result`` (MAV_RESULT), addressed to its
+        sender as PX4 does once the link speaks MAVLink 2 (pymavlink starts in MAVLink 1, whose
+        COMMAND_ACK has no target fields, and switches when a MAVLink 2 peer is heard)."""
+        ack = self._conn.mav.command_ack_encode(msg.command, result)
+        if hasattr(ack, "target_system"):
+            ack.target_system, ack.target_component = msg.get_srcSystem(), msg.get_srcComponent()
+        self._conn.mav.send(ack)
 
     def _set_mode(self, main_mode: float) -> bool:
         if not math.isfinite(main_mode):
