@@ -3,13 +3,14 @@
 Small and separate from vehicle_sim.mavlink (the multirotor endpoint): HEARTBEAT with
 MAV_TYPE_GROUND_ROVER and the PX4 custom mode (main mode 6 = OFFBOARD), COMMAND_LONG
 MAV_CMD_COMPONENT_ARM_DISARM and MAV_CMD_DO_SET_MODE (acknowledged; MANUAL, AUTO = hold,
-OFFBOARD), SET_MODE, and offboard
-SET_POSITION_TARGET_LOCAL_NED with velocity + yaw rate: in MAV_FRAME_BODY_NED vx is the forward
-speed; in MAV_FRAME_LOCAL_NED the speed is (vx, vy) projected on the heading. Telemetry at
-``telemetry_hz``: HEARTBEAT, LOCAL_POSITION_NED, ATTITUDE, ATTITUDE_QUATERNION, and at 1 Hz what
-MAVSDK's health check wants (SYS_STATUS with healthy sensors and the pre-arm bit, GPS_RAW_INT,
-GLOBAL_POSITION_INT and HOME_POSITION about a fixed origin, flat-earth). Offboard without
-a setpoint for ``setpoint_timeout_s`` stops the rover (PX4's offboard loss failsafe, here: hold).
+OFFBOARD), AUTOPILOT_VERSION on request (MAV_CMD_REQUEST_MESSAGE 148, or 520), SET_MODE, and
+offboard SET_POSITION_TARGET_LOCAL_NED with velocity + yaw rate: in MAV_FRAME_BODY_NED vx is
+the forward speed; in MAV_FRAME_LOCAL_NED the speed is (vx, vy) projected on the heading.
+Telemetry at ``telemetry_hz``: HEARTBEAT, LOCAL_POSITION_NED, ATTITUDE, ATTITUDE_QUATERNION,
+and at 1 Hz what MAVSDK's health check wants (SYS_STATUS with healthy sensors and the pre-arm
+bit, GPS_RAW_INT, GLOBAL_POSITION_INT and HOME_POSITION about a fixed origin, flat-earth).
+Offboard without a setpoint for ``setpoint_timeout_s`` stops the rover (PX4's offboard loss
+failsafe, here: hold).
 A malformed message never stops the endpoint: a mode that is not a number is DENIED, a setpoint
 with a non-finite speed or yaw rate, or without a velocity (a position setpoint, which this
 rover does not fly), is refused with a STATUSTEXT (and is no proof of life), an
@@ -28,6 +29,7 @@ import time
 
 from pymavlink import mavutil
 
+from vehicle_sim.mavlink.telemetry import PX4_VERSION
 from vehicle_sim.rover.simulator import RoverSim
 
 _PX4_MAIN_OFFBOARD = 6
@@ -38,6 +40,12 @@ _ORIGIN_LAT_DEG, _ORIGIN_LON_DEG, _ORIGIN_ALT_M = 47.397742, 8.545594, 488.0  # 
 _M_PER_DEG_LAT = 111_320.0
 _IGNORE_VELOCITY, _IGNORE_YAW, _IGNORE_YAW_RATE = 0x38, 0x400, 0x800  # POSITION_TARGET_TYPEMASK
 _YAW_P = 2.0
+_VERSION_REQUESTS = (_MAV.MAV_CMD_REQUEST_MESSAGE, _MAV.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES)
+_CAPABILITIES = (
+    _MAV.MAV_PROTOCOL_CAPABILITY_SET_POSITION_TARGET_LOCAL_NED
+    | _MAV.MAV_PROTOCOL_CAPABILITY_MAVLINK2
+)
+_UID = 0x5349_4D00_0000_0002  # the multirotor endpoint's is ...01
 _SENSORS = (
     _MAV.MAV_SYS_STATUS_SENSOR_3D_GYRO
     | _MAV.MAV_SYS_STATUS_SENSOR_3D_ACCEL
@@ -154,6 +162,15 @@ class RoverMavlinkEndpoint:
                     self.sim.disarm()
                     self.offboard = False
                 self._ack(msg, _MAV.MAV_RESULT_ACCEPTED)
+            elif msg.command in _VERSION_REQUESTS and (
+                msg.command != _MAV.MAV_CMD_REQUEST_MESSAGE
+                or msg.param1 == _MAV.MAVLINK_MSG_ID_AUTOPILOT_VERSION
+            ):  # MAVSDK's info plugin asks for it on connecting
+                self._ack(msg, _MAV.MAV_RESULT_ACCEPTED)
+                self._conn.mav.autopilot_version_send(
+                    _CAPABILITIES, PX4_VERSION, PX4_VERSION, 0, 0, [0] * 8, [0] * 8, [0] * 8,
+                    0, 0, _UID,
+                )  # fmt: skip
             elif msg.command == _MAV.MAV_CMD_DO_SET_MODE:
                 ok = self._set_mode(msg.param2)
                 self._ack(msg, _MAV.MAV_RESULT_ACCEPTED if ok else _MAV.MAV_RESULT_DENIED)

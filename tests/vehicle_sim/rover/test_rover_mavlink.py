@@ -109,6 +109,9 @@ def test_malformed_messages_get_an_answer_and_never_stop_the_rover() -> None:
         setpoint(0b0000_0101_1100_0111, 0.5)
         assert command(_MAV.MAV_CMD_DO_SET_MODE, 1, 6, 0, 0, 0, 0, 0) == (_MAV.MAV_RESULT_ACCEPTED)
         assert ep.offboard and ep.handler_errors == 0
+        assert command(_MAV.MAV_CMD_REQUEST_MESSAGE, 148, 0, 0, 0, 0, 0, 0) == 0  # MAVSDK info
+        version = gcs.recv_match(type="AUTOPILOT_VERSION", blocking=True, timeout=20)
+        assert version is not None and version.flight_sw_version >> 16 == 0x010F  # PX4 1.15
         gcs.mav.log_request_list_send(1, 1, 0, 0xFFFF)  # MAVSDK's log_files.get_entries()
         entry = gcs.recv_match(type="LOG_ENTRY", blocking=True, timeout=20)
         assert entry is not None and entry.num_logs == 0
