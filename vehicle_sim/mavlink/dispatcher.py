@@ -255,6 +255,8 @@ class Dispatcher:
         out = [Outgoing(m, broadcast) for m in reply.values]
         if reply.problem and reply.values:
             out += self._notices(((MAV_SEVERITY_CRITICAL, reply.problem),))
+        elif reply.problem:  # an unknown name or index: PX4 says "[pm] unknown param" (info)
+            out += self._notices(((mavlink2.MAV_SEVERITY_INFO, reply.problem),))
         return out
 
     def _param_request_list(self, msg, _scheduler, _now_ns) -> list[Outgoing]:
