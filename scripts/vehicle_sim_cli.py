@@ -14,6 +14,11 @@ Usage:
     vehicle-sim --vehicle iris_study --log onboard.csv   # fly it, then diagnose onboard.csv
     vehicle-sim --vehicle f450 --backend jsbsim          # JSBSim's F450 under the same control
     vehicle-sim config-from-log flight.ulg --out my_vehicle.toml   # your tuning, your hover
+    vehicle-sim --vehicle husky_50kg                     # a ground rover, as PX4's rover speaks
+
+A rover preset (vehicle_sim.rover: husky_50kg, roc6_150kg, dmrv_600kg) runs the rover endpoint
+(MAV_TYPE_GROUND_ROVER; offboard velocity + yaw rate) in real time on the offboard link only
+(MAVSDK and pymavlink: ``udpin://127.0.0.1:14540``); the multirotor-only options are refused.
 """
 
 from __future__ import annotations
@@ -45,6 +50,9 @@ from vehicle_sim.mavlink import (
     px4_sitl_links,
 )
 from vehicle_sim.onboard_log import OnboardLogger
+from vehicle_sim.rover import PRESETS as ROVER_PRESETS
+from vehicle_sim.rover import RoverSim, rover_preset
+from vehicle_sim.rover.mavlink_rover import RoverMavlinkEndpoint
 
 PROG = "vehicle-sim"
 
@@ -130,7 +138,12 @@ def parse_args(argv: Sequence[str] | None) -> VehicleSimCliConfig:
         epilog="Also: vehicle-sim config-from-log LOG --out my_vehicle.toml (a config with a "
         "PX4 log's tuning and hover thrust; --help there).",
     )
-    parser.add_argument("--vehicle", default="iris", help="preset name or config TOML path")
+    parser.add_argument(
+        "--vehicle",
+        default="iris",
+        help="multirotor preset or config TOML path, or a rover preset "
+        f"({', '.join(ROVER_PRESETS)})",
+    )
     parser.add_argument(
         "--effect",
         action="append",
@@ -309,7 +322,54 @@ def _undo_log(log_path: str | None, kept: Path | None) -> None:
         sidecar_path(log_path).unlink(missing_ok=True)
 
 
+def _run_rover(config: VehicleSimCliConfig, stop: threading.Event) -> int:
+    """Serve a rover preset on the offboard link until ``stop``, the deadline or a dead loop."""
+    refused = [
+        flag
+        for flag, used in (
+            ("--effect", config.effects),
+            ("--backend", config.backend),
+            ("--speed", config.speed != 1.0),
+            ("--signing-key", config.signing_key_path),
+            ("--world", config.world_path),
+            ("--log", config.log_path),
+            ("--realtime-priority", config.realtime_priority),
+        )
+        if used
+    ]
+    if refused:
+        print(
+            f"{PROG}: error: {', '.join(refused)}: not for the rover {config.vehicle} "
+            "(real time, one offboard link)",
+            file=sys.stderr,
+        )
+        return 2
+    sim = RoverSim(rover_preset(config.vehicle), seed=config.seed)
+    try:
+        endpoint = RoverMavlinkEndpoint(sim, config.offboard_port, config.host, mode="udpout")
+    except OSError as exc:
+        print(f"{PROG}: error: {exc}", file=sys.stderr)
+        return 2
+    endpoint.start()
+    print(f"{PROG}: rover {config.vehicle} at 1x real time, seed {config.seed}")
+    print(f"MAVSDK: udpin://{config.host}:{config.offboard_port}")
+    print(f"pymavlink: udpin:{config.host}:{config.offboard_port}")
+    print("Ctrl-C to stop", flush=True)
+    deadline = math.inf if config.duration_s is None else time.monotonic() + config.duration_s
+    while not stop.is_set() and endpoint.running and time.monotonic() < deadline:
+        stop.wait(min(0.2, max(0.0, deadline - time.monotonic())))
+    died = not endpoint.running
+    endpoint.close()
+    if died:
+        print(f"{PROG}: error: the rover's loop stopped", file=sys.stderr)
+        return 1
+    print(f"{PROG}: stopped at t = {sim.state.t_s:.1f} s sim", flush=True)
+    return 0
+
+
 def _run(config: VehicleSimCliConfig, stop: threading.Event) -> int:
+    if config.vehicle in ROVER_PRESETS:
+        return _run_rover(config, stop)
     if config.log_path is not None:
         try:  # found out now, not after a flight whose log would be lost
             check_writable_file(config.log_path)

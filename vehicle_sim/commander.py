@@ -84,6 +84,8 @@ class _SetpointParams:
     z_vel_max_dn: float
     tko_speed: float
     land_speed: float
+    land_alt1: float
+    land_alt2: float
     acc_hor: float
 
     @classmethod
@@ -99,6 +101,8 @@ class _SetpointParams:
             p("MPC_Z_VEL_MAX_DN"),
             p("MPC_TKO_SPEED"),
             p("MPC_LAND_SPEED"),
+            p("MPC_LAND_ALT1"),
+            p("MPC_LAND_ALT2"),
             p("MPC_ACC_HOR"),
         )
 
@@ -110,6 +114,18 @@ def _earlier(deadline: float, candidate: float) -> float:
     """``candidate`` if it is earlier than ``deadline``, else ``deadline`` (as ``min`` over the
     deadlines in the order given)."""
     return candidate if candidate < deadline else deadline
+
+
+def _land_speed_mps(p: _SetpointParams, height_m: float) -> float:
+    """PX4's landing descent speed [m/s] at ``height_m`` above home (FlightTaskAuto,
+    math::gradual): MPC_Z_V_AUTO_DN above MPC_LAND_ALT1, MPC_LAND_SPEED below MPC_LAND_ALT2,
+    linear between."""
+    if height_m <= p.land_alt2:
+        return p.land_speed
+    if height_m >= p.land_alt1:
+        return p.z_v_auto_dn
+    frac = (height_m - p.land_alt2) / (p.land_alt1 - p.land_alt2)
+    return p.land_speed + frac * (p.z_v_auto_dn - p.land_speed)
 
 
 def _ok(reason: str = "") -> CommandResult:
@@ -132,6 +148,7 @@ class Commander:
         self._hold_yaw = 0.0
         self._landed = True
         self._home = np.zeros(3)
+        self._height_m = 0.0  # above home, as of the last update [m]
         self._rtl_phase: RtlPhase = "climb"
         self.mission: tuple[MissionItem, ...] = ()
         self.mission_current = 0
@@ -359,6 +376,7 @@ class Commander:
         """Advance the state machine to time ``t`` given the vehicle's state (battery charge
         remaining as a fraction)."""
         self._landed = contact
+        self._height_m = float(self._home[2] - pos_ned_m[2])
         if not self.armed:
             return
         if not contact:
@@ -404,6 +422,8 @@ class Commander:
             deadline = _earlier(deadline, t + TAKEOFF_POLL_S)
         if mode is FlightMode.RTL or mode is FlightMode.MISSION:
             deadline = _earlier(deadline, t + RTL_POLL_S)
+        if mode is FlightMode.LAND and self._height_m > p("MPC_LAND_ALT2"):
+            deadline = _earlier(deadline, t + RTL_POLL_S)  # the descent slows with height
         if self._pending is not None:
             deadline = _earlier(deadline, self._pending[1])
         link_lost_s = self.failsafes.next_check_s(t)
@@ -441,7 +461,7 @@ class Commander:
             if speed is not None:
                 vmax_xy = min(speed, p.xy_vel_max)
         elif mode is FlightMode.LAND:
-            vel_d = vmax_dn = p.land_speed
+            vel_d = vmax_dn = _land_speed_mps(p, self._height_m)
         elif mode is FlightMode.OFFBOARD and active is not None:
             if active.pos_ned_m is None:
                 pos_n = pos_e = pos_d = math.nan

@@ -96,7 +96,13 @@ PX4_PARAMS: dict[str, Px4ParamSpec] = {
     "MC_YAW_WEIGHT": _F(0.4, "yaw weight in the attitude error", 0.0, 1.0),
     "MIS_TAKEOFF_ALT": _F(2.5, "takeoff altitude above home [m]", 0.0),
     "MPC_ACC_HOR": _F(3.0, "velocity setpoint slew in auto modes [m/s^2]", 2.0, 15.0),
-    "MPC_LAND_SPEED": _F(0.7, "landing descent speed [m/s]", 0.6),
+    "MPC_LAND_ALT1": _F(
+        10.0, "above this height the landing descends at MPC_Z_V_AUTO_DN [m]", 0.0, 122.0
+    ),
+    "MPC_LAND_ALT2": _F(
+        5.0, "below this height the landing descends at MPC_LAND_SPEED [m]", 0.0, 122.0
+    ),
+    "MPC_LAND_SPEED": _F(0.7, "landing descent speed near the ground [m/s]", 0.6),
     "MPC_THR_HOVER": _F(0.5, "hover thrust, normalised (set from the preset)", 0.1, 0.8),
     "MPC_THR_MAX": _F(1.0, "max collective thrust, normalised", 0.0, 1.0),
     "MPC_THR_MIN": _F(0.12, "min collective thrust in flight, normalised", 0.05, 0.5),

@@ -69,6 +69,23 @@ def test_land_descends_at_land_speed_and_disarms_2_s_after_touchdown():
     assert events.count("Landing detected") == 1 and "Disarmed after landing" in events
 
 
+def test_land_from_high_descends_at_auto_speed_then_slows_near_the_ground():
+    """As PX4's FlightTaskAuto: MPC_Z_V_AUTO_DN (1.5 m/s) above MPC_LAND_ALT1 (10 m),
+    MPC_LAND_SPEED (0.7 m/s) below MPC_LAND_ALT2 (5 m); sampled in one-second steps."""
+    sim = hovering(settle_s=1.0, alt_m=20.0)
+    assert sim.land().accepted
+    sink_at_height = []
+    for _ in range(60):
+        s = sim.step(1.0)
+        if s.landed_state is LandedState.LANDING:
+            sink_at_height.append((-s.pos_ned_m[2], s.vel_ned_mps[2]))
+    high = [v for h, v in sink_at_height if 11.0 < h < 17.0]
+    low = [v for h, v in sink_at_height if 0.5 < h < 4.0]
+    assert high and float(np.median(high)) == pytest.approx(1.5, abs=0.05)
+    assert low and float(np.median(low)) == pytest.approx(0.7, abs=0.05)
+    assert not sim.state.armed and sim.state.pos_ned_m[2] == 0.0
+
+
 def test_auto_disarm_10_s_after_arming_without_takeoff():
     sim = new_sim()
     assert sim.arm().accepted

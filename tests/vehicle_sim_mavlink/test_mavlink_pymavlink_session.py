@@ -86,6 +86,18 @@ def test_param_list_read_and_set(endpoint, client):
     assert msg.param_value == 4.0
 
 
+def test_an_unknown_parameter_is_said_as_px4_says_it(endpoint, client):
+    """PX4 answers a read or set of a name it does not have with "[pm] unknown param" (info),
+    not with silence; nothing is set."""
+    client.mav.param_set_send(1, 1, b"NO_SUCH_PARAM", 1.0, 9)
+    notice = client.recv("STATUSTEXT", 3.0, lambda m: "NO_SUCH_PARAM" in m.text)
+    assert notice is not None and notice.severity == 6 and "unknown" in notice.text
+    client.mav.param_request_read_send(1, 1, b"", 30000)
+    notice = client.recv("STATUSTEXT", 3.0, lambda m: "30000" in m.text)
+    assert notice is not None and notice.severity == 6
+    assert endpoint.stats.params_unknown == 2 and endpoint.stats.handler_errors == 0
+
+
 def test_unknown_commands_are_answered_unsupported(endpoint, client):
     assert client.command(31999, 1, 2, 3).result == MAV_RESULT_UNSUPPORTED
     assert client.command(31998, use_int=True).result == MAV_RESULT_UNSUPPORTED
@@ -119,6 +131,9 @@ def test_requests_and_small_services(endpoint, client):
     client.mav.file_transfer_protocol_send(0, 1, 1, [1, 0, 0, 4] + [0] * 247)
     nak = client.recv("FILE_TRANSFER_PROTOCOL", 2.0)
     assert nak.payload[3] == 129 and nak.payload[5] == 4
+    client.mav.log_request_list_send(1, 1, 0, 0xFFFF)  # MAVSDK's log_files.get_entries()
+    entry = client.recv("LOG_ENTRY", 2.0)
+    assert entry is not None and entry.num_logs == 0  # no logs: said at once, as PX4 does
 
 
 def test_set_message_interval_stops_and_restores_a_stream(endpoint, client):

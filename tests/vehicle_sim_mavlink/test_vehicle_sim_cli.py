@@ -33,6 +33,7 @@ REPO = Path(__file__).resolve().parents[2]
         (["--frobnicate"], "unrecognized arguments"),
         (["--seed", "-1"], "--seed -1: must be >= 0"),
         (["--realtime-priority", "100"], "--realtime-priority 100: must be 0 (off) or 1..99"),
+        (["--vehicle", "husky_50kg", "--world", "w.toml"], "--world: not for the rover"),
     ],
 )
 def test_bad_input_is_one_line_and_exit_2(capsys, argv, message):
@@ -223,3 +224,34 @@ def test_a_log_at_the_vehicle_config_is_refused_not_moved_aside(tmp_path, capsys
     assert "is an input being read" in capsys.readouterr().err
     assert vehicle.read_text() == preset.read_text()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["quad.toml"]
+
+
+@pytest.mark.slow
+def test_a_rover_preset_serves_a_px4_rover_on_the_offboard_link():
+    """`vehicle-sim --vehicle husky_50kg`: HEARTBEAT as a PX4 ground rover, arming answered
+    (to the sender), a clean stop on SIGINT."""
+    offboard_port = free_udp_port()
+    client = Client(url=f"udpin:127.0.0.1:{offboard_port}")
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "scripts.vehicle_sim_cli", "--vehicle", "husky_50kg"]
+        + ["--offboard-port", str(offboard_port)],
+        cwd=REPO,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        hb = client.hello(30.0)
+        assert (hb.type, hb.autopilot) == (10, 12)  # MAV_TYPE_GROUND_ROVER, PX4
+        client.mav.command_long_send(1, 1, 400, 0, 1, 0, 0, 0, 0, 0, 0)
+        ack = client.recv("COMMAND_ACK", 10.0, lambda m: m.command == 400)
+        assert ack is not None and ack.result == 0
+        assert getattr(ack, "target_system", 245) == 245
+        proc.send_signal(signal.SIGINT)
+        assert proc.wait(10.0) == 0, proc.stderr.read()
+        assert "vehicle-sim: stopped at" in proc.stdout.read()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(5.0)
+        client.close()

@@ -110,13 +110,18 @@ class Dispatcher:
             "MISSION_CLEAR_ALL": self._mission(self.missions.on_clear_all),
             "MISSION_SET_CURRENT": self._mission(self.missions.on_set_current),
             "FILE_TRANSFER_PROTOCOL": self._ftp,
+            "LOG_REQUEST_LIST": self._log_request_list,
             "SET_MODE": self._set_mode_message,
+            "SET_ATTITUDE_TARGET": self._not_flown(
+                "Offboard: attitude setpoints not supported, send velocity or position"
+            ),
         }
         # Services with their own addressing rules (a PING to 0 is a request to all).
         self._services: dict[str, Callable[..., list[Outgoing]]] = {
             "HEARTBEAT": self._heartbeat,
             "PING": self._ping,
             "TIMESYNC": self._timesync,
+            "MANUAL_CONTROL": self._manual_control,  # its target field is ``target``
         }
 
     def handle(
@@ -250,6 +255,8 @@ class Dispatcher:
         out = [Outgoing(m, broadcast) for m in reply.values]
         if reply.problem and reply.values:
             out += self._notices(((MAV_SEVERITY_CRITICAL, reply.problem),))
+        elif reply.problem:  # an unknown name or index: PX4 says "[pm] unknown param" (info)
+            out += self._notices(((mavlink2.MAV_SEVERITY_INFO, reply.problem),))
         return out
 
     def _param_request_list(self, msg, _scheduler, _now_ns) -> list[Outgoing]:
@@ -303,8 +310,29 @@ class Dispatcher:
         text = "Mission: send MISSION_ITEM_INT, MISSION_ITEM is not supported"
         return [Outgoing(ack), *self._notices(((MAV_SEVERITY_WARNING, text),))]
 
+    def _not_flown(self, text: str) -> Callable[..., list[Outgoing]]:
+        """A handler for a message the simulator does not act on: it says so (STATUSTEXT,
+        limited per kind like every notice) instead of dropping the message in silence."""
+
+        def handle(_msg, _scheduler, _now_ns) -> list[Outgoing]:
+            return self._notices(((MAV_SEVERITY_WARNING, text),))
+
+        return handle
+
+    def _manual_control(self, msg, scheduler, now_ns) -> list[Outgoing]:
+        """MANUAL_CONTROL (MAVSDK's manual_control, a joystick in QGC): no stick input is
+        simulated, so the modes hold; said once a second rather than ignored."""
+        if msg.target not in (0, SYSTEM_ID):
+            self._stats.add("wrong_target")
+            return []
+        text = "Manual control input is not simulated: sticks ignored"
+        return self._not_flown(text)(msg, scheduler, now_ns)
+
     def _ftp(self, msg, _scheduler, _now_ns) -> list[Outgoing]:
         return [Outgoing(services.ftp_nak_reply(msg))]
+
+    def _log_request_list(self, msg, _scheduler, _now_ns) -> list[Outgoing]:
+        return [Outgoing(services.empty_log_list_reply(msg))]
 
     def _notices(self, notices: tuple[Notice, ...]) -> list[Outgoing]:
         return [Outgoing(notice=notice, broadcast=True) for notice in notices]

@@ -1,4 +1,4 @@
-"""Small request/response services PX4 answers: PING, TIMESYNC, FTP NAK.
+"""Small request/response services PX4 answers: PING, TIMESYNC, FTP NAK, the (empty) log list.
 
 Pure builders of the reply message (or None when the message needs no reply).
 """
@@ -55,3 +55,13 @@ def ftp_nak_reply(msg: mavlink2.MAVLink_file_transfer_protocol_message) -> mavli
         target_component=msg.get_srcComponent(),
         payload=list(reply),
     )
+
+
+def empty_log_list_reply(
+    msg: mavlink2.MAVLink_log_request_list_message,
+) -> mavlink2.MAVLink_message:
+    """Answer LOG_REQUEST_LIST as PX4 does with no log on its SD card: one LOG_ENTRY with
+    ``num_logs`` 0 (MAVSDK's log_files then reports "no logfiles" at once instead of waiting
+    for a timeout). The onboard log (``vehicle-sim --log``) is a CSV file, not served here."""
+    del msg  # every request gets the same answer
+    return _FACTORY.log_entry_encode(id=0, num_logs=0, last_log_num=0, time_utc=0, size=0)

@@ -3,13 +3,19 @@
 Small and separate from vehicle_sim.mavlink (the multirotor endpoint): HEARTBEAT with
 MAV_TYPE_GROUND_ROVER and the PX4 custom mode (main mode 6 = OFFBOARD), COMMAND_LONG
 MAV_CMD_COMPONENT_ARM_DISARM and MAV_CMD_DO_SET_MODE (acknowledged; MANUAL, AUTO = hold,
-OFFBOARD), SET_MODE, and offboard
-SET_POSITION_TARGET_LOCAL_NED with velocity + yaw rate: in MAV_FRAME_BODY_NED vx is the forward
-speed; in MAV_FRAME_LOCAL_NED the speed is (vx, vy) projected on the heading. Telemetry at
-``telemetry_hz``: HEARTBEAT, LOCAL_POSITION_NED, ATTITUDE, ATTITUDE_QUATERNION, and at 1 Hz what
-MAVSDK's health check wants (SYS_STATUS with healthy sensors and the pre-arm bit, GPS_RAW_INT,
-GLOBAL_POSITION_INT and HOME_POSITION about a fixed origin, flat-earth). Offboard without
-a setpoint for ``setpoint_timeout_s`` stops the rover (PX4's offboard loss failsafe, here: hold).
+OFFBOARD), AUTOPILOT_VERSION on request (MAV_CMD_REQUEST_MESSAGE 148, or 520), SET_MODE, and
+offboard SET_POSITION_TARGET_LOCAL_NED with velocity + yaw rate: in MAV_FRAME_BODY_NED vx is
+the forward speed; in MAV_FRAME_LOCAL_NED the speed is (vx, vy) projected on the heading.
+Telemetry at ``telemetry_hz``: HEARTBEAT, LOCAL_POSITION_NED, ATTITUDE, ATTITUDE_QUATERNION,
+and at 1 Hz what MAVSDK's health check wants (SYS_STATUS with healthy sensors and the pre-arm
+bit, GPS_RAW_INT, GLOBAL_POSITION_INT and HOME_POSITION about a fixed origin, flat-earth).
+Offboard without a setpoint for ``setpoint_timeout_s`` stops the rover (PX4's offboard loss
+failsafe, here: hold).
+A malformed message never stops the endpoint: a mode that is not a number is DENIED, a setpoint
+with a non-finite speed or yaw rate, or without a velocity (a position setpoint, which this
+rover does not fly), is refused with a STATUSTEXT (and is no proof of life), an
+unknown command is UNSUPPORTED; whatever else fails in a handler is counted in
+``handler_errors`` and the message dropped.
 
 World frame mapping: the rover's x is north, its y is west (heading counter-clockwise from x),
 so NED north = x_m, east = -y_m, yaw = -heading_rad.
@@ -23,6 +29,7 @@ import time
 
 from pymavlink import mavutil
 
+from vehicle_sim.mavlink.telemetry import PX4_VERSION
 from vehicle_sim.rover.simulator import RoverSim
 
 _PX4_MAIN_OFFBOARD = 6
@@ -31,8 +38,14 @@ _PX4_MAIN_AUTO = 4
 _MAV = mavutil.mavlink
 _ORIGIN_LAT_DEG, _ORIGIN_LON_DEG, _ORIGIN_ALT_M = 47.397742, 8.545594, 488.0  # PX4 SITL home
 _M_PER_DEG_LAT = 111_320.0
-_IGNORE_YAW, _IGNORE_YAW_RATE = 0x400, 0x800  # POSITION_TARGET_TYPEMASK bits
+_IGNORE_VELOCITY, _IGNORE_YAW, _IGNORE_YAW_RATE = 0x38, 0x400, 0x800  # POSITION_TARGET_TYPEMASK
 _YAW_P = 2.0
+_VERSION_REQUESTS = (_MAV.MAV_CMD_REQUEST_MESSAGE, _MAV.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES)
+_CAPABILITIES = (
+    _MAV.MAV_PROTOCOL_CAPABILITY_SET_POSITION_TARGET_LOCAL_NED
+    | _MAV.MAV_PROTOCOL_CAPABILITY_MAVLINK2
+)
+_UID = 0x5349_4D00_0000_0002  # the multirotor endpoint's is ...01
 _SENSORS = (
     _MAV.MAV_SYS_STATUS_SENSOR_3D_GYRO
     | _MAV.MAV_SYS_STATUS_SENSOR_3D_ACCEL
@@ -76,11 +89,18 @@ class RoverMavlinkEndpoint:
         self._timeout = setpoint_timeout_s
         self.offboard = False
         self._last_sp = -math.inf
+        self.handler_errors = 0
+        self._refused_at: dict[bytes, float] = {}  # refusal text -> when last said [s]
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, daemon=True)
 
     def start(self) -> None:
         self._thread.start()
+
+    @property
+    def running(self) -> bool:
+        """True while the endpoint's loop runs (started and not closed)."""
+        return self._thread.is_alive()
 
     def close(self) -> None:
         self._stop.set()
@@ -92,7 +112,10 @@ class RoverMavlinkEndpoint:
         t_prev = time.monotonic()
         while not self._stop.is_set():
             while (msg := self._conn.recv_match(blocking=False)) is not None:
-                self._handle(msg)
+                try:
+                    self._handle(msg)
+                except Exception:  # a hostile message must never stop the rover's loop
+                    self.handler_errors += 1
             now = time.monotonic()
             if self.offboard and now - self._last_sp > self._timeout:
                 self.sim.set_setpoint(0.0, 0.0)
@@ -106,11 +129,18 @@ class RoverMavlinkEndpoint:
                 next_slow = now + 1.0
             time.sleep(self._period)
 
-    def _ack(self, command: int, ok: bool) -> None:
-        result = _MAV.MAV_RESULT_ACCEPTED if ok else _MAV.MAV_RESULT_DENIED
-        self._conn.mav.command_ack_send(command, result)
+    def _ack(self, msg: object, result: int) -> None:
+        """COMMAND_ACK for ``msg``'s command with ``result`` (MAV_RESULT), addressed to its
+        sender as PX4 does once the link speaks MAVLink 2 (pymavlink starts in MAVLink 1, whose
+        COMMAND_ACK has no target fields, and switches when a MAVLink 2 peer is heard)."""
+        ack = self._conn.mav.command_ack_encode(msg.command, result)
+        if hasattr(ack, "target_system"):
+            ack.target_system, ack.target_component = msg.get_srcSystem(), msg.get_srcComponent()
+        self._conn.mav.send(ack)
 
-    def _set_mode(self, main_mode: int) -> bool:
+    def _set_mode(self, main_mode: float) -> bool:
+        if not math.isfinite(main_mode):
+            return False
         if main_mode == _PX4_MAIN_OFFBOARD:
             if time.monotonic() - self._last_sp > self._timeout:
                 return False  # PX4 refuses OFFBOARD without a setpoint stream
@@ -131,23 +161,50 @@ class RoverMavlinkEndpoint:
                 else:
                     self.sim.disarm()
                     self.offboard = False
-                self._ack(msg.command, True)
+                self._ack(msg, _MAV.MAV_RESULT_ACCEPTED)
+            elif msg.command in _VERSION_REQUESTS and (
+                msg.command != _MAV.MAV_CMD_REQUEST_MESSAGE
+                or msg.param1 == _MAV.MAVLINK_MSG_ID_AUTOPILOT_VERSION
+            ):  # MAVSDK's info plugin asks for it on connecting
+                self._ack(msg, _MAV.MAV_RESULT_ACCEPTED)
+                self._conn.mav.autopilot_version_send(
+                    _CAPABILITIES, PX4_VERSION, PX4_VERSION, 0, 0, [0] * 8, [0] * 8, [0] * 8,
+                    0, 0, _UID,
+                )  # fmt: skip
             elif msg.command == _MAV.MAV_CMD_DO_SET_MODE:
-                self._ack(msg.command, self._set_mode(int(msg.param2)))
+                ok = self._set_mode(msg.param2)
+                self._ack(msg, _MAV.MAV_RESULT_ACCEPTED if ok else _MAV.MAV_RESULT_DENIED)
             else:
-                self._ack(msg.command, False)
+                self._ack(msg, _MAV.MAV_RESULT_UNSUPPORTED)
         elif kind == "SET_MODE":
             self._set_mode((msg.custom_mode >> 16) & 0xFF)
+        elif kind == "LOG_REQUEST_LIST":  # no logs, said at once as PX4 does (num_logs 0)
+            self._conn.mav.log_entry_send(0, 0, 0, 0, 0)
         elif kind == "SET_POSITION_TARGET_LOCAL_NED":
-            self._last_sp = time.monotonic()
+            if msg.type_mask & _IGNORE_VELOCITY == _IGNORE_VELOCITY:
+                self._refuse_setpoint(b"Offboard: rover flies velocity setpoints only")
+                return
             heading = self.sim.state.heading_rad
             if msg.coordinate_frame == _MAV.MAV_FRAME_BODY_NED:
                 speed = msg.vx
             else:  # LOCAL_NED: project the ground velocity on the heading (north, east)
                 speed = msg.vx * math.cos(-heading) + msg.vy * math.sin(-heading)
             yaw_rate = self._yaw_rate_sp(msg, heading)
+            if not (math.isfinite(speed) and math.isfinite(yaw_rate)):
+                self._refuse_setpoint(b"Offboard: setpoint refused: not finite")
+                return
+            self._last_sp = time.monotonic()
             if self.offboard and self.sim.armed:
                 self.sim.set_setpoint(float(speed), float(yaw_rate))
+
+    def _refuse_setpoint(self, text: bytes) -> None:
+        """Say why a setpoint is not flown (STATUSTEXT of at most 50 characters, each text at
+        most once a second, as PX4 limits its messages); it is no proof of life, so OFFBOARD
+        is not entered on it and its loss failsafe still runs."""
+        now = time.monotonic()
+        if now - self._refused_at.get(text, -math.inf) >= 1.0:
+            self._refused_at[text] = now
+            self._conn.mav.statustext_send(_MAV.MAV_SEVERITY_WARNING, text)
 
     @staticmethod
     def _yaw_rate_sp(msg: object, heading_rad: float) -> float:

@@ -63,3 +63,58 @@ def test_pymavlink_arm_offboard_velocity_and_yaw_rate() -> None:
     finally:
         gcs.close()
         ep.close()
+
+
+@pytest.mark.slow
+def test_malformed_messages_get_an_answer_and_never_stop_the_rover() -> None:
+    """A mode that is not a number is DENIED, NaN / position-only setpoints are refused with a
+    STATUSTEXT (no proof of life: OFFBOARD is refused), an unknown command is UNSUPPORTED; the
+    rover keeps answering and then drives a good setpoint stream."""
+    port = _free_port()
+    ep = RoverMavlinkEndpoint(RoverSim(rover_preset("husky_50kg")), port)
+    ep.start()
+    gcs = mavutil.mavlink_connection(f"udpout:127.0.0.1:{port}", source_system=255)
+    nan = float("nan")
+
+    def command(cmd: int, *params: float) -> object:
+        gcs.mav.command_long_send(1, 1, cmd, 0, *params)
+        ack = gcs.recv_match(type="COMMAND_ACK", blocking=True, timeout=20)
+        assert ack is not None and ack.command == cmd
+        return ack.result
+
+    def setpoint(mask: int, vx: float) -> None:
+        gcs.mav.set_position_target_local_ned_send(
+            0, 1, 1, _MAV.MAV_FRAME_BODY_NED, mask, 1, 0, 0, vx, 0, 0, 0, 0, 0, 0, 0.0
+        )
+
+    try:
+        gcs.mav.heartbeat_send(_MAV.MAV_TYPE_GCS, _MAV.MAV_AUTOPILOT_INVALID, 0, 0, 0)
+        assert gcs.recv_match(type="HEARTBEAT", blocking=True, timeout=20) is not None
+        assert command(_MAV.MAV_CMD_COMPONENT_ARM_DISARM, 1, 0, 0, 0, 0, 0, 0) == 0
+        assert command(_MAV.MAV_CMD_DO_SET_MODE, 1, nan, 0, 0, 0, 0, 0) == (_MAV.MAV_RESULT_DENIED)
+        assert command(_MAV.MAV_CMD_DO_ORBIT, 0, 0, 0, 0, 0, 0, 0) == (_MAV.MAV_RESULT_UNSUPPORTED)
+        texts = set()
+        for mask, vx in ((0b0000_0101_1100_0111, nan), (0b0000_1101_1111_1000, 0.0)):
+            setpoint(mask, vx)
+            text = gcs.recv_match(type="STATUSTEXT", blocking=True, timeout=20)
+            assert text is not None
+            texts.add(text.text)
+        assert texts == {
+            "Offboard: setpoint refused: not finite",
+            "Offboard: rover flies velocity setpoints only",
+        }
+        assert command(_MAV.MAV_CMD_DO_SET_MODE, 1, 6, 0, 0, 0, 0, 0) == (
+            _MAV.MAV_RESULT_DENIED
+        )  # no usable setpoint arrived: no OFFBOARD
+        setpoint(0b0000_0101_1100_0111, 0.5)
+        assert command(_MAV.MAV_CMD_DO_SET_MODE, 1, 6, 0, 0, 0, 0, 0) == (_MAV.MAV_RESULT_ACCEPTED)
+        assert ep.offboard and ep.handler_errors == 0
+        assert command(_MAV.MAV_CMD_REQUEST_MESSAGE, 148, 0, 0, 0, 0, 0, 0) == 0  # MAVSDK info
+        version = gcs.recv_match(type="AUTOPILOT_VERSION", blocking=True, timeout=20)
+        assert version is not None and version.flight_sw_version >> 16 == 0x010F  # PX4 1.15
+        gcs.mav.log_request_list_send(1, 1, 0, 0xFFFF)  # MAVSDK's log_files.get_entries()
+        entry = gcs.recv_match(type="LOG_ENTRY", blocking=True, timeout=20)
+        assert entry is not None and entry.num_logs == 0
+    finally:
+        gcs.close()
+        ep.close()
