@@ -1,7 +1,7 @@
 """Run a rover regime and write its figures and summary (atomically) into a folder.
 
 Figures: max and RMS e_L / e_H per trial, scheduled speeds along the path per trial, travel
-time per trial; ``summary.json`` holds the per-trial numbers (with how often the safety
+time per trial; ``<regime>.json`` holds the per-trial numbers (with how often the safety
 governor slowed each pass, ``safety_trips``) and the reductions 1 - (last trial / trial 1) of
 the max errors. With a speed scheduler the last trial is driven
 again with learning disabled (:func:`learning_disabled_pass`), and the summary adds that pair.
@@ -12,6 +12,7 @@ from __future__ import annotations
 import json
 import os
 import tempfile
+from collections.abc import Callable
 from dataclasses import replace
 
 import numpy as np
@@ -125,14 +126,32 @@ def _plots(records: list[TrialRecord], s_m: np.ndarray, folder: str, name: str) 
     os.replace(tmp, os.path.join(folder, f"{name}.png"))
 
 
-def run_regime(name: str, out_dir: str, trials: int | None = None, seed: int = 0) -> dict:
-    """Run regime ``name`` (rover_exp1..3) and write ``<name>.png`` and ``<name>.json``."""
+def run_regime(
+    name: str,
+    out_dir: str,
+    trials: int | None = None,
+    seed: int = 0,
+    progress: Callable[[str], None] | None = None,
+) -> dict:
+    """Run regime ``name`` (rover_exp1..3) and write ``<name>.png`` and ``<name>.json``;
+    ``progress`` is told each trial as it ends (one line)."""
     sc = scenario(name, seed)
     if trials is not None:
         sc = replace(sc, trials=trials)
-    records = run_trials(sc)
+
+    def trial_done(j: int, r: TrialRecord) -> None:
+        if progress is not None:
+            progress(
+                f"{name} trial {j + 1}/{sc.trials}: max |e_L| {r.max_e_lat_m:.3f} m, "
+                f"max |e_H| {r.max_e_head_rad:.3f} rad, travel time {r.travel_time_s:.1f} s"
+                + ("" if r.completed else ", did not complete")
+            )
+
+    records = run_trials(sc, on_trial=trial_done)
     summary = summarise(records)
     if sc.scheduler is not None and sc.learning:
+        if progress is not None:
+            progress(f"{name}: the last trial's speeds again with learning disabled")
         summary.update(same_schedule_figures(records[-1], learning_disabled_pass(sc, records)))
     os.makedirs(out_dir, exist_ok=True)
     _plots(records, sc.path.s_m, out_dir, name)

@@ -29,3 +29,32 @@ def test_an_out_folder_that_cannot_be_made_is_one_line_exit_2(tmp_path: Path, ca
         assert rover.main(["--regime", regime, "--out", str(blocker / "out")]) == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and err[0].startswith(f"rover: --out {blocker}"), err
+
+
+def test_a_negative_seed_is_one_line_exit_2(tmp_path: Path, capsys) -> None:
+    """The trial draws need a seed >= 0: said in one line, not a NumPy traceback."""
+    assert rover.main(["--regime", "rover_exp1", "--seed", "-3", "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--seed" in err[0] and ">= 0" in err[0], err
+
+
+def test_help_lists_the_regimes_what_is_written_and_quick(capsys) -> None:
+    """--help says what each regime is and which files it writes; study's --help points at
+    the rover regimes it hands over."""
+    assert rover.main(["--help"]) == 0
+    text = capsys.readouterr().out
+    for word in ("rover_exp2", "Ackermann", "fig4_illustrative.png", "REGIME.json", "--quick"):
+        assert word in text, word
+    assert study.main(["--help"]) == 0
+    assert "rover_exp1" in capsys.readouterr().out
+
+
+@pytest.mark.slow
+def test_quick_rover_regime_through_study_reports_each_trial(tmp_path: Path, capsys) -> None:
+    """`study --regime rover_exp1 --quick` (study's own smoke option) runs a few trials, says
+    each on stderr as it ends, and writes the figure and the summary."""
+    assert study.main(["--regime", "rover_exp1", "--quick", "--out", str(tmp_path)]) == 0
+    err = capsys.readouterr().err
+    assert "trial 1/2" in err and "trial 2/2" in err
+    assert (tmp_path / "rover_exp1.json").stat().st_size > 0
+    assert (tmp_path / "rover_exp1.png").stat().st_size > 10_000
