@@ -14,12 +14,16 @@ import os
 import tempfile
 from collections.abc import Callable
 from dataclasses import replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from experiments.rover.learner import make_history_gp
 from experiments.rover.scenarios import RoverScenario, scenario
 from experiments.rover.trial import TrialRecord, run_trial, run_trials
+
+if TYPE_CHECKING:
+    import matplotlib.figure
 
 
 def _late_reductions(first: float, late: list[float]) -> list[float]:
@@ -93,11 +97,14 @@ def same_schedule_figures(last: TrialRecord, disabled: TrialRecord) -> dict:
     }
 
 
-def _plots(records: list[TrialRecord], s_m: np.ndarray, folder: str, name: str) -> None:
+def figure(records: list[TrialRecord], s_m: np.ndarray, name: str) -> matplotlib.figure.Figure:
+    """The regime's figure: errors per trial, scheduled speed along the path (one line per
+    trial, coloured by trial), travel time per trial. ``s_m`` (N,) is the vertices' arc length."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import MaxNLocator
 
     j = np.arange(1, len(records) + 1)
     fig, axes = plt.subplots(3, 1, figsize=(8, 9))
@@ -106,18 +113,33 @@ def _plots(records: list[TrialRecord], s_m: np.ndarray, folder: str, name: str) 
     ax.plot(j, [r.rms_e_lat_m for r in records], "s-", label="RMS e_L [m]")
     ax.plot(j, [r.max_e_head_rad for r in records], "o--", label="max |e_H| [rad]")
     ax.plot(j, [r.rms_e_head_rad for r in records], "s--", label="RMS e_H [rad]")
-    ax.set_xlabel("trial")
+    ax.set_ylabel("path error [m] or [rad]")
     ax.legend()
     ax = axes[1]
+    colours = plt.cm.viridis
     for k, r in enumerate(records):
-        ax.plot(s_m, r.schedule_mps, color=plt.cm.viridis(k / max(1, len(records) - 1)))
+        ax.plot(s_m, r.schedule_mps, color=colours(k / max(1, len(records) - 1)))
     ax.set_xlabel("distance along path [m]")
     ax.set_ylabel("scheduled speed [m/s]")
+    scale = plt.cm.ScalarMappable(cmap=colours, norm=plt.Normalize(1, max(2, len(records))))
+    bar = fig.colorbar(scale, ax=ax, pad=0.01)
+    bar.set_label("trial")
+    bar.locator = MaxNLocator(integer=True)
+    bar.update_ticks()
     axes[2].plot(j, [r.travel_time_s for r in records], "o-")
-    axes[2].set_xlabel("trial")
     axes[2].set_ylabel("travel time [s]")
+    for ax in (axes[0], axes[2]):
+        ax.set_xlabel("trial")
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     fig.suptitle(f"{name}: [Ostafew16] path repeating with LB-NMPC")
     fig.tight_layout()
+    return fig
+
+
+def _plots(records: list[TrialRecord], s_m: np.ndarray, folder: str, name: str) -> None:
+    import matplotlib.pyplot as plt
+
+    fig = figure(records, s_m, name)
     fd, tmp = tempfile.mkstemp(suffix=".png", dir=folder)
     os.close(fd)
     os.chmod(tmp, 0o644)

@@ -42,3 +42,27 @@ def test_safety_governor_keeps_a_pass_too_fast_for_its_model_near_the_path() -> 
     assert governed.safety_trips >= 1 and governed.completed
     assert np.min(governed.v_cmd_mps) == base.scheduler.v_init_mps
     assert governed.max_e_lat_m < 0.5 * free.max_e_lat_m
+
+
+def test_the_regime_figure_labels_every_axis_and_says_which_line_is_which_trial() -> None:
+    """Every panel has its quantity and unit on both axes, trials are whole numbers, and the
+    scheduled-speed lines carry a trial colour bar (one line per trial, otherwise unnamed)."""
+    import matplotlib.pyplot as plt
+
+    from experiments.rover.report import figure
+
+    sc = scenario("rover_exp1").with_trials(2)
+    records = run_trials(sc)
+    fig = figure(records, sc.path.s_m, "rover_exp1")
+    try:
+        errors, speeds, times = fig.axes[:3]
+        for ax in (errors, speeds, times):
+            assert ax.get_xlabel() and ax.get_ylabel(), ax
+        assert "[m]" in errors.get_ylabel() and "[rad]" in errors.get_ylabel()
+        colour_bars = [ax for ax in fig.axes[3:] if ax.get_ylabel() == "trial"]
+        assert len(colour_bars) == 1
+        for ax in (errors, times):
+            ticks = [t for t in ax.get_xticks() if 1 <= t <= len(records)]
+            assert ticks and all(float(t).is_integer() for t in ticks), ticks
+    finally:
+        plt.close(fig)
