@@ -91,6 +91,8 @@ def same_schedule_figures(last: TrialRecord, disabled: TrialRecord) -> dict:
         "learning_disabled_max_e_lat_m": disabled.max_e_lat_m,
         "learning_disabled_max_e_head_rad": disabled.max_e_head_rad,
         "learning_disabled_travel_time_s": disabled.travel_time_s,
+        # the governor may slow this pass below the schedule: its travel time then says so
+        "learning_disabled_safety_trips": disabled.safety_trips,
         "max_lateral_reduction_vs_learning_disabled": 1.0 - last.max_e_lat_m / disabled.max_e_lat_m,
         "max_heading_reduction_vs_learning_disabled": 1.0
         - last.max_e_head_rad / disabled.max_e_head_rad,

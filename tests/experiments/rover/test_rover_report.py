@@ -25,6 +25,8 @@ def test_learning_disabled_pass_repeats_the_last_trial_without_the_gp() -> None:
     assert off.e_head_rad[0] == pytest.approx(records[1].e_head_rad[0], abs=1e-12)
     figs = same_schedule_figures(records[1], off)
     assert figs["learning_disabled_max_e_lat_m"] == off.max_e_lat_m
+    # a slower same-schedule pass is explained by its governor trips, reported beside it
+    assert figs["learning_disabled_safety_trips"] == off.safety_trips
     assert figs["max_lateral_reduction_vs_learning_disabled"] == pytest.approx(
         1.0 - records[1].max_e_lat_m / off.max_e_lat_m
     )
