@@ -1,5 +1,6 @@
 """study --regime / scripts.rover: bad input exits 2; the section 3.4 example writes Fig. 4."""
 
+import json
 from pathlib import Path
 
 import pytest
@@ -14,9 +15,12 @@ def test_unknown_regime_exits_2(capsys) -> None:
 
 
 @pytest.mark.slow
-def test_example_regime_writes_the_figure(tmp_path: Path) -> None:
+def test_example_regime_writes_the_figure(tmp_path: Path, capsys) -> None:
     assert study.main(["--regime", "example", "--out", str(tmp_path)]) == 0
     png = tmp_path / "fig4_illustrative.png"
+    out, err = capsys.readouterr()
+    assert f"wrote {png}" in err  # where to look; the figures printed say what they are:
+    assert set(json.loads(out)["rms_tracking_error_z"]) == {"feedback", "mpc", "lbnmpc"}
     assert png.stat().st_size > 10_000
     assert not [p for p in tmp_path.iterdir() if p.name.startswith("tmp")]
 
@@ -56,5 +60,6 @@ def test_quick_rover_regime_through_study_reports_each_trial(tmp_path: Path, cap
     assert study.main(["--regime", "rover_exp1", "--quick", "--out", str(tmp_path)]) == 0
     err = capsys.readouterr().err
     assert "trial 1/2" in err and "trial 2/2" in err
+    assert f"wrote {tmp_path / 'rover_exp1.png'} and {tmp_path / 'rover_exp1.json'}" in err
     assert (tmp_path / "rover_exp1.json").stat().st_size > 0
     assert (tmp_path / "rover_exp1.png").stat().st_size > 10_000
