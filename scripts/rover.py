@@ -11,6 +11,7 @@ along the path per trial, travel time per trial) and REGIME.json (the per-trial 
 the reductions 1 - last / first trial); `example` writes fig4_illustrative.png and takes no
 --trials or --seed. Each trial is said on stderr as it ends, then the files written; the
 summary is printed on stdout (for `example`, each controller's RMS tracking error of z).
+Ctrl-C stops a regime with exit 130 and writes nothing.
 A full regime takes about 30-60 s of CPU; --quick drives 2 trials (learning needs one before
 it). `study --regime rover_exp1 ...` runs this command. Exit 2 with one line on bad input.
 """
@@ -85,7 +86,11 @@ def main(argv: list[str] | None = None) -> int:
         def progress(message: str) -> None:
             print(f"rover [{time.process_time() - start:6.1f} s CPU] {message}", file=sys.stderr)
 
-        result = run_regime(args.regime, args.out, args.trials, args.seed, progress)
+        try:
+            result = run_regime(args.regime, args.out, args.trials, args.seed, progress)
+        except KeyboardInterrupt:  # the figure and summary are written at the end, whole
+            print(f"rover: interrupted; nothing written to {args.out}", file=sys.stderr)
+            return 130
         written = [os.path.join(args.out, f"{args.regime}.{ext}") for ext in ("png", "json")]
     print(f"rover: wrote {' and '.join(written)}", file=sys.stderr)
     print(json.dumps(result, indent=1))

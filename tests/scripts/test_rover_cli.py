@@ -1,11 +1,16 @@
 """study --regime / scripts.rover: bad input exits 2; the section 3.4 example writes Fig. 4."""
 
 import json
+import signal
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
 
 from scripts import rover, study
+
+REPO = Path(__file__).resolve().parents[2]
 
 
 def test_unknown_regime_exits_2(capsys) -> None:
@@ -63,3 +68,26 @@ def test_quick_rover_regime_through_study_reports_each_trial(tmp_path: Path, cap
     assert f"wrote {tmp_path / 'rover_exp1.png'} and {tmp_path / 'rover_exp1.json'}" in err
     assert (tmp_path / "rover_exp1.json").stat().st_size > 0
     assert (tmp_path / "rover_exp1.png").stat().st_size > 10_000
+
+
+@pytest.mark.slow
+def test_ctrl_c_during_a_regime_is_one_line_exit_130_and_writes_nothing(tmp_path: Path) -> None:
+    """Ctrl-C after the first trial: no traceback, exit 130, no half-written figure."""
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "scripts.rover", "--regime", "rover_exp1", "--out", str(tmp_path)],
+        cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )  # fmt: skip
+    try:
+        for line in proc.stderr:
+            if "trial 1/20" in line:
+                break
+        proc.send_signal(signal.SIGINT)
+        err = proc.stderr.read()
+        assert proc.wait(60) == 130, err
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(5)
+    assert "Traceback" not in err and err.strip().splitlines()[-1].startswith("rover: interrupted")
+    assert list(tmp_path.iterdir()) == []
