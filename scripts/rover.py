@@ -55,6 +55,10 @@ def main(argv: list[str] | None = None) -> int:
         args = ap.parse_args(argv)
     except SystemExit as exc:  # --help (0) or a one-line usage error (2): the exit code
         return int(exc.code or 0)
+    if args.regime == "example" and (args.trials is not None or args.quick or args.seed != 0):
+        print("rover: error: --regime example has no trials or draws; drop --trials, --quick "
+              "and --seed", file=sys.stderr)  # fmt: skip
+        return 2
     if args.quick and args.trials is None:
         args.trials = QUICK_TRIALS
     if args.regime not in REGIMES:

@@ -17,6 +17,12 @@ def test_unknown_regime_exits_2(capsys) -> None:
     assert study.main(["--regime", "rover_exp9"]) == 2
     assert "rover_exp9" in capsys.readouterr().err
     assert rover.main(["--regime", "rover_exp1", "--trials", "0"]) == 2
+    capsys.readouterr()
+    # the example is one fixed run: options it would ignore are refused, not dropped silently
+    for extra in (["--trials", "5"], ["--quick"], ["--seed", "3"]):
+        assert rover.main(["--regime", "example", *extra]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and extra[0] in err[0], err
 
 
 @pytest.mark.slow
