@@ -100,8 +100,9 @@ def same_schedule_figures(last: TrialRecord, disabled: TrialRecord) -> dict:
 
 
 def figure(records: list[TrialRecord], s_m: np.ndarray, name: str) -> matplotlib.figure.Figure:
-    """The regime's figure: errors per trial, scheduled speed along the path (one line per
-    trial, coloured by trial), travel time per trial. ``s_m`` (N,) is the vertices' arc length."""
+    """The regime's figure: errors per trial; e_L along the path in the first and the last
+    trial ([Ostafew16] Figs. 9, 12, 17); scheduled speed along the path (one line per trial,
+    coloured by trial); travel time per trial. ``s_m`` (N,) is the vertices' arc length."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -109,7 +110,7 @@ def figure(records: list[TrialRecord], s_m: np.ndarray, name: str) -> matplotlib
     from matplotlib.ticker import MaxNLocator
 
     j = np.arange(1, len(records) + 1)
-    fig, axes = plt.subplots(3, 1, figsize=(8, 9))
+    fig, axes = plt.subplots(4, 1, figsize=(8, 12))
     ax = axes[0]
     ax.plot(j, [r.max_e_lat_m for r in records], "o-", label="max |e_L| [m]")
     ax.plot(j, [r.rms_e_lat_m for r in records], "s-", label="RMS e_L [m]")
@@ -118,6 +119,14 @@ def figure(records: list[TrialRecord], s_m: np.ndarray, name: str) -> matplotlib
     ax.set_ylabel("path error [m] or [rad]")
     ax.legend()
     ax = axes[1]
+    for k, style in ((0, "r"), (len(records) - 1, "k")):
+        r = records[k]
+        ax.plot(r.s_m, r.e_lat_m, style, lw=0.8, label=f"trial {k + 1}")
+    ax.axhline(0.0, color="0.6", lw=0.5)
+    ax.set_xlabel("distance along path [m]")
+    ax.set_ylabel("lateral error e_L [m]")
+    ax.legend()
+    ax = axes[2]
     colours = plt.cm.viridis
     for k, r in enumerate(records):
         ax.plot(s_m, r.schedule_mps, color=colours(k / max(1, len(records) - 1)))
@@ -128,9 +137,9 @@ def figure(records: list[TrialRecord], s_m: np.ndarray, name: str) -> matplotlib
     bar.set_label("trial")
     bar.locator = MaxNLocator(integer=True)
     bar.update_ticks()
-    axes[2].plot(j, [r.travel_time_s for r in records], "o-")
-    axes[2].set_ylabel("travel time [s]")
-    for ax in (axes[0], axes[2]):
+    axes[3].plot(j, [r.travel_time_s for r in records], "o-")
+    axes[3].set_ylabel("travel time [s]")
+    for ax in (axes[0], axes[3]):
         ax.set_xlabel("trial")
         ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     fig.suptitle(f"{name}: [Ostafew16] path repeating with LB-NMPC")

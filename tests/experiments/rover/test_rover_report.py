@@ -57,11 +57,16 @@ def test_the_regime_figure_labels_every_axis_and_says_which_line_is_which_trial(
     records = run_trials(sc)
     fig = figure(records, sc.path.s_m, "rover_exp1")
     try:
-        errors, speeds, times = fig.axes[:3]
-        for ax in (errors, speeds, times):
+        errors, along, speeds, times = fig.axes[:4]
+        for ax in (errors, along, speeds, times):
             assert ax.get_xlabel() and ax.get_ylabel(), ax
+        # [Ostafew16] Figs. 9, 12, 17: e_L along the path, first trial against the last
+        labels = [t.get_text() for t in along.get_legend().get_texts()]
+        assert labels == ["trial 1", "trial 2"] and "[m]" in along.get_ylabel()
+        first = along.get_lines()[0]
+        np.testing.assert_array_equal(first.get_ydata(), records[0].e_lat_m)
         assert "[m]" in errors.get_ylabel() and "[rad]" in errors.get_ylabel()
-        colour_bars = [ax for ax in fig.axes[3:] if ax.get_ylabel() == "trial"]
+        colour_bars = [ax for ax in fig.axes[4:] if ax.get_ylabel() == "trial"]
         assert len(colour_bars) == 1
         for ax in (errors, times):
             ticks = [t for t in ax.get_xticks() if 1 <= t <= len(records)]
