@@ -12,7 +12,7 @@ the reductions 1 - last / first trial); `example` writes fig4_illustrative.png a
 --trials or --seed. Each trial is said on stderr as it ends, then the files written; the
 summary is printed on stdout (for `example`, each controller's RMS tracking error of z).
 Ctrl-C stops a regime with exit 130 and writes nothing.
-A full regime takes about 30-60 s of CPU; --quick drives 2 trials (learning needs one before
+A full regime takes about 25-60 s of CPU; --quick drives 2 trials (learning needs one before
 it). `study --regime rover_exp1 ...` runs this command. Exit 2 with one line on bad input.
 """
 
