@@ -1,7 +1,8 @@
 """Run a rover regime and write its figures and summary (atomically) into a folder.
 
-Figures: max and RMS e_L / e_H per trial, scheduled speeds along the path per trial, travel
-time per trial; ``<regime>.json`` holds the per-trial numbers (with how often the safety
+Figures (:func:`figure`): max and RMS e_L / e_H per trial, e_L along the path in the first and
+the last trial, scheduled speeds along the path per trial, travel time per trial;
+``<regime>.json`` holds the per-trial numbers (with how often the safety
 governor slowed each pass, ``safety_trips``) and the reductions 1 - (last trial / trial 1) of
 the max errors. With a speed scheduler the last trial is driven
 again with learning disabled (:func:`learning_disabled_pass`), and the summary adds that pair.
