@@ -16,6 +16,7 @@ PX4_MAIN_SUB: dict[str, tuple[int, int]] = {
     "RTL": (4, 5),
     "MISSION": (4, 4),
     "OFFBOARD": (6, 0),
+    "MANUAL": (1, 0),  # a pilot's sticks: where an RC switch puts a rover
 }
 
 

@@ -1,30 +1,66 @@
 """Paper 004 on its own robots: `python -m scripts.rover --regime rover_exp1 --out DIR`.
 
-Regimes: rover_exp1 (30 m, 0.4 m/s, 20 trials, 50 kg skid-steer), rover_exp2 (60 m loop,
-scheduler, 20 trials, 150 kg skid-steer), rover_exp3 (100 m loop, scheduler, 10 trials, 600 kg
-Ackermann), example (section 3.4's illustrative example, Fig. 4). Exit 2 on bad input.
+Regimes ([Ostafew16] section 5; the robots are vehicle_sim.rover's presets):
+  rover_exp1  30 m path at a fixed 0.4 m/s, 20 trials, 50 kg skid-steer (Husky)
+  rover_exp2  60 m loop, speed scheduler, 20 trials, 150 kg skid-steer (ROC6)
+  rover_exp3  100 m loop, speed scheduler, 10 trials, 600 kg Ackermann (DMRV)
+  example     section 3.4's illustrative example: feedback vs MPC vs LB-NMPC (Fig. 4)
+
+Writes into --out: REGIME.png (max and RMS e_L [m] / e_H [rad] per trial, the scheduled speed
+along the path per trial, travel time per trial) and REGIME.json (the per-trial numbers and
+the reductions 1 - last / first trial); `example` writes fig4_illustrative.png and takes no
+--trials or --seed. Each trial is said on stderr as it ends, then the files written; the
+summary is printed on stdout (for `example`, each controller's RMS tracking error of z).
+Ctrl-C stops a regime with exit 130 and writes nothing.
+A full regime takes about 25-60 s of CPU; --quick drives 2 trials (learning needs one before
+it). `study --regime rover_exp1 ...` runs this command. Exit 2 with one line on bad input.
 """
 
 from __future__ import annotations
 
+import argparse
 import json
 import os
 import sys
+import time
 from pathlib import Path
 
 from flightlog.atomic_output import OutputError, check_writable_dir, describe_os_error
 from scripts.one_line_parser import OneLineParser, output_path
 
 REGIMES = ("rover_exp1", "rover_exp2", "rover_exp3", "example")
+QUICK_TRIALS = 2
+
+
+def _seed(text: str) -> int:
+    """A trial seed (argparse ``type``): NumPy's generators take integers >= 0 only."""
+    value = int(text)
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"must be >= 0, got {value}")
+    return value
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = OneLineParser(prog="rover", description=__doc__.splitlines()[0])
+    ap = OneLineParser(
+        prog="rover", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     ap.add_argument("--regime", required=True, help=f"one of {', '.join(REGIMES)}")
     ap.add_argument("--out", type=output_path, default="rover_out", help="output folder")
     ap.add_argument("--trials", type=int, default=None, help="override the number of trials")
-    ap.add_argument("--seed", type=int, default=0)
-    args = ap.parse_args(argv)
+    ap.add_argument(
+        "--quick", action="store_true", help=f"{QUICK_TRIALS} trials (unless --trials is given)"
+    )
+    ap.add_argument("--seed", type=_seed, default=0, help="draws of starts, localisation, terrain")
+    try:
+        args = ap.parse_args(argv)
+    except SystemExit as exc:  # --help (0) or a one-line usage error (2): the exit code
+        return int(exc.code or 0)
+    if args.regime == "example" and (args.trials is not None or args.quick or args.seed != 0):
+        print("rover: error: --regime example has no trials or draws; drop --trials, --quick "
+              "and --seed", file=sys.stderr)  # fmt: skip
+        return 2
+    if args.quick and args.trials is None:
+        args.trials = QUICK_TRIALS
     if args.regime not in REGIMES:
         print(f"rover: error: --regime {args.regime!r} is unknown; use one of {', '.join(REGIMES)}",
               file=sys.stderr)  # fmt: skip
@@ -44,11 +80,23 @@ def main(argv: list[str] | None = None) -> int:
     if args.regime == "example":
         from experiments.rover.illustrative import write_figure
 
-        result = write_figure(os.path.join(args.out, "fig4_illustrative.png"))
+        written = [os.path.join(args.out, "fig4_illustrative.png")]
+        result = {"rms_tracking_error_z": write_figure(written[0])}
     else:
         from experiments.rover.report import run_regime
 
-        result = run_regime(args.regime, args.out, args.trials, args.seed)
+        start = time.process_time()
+
+        def progress(message: str) -> None:
+            print(f"rover [{time.process_time() - start:6.1f} s CPU] {message}", file=sys.stderr)
+
+        try:
+            result = run_regime(args.regime, args.out, args.trials, args.seed, progress)
+        except KeyboardInterrupt:  # the figure and summary are written at the end, whole
+            print(f"rover: interrupted; nothing written to {args.out}", file=sys.stderr)
+            return 130
+        written = [os.path.join(args.out, f"{args.regime}.{ext}") for ext in ("png", "json")]
+    print(f"rover: wrote {' and '.join(written)}", file=sys.stderr)
     print(json.dumps(result, indent=1))
     return 0
 

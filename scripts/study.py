@@ -67,7 +67,13 @@ def parse_args(argv: list[str] | None) -> StudyConfig:
         help="nominal model under the learned residual",
     )
     parser.add_argument("--features", choices=list(FEATURE_SETS), default=None)
-    parser.add_argument("--regime", choices=list(REGIMES), default="paper000")
+    parser.add_argument(
+        "--regime",
+        choices=list(REGIMES),
+        default="paper000",
+        help=f"the multirotor task; {', '.join(ROVER_REGIMES)} run the rover experiments "
+        "instead (python -m scripts.rover --help: their options)",
+    )
     parser.add_argument(
         "--refit-rounds",
         type=int,

@@ -12,11 +12,15 @@ in this example). Trial 1 of LB-NMPC has no experience; the figure shows trial 2
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from gp.exact_gp import exact_posterior
 from gp.kernels import SquaredExponentialARD
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 
 @dataclass(frozen=True)
@@ -58,7 +62,10 @@ def _mpc_input(c: ExampleConfig, z: float, zd: np.ndarray, g: np.ndarray) -> flo
 
 
 def run(controller: str, c: ExampleConfig = ExampleConfig(), trials: int = 2) -> dict:  # noqa: B008
-    """Trajectories of the last trial: {"z", "z_d", "u", "d", "g"} (steps,) each."""
+    """Trajectories of the last trial: {"z", "z_d", "u", "d", "g", "resid"} (steps,) each;
+    ``g`` is what the controller used (learned from the trial before), ``resid`` what the
+    nominal model missed in this trial, z_{k+1} - (z_k + dt u_k): the disturbance and the model
+    error (a, b) together, which is what g learns."""
     n, K = c.steps, c.horizon
     zd, d = desired(n + K + 1), disturbance(n, c.dt_s)
     learned = np.zeros(n + K)
@@ -79,18 +86,15 @@ def run(controller: str, c: ExampleConfig = ExampleConfig(), trials: int = 2) ->
         alpha, _ = exact_posterior(t, resid, kern, 1e-4)
         tq = np.arange(n + K, dtype=float)[:, None]
         learned = kern(tq, t) @ alpha
-    return {"z": z[:-1], "z_d": zd[:n], "u": u, "d": d, "g": g_used}
+    return {"z": z[:-1], "z_d": zd[:n], "u": u, "d": d, "g": g_used, "resid": resid}
 
 
 def tracking_rms(result: dict) -> float:
     return float(np.sqrt(np.mean((result["z"] - result["z_d"]) ** 2)))
 
 
-def write_figure(path: str, c: ExampleConfig = ExampleConfig()) -> dict[str, float]:  # noqa: B008
-    """Fig. 4-like PNG (atomic write); returns the RMS tracking error of each controller."""
-    import os
-    import tempfile
-
+def figure(c: ExampleConfig = ExampleConfig()) -> tuple[Figure, dict[str, dict]]:  # noqa: B008
+    """Fig. 4-like figure and the runs it shows ({controller: :func:`run`'s dict})."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -101,14 +105,30 @@ def write_figure(path: str, c: ExampleConfig = ExampleConfig()) -> dict[str, flo
     fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
     ax1.plot(t, runs["mpc"]["z_d"], "g", label="desired z_d")
     for name, style in (("feedback", "r"), ("mpc", "b"), ("lbnmpc", "k")):
-        ax1.plot(t, runs[name]["z"], style, label=name)
-    ax1.set_ylabel("z")
-    ax1.legend(loc="upper right")
+        rms = tracking_rms(runs[name])
+        ax1.plot(t, runs[name]["z"], style, label=f"{name} (RMS error {rms:.3f})")
+    ax1.set_ylabel("state z [-]")
+    ax1.legend(loc="upper right", fontsize="small")
     ax2.plot(t, runs["mpc"]["d"], "m", label="disturbance d_k")
-    ax2.plot(t, runs["lbnmpc"]["g"] / c.dt_s, "k--", label="learned g / dt")
+    lb = runs["lbnmpc"]
+    ax2.plot(t, lb["resid"] / c.dt_s, "c", label="nominal model's miss / dt (d_k + model error)")
+    ax2.plot(t, lb["g"] / c.dt_s, "k--", label="learned g / dt (from trial 1)")
     ax2.set_xlabel("time [s]")
-    ax2.legend(loc="upper right")
-    fig.suptitle("[Ostafew16] section 3.4: feedback vs MPC vs LB-NMPC (trial 2)")
+    ax2.set_ylabel("z per second [1/s]")
+    ax2.legend(loc="upper right", fontsize="small")
+    fig.suptitle("[Ostafew16] section 3.4: feedback vs MPC vs LB-NMPC (LB-NMPC trial 2)")
+    fig.tight_layout()
+    return fig, runs
+
+
+def write_figure(path: str, c: ExampleConfig = ExampleConfig()) -> dict[str, float]:  # noqa: B008
+    """Fig. 4-like PNG (atomic write); returns the RMS tracking error of each controller."""
+    import os
+    import tempfile
+
+    import matplotlib.pyplot as plt
+
+    fig, runs = figure(c)
     folder = os.path.dirname(os.path.abspath(path))
     fd, tmp = tempfile.mkstemp(suffix=".png", dir=folder)
     os.close(fd)

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from companion.link import Link, LinkError, VelocityCommand
+from companion.link import Link, LinkError, LinkState, VelocityCommand
 from experiments.rover import learner
 from gp.local_gp import LocalGP
 from planners.rover.path import TaughtPath, project_arc_length
@@ -31,6 +31,8 @@ class LinkDrive:
         t_s: link time [s]; s_m: arc length; e_lat_m, e_head_rad: [Ostafew16] errors against
         the path (from the Link's own state); w_cmd_radps: commanded turn rate (path frame).
         reached_end: the rover reached the last vertices before the deadline.
+        left_offboard_for: the mode the vehicle switched to by itself or by someone else (PX4's
+        offboard-loss failsafe, a pilot, a ground station), which ended the drive; "" if none.
     """
 
     t_s: np.ndarray
@@ -39,11 +41,15 @@ class LinkDrive:
     e_head_rad: np.ndarray
     w_cmd_radps: np.ndarray
     reached_end: bool
+    left_offboard_for: str = ""
 
 
 def pose_of(link: Link) -> np.ndarray:
     """(x_m, y_m, heading_rad) in the path frame from the Link's NED state."""
-    st = link.read_state()
+    return _pose(link.read_state())
+
+
+def _pose(st: LinkState) -> np.ndarray:
     return np.array([st.pos_ned_m[0], -st.pos_ned_m[1], -st.yaw_rad])
 
 
@@ -56,6 +62,10 @@ def drive_path(
     gp: LocalGP | None = None,
 ) -> LinkDrive:
     """Connect, arm, switch to OFFBOARD and follow ``path`` at ``speed_mps``; then hold.
+
+    Once the vehicle has reported OFFBOARD, a report of another mode ends the drive at once,
+    with nothing more sent (the companion never fights a pilot or a failsafe): the mode is in
+    ``left_offboard_for``.
 
     Raises:
         LinkError: the Link refuses arming or OFFBOARD (its reason in the message).
@@ -75,10 +85,15 @@ def drive_path(
     hint, w_prev, pose_prev, pending = 0, 0.0, None, None
     out: dict[str, list[float]] = {k: [] for k in ("t", "s", "el", "eh", "w")}
     experiences: list = []
-    reached = False
+    reached, seen_offboard, left_for = False, False, ""
     t_next = clock.now_s()
     while clock.now_s() < t_end:
-        pose = pose_of(link)
+        st = link.read_state()
+        seen_offboard = seen_offboard or st.mode == "OFFBOARD"
+        if seen_offboard and st.mode != "OFFBOARD":
+            left_for = st.mode
+            break
+        pose = _pose(st)
         pose_prev = pose if pose_prev is None else pose_prev
         fix = path.localise(*pose, hint=hint)
         hint = fix.vertex
@@ -113,8 +128,11 @@ def drive_path(
         pose_prev, w_prev = pose, w
         t_next += dt
         clock.sleep_until(t_next)
-    link.hold()
+    if left_for:
+        link.stop_streaming()
+    else:
+        link.hold()
     if gp is not None:
         learner.store_pass(gp, experiences)
     arr = {k: np.asarray(v, dtype=float) for k, v in out.items()}
-    return LinkDrive(arr["t"], arr["s"], arr["el"], arr["eh"], arr["w"], reached)
+    return LinkDrive(arr["t"], arr["s"], arr["el"], arr["eh"], arr["w"], reached, left_for)

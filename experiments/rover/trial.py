@@ -13,6 +13,7 @@ records.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -210,8 +211,13 @@ def run_trial(
     )  # fmt: skip
 
 
-def run_trials(sc: RoverScenario, gp: LocalGP | None = None) -> list[TrialRecord]:
-    """All trials of a scenario; the schedule follows eq. 31 when the scenario has a scheduler."""
+def run_trials(
+    sc: RoverScenario,
+    gp: LocalGP | None = None,
+    on_trial: Callable[[int, TrialRecord], None] | None = None,
+) -> list[TrialRecord]:
+    """All trials of a scenario; the schedule follows eq. 31 when the scenario has a scheduler.
+    ``on_trial(j, record)`` is called as trial j (from 0) ends."""
     gp = learner.make_history_gp() if gp is None else gp
     N = len(sc.path)
     if sc.scheduler is None:
@@ -222,6 +228,8 @@ def run_trials(sc: RoverScenario, gp: LocalGP | None = None) -> list[TrialRecord
     for j in range(sc.trials):
         r = run_trial(sc, gp, schedule, j)
         out.append(r)
+        if on_trial is not None:
+            on_trial(j, r)
         if sc.scheduler is not None:
             schedule = next_schedule(
                 schedule, r.vertex_e_lat_m, r.vertex_e_head_rad, r.vertex_w_cmd_radps,

@@ -56,6 +56,8 @@ class TaughtPath:
         seg = np.hypot(*np.diff(xy, axis=0).T)
         keep = np.concatenate([[True], seg > 1e-9])
         xy = xy[keep]
+        if xy.shape[0] < 2:
+            raise ValueError("a path of zero length (every row the same point) has no heading")
         s = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))])
         n = max(3, int(round(s[-1] / spacing_m)) + 1)
         s_new = np.linspace(0.0, s[-1], n)
@@ -85,15 +87,23 @@ class TaughtPath:
 
     @classmethod
     def from_csv_text(cls, text: str, spacing_m: float = 0.25) -> TaughtPath:
-        """Rows ``x_m,y_m`` (a header line starting with a letter is skipped)."""
+        """Rows ``x_m,y_m`` (a first line of names, e.g. ``x_m,y_m``, is skipped); a malformed
+        or non-finite row raises ValueError naming its line."""
         rows = []
-        for n, line in enumerate(text.strip().splitlines(), 1):
-            if not line.strip() or line.strip()[0].isalpha():
+        header_allowed = True
+        for n, line in enumerate(text.splitlines(), 1):
+            if not line.strip():
                 continue
             try:
                 x, y = (float(v) for v in line.split(",")[:2])
             except ValueError:
+                if header_allowed and line.strip()[0].isalpha():
+                    header_allowed = False
+                    continue
                 raise ValueError(f"path line {n}: expected 'x_m,y_m', got {line!r}") from None
+            header_allowed = False
+            if not (math.isfinite(x) and math.isfinite(y)):
+                raise ValueError(f"path line {n}: {line.strip()!r} is not finite")
             rows.append((x, y))
         return cls(np.array(rows), spacing_m)
 

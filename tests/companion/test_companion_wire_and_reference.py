@@ -13,7 +13,7 @@ from companion.waypoint_reference import WaypointReference
 # px4_custom_mode.h).
 PROTOCOL_CUSTOM_MODES = {
     "POSCTL": 196608, "HOLD": 50593792, "TAKEOFF": 33816576, "LAND": 100925440,
-    "RTL": 84148224, "MISSION": 67371008, "OFFBOARD": 393216,
+    "RTL": 84148224, "MISSION": 67371008, "OFFBOARD": 393216, "MANUAL": 65536,
 }  # fmt: skip
 
 
@@ -63,3 +63,9 @@ def test_waypoint_reference_refuses_bad_input() -> None:
         WaypointReference(np.zeros((1, 3)), 1.0)
     with pytest.raises(ValueError, match="speed_mps must be positive"):
         WaypointReference(np.zeros((2, 3)), 0.0)
+
+
+def test_manual_is_named_not_unknown() -> None:
+    """PX4's MANUAL (main mode 1), where an RC switch puts a rover, reads as MANUAL, so the
+    companion can say who took the vehicle."""
+    assert mode_name_of(1 << 16) == "MANUAL"

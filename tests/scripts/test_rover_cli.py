@@ -1,22 +1,37 @@
 """study --regime / scripts.rover: bad input exits 2; the section 3.4 example writes Fig. 4."""
 
+import json
+import signal
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
 
 from scripts import rover, study
 
+REPO = Path(__file__).resolve().parents[2]
+
 
 def test_unknown_regime_exits_2(capsys) -> None:
     assert study.main(["--regime", "rover_exp9"]) == 2
     assert "rover_exp9" in capsys.readouterr().err
     assert rover.main(["--regime", "rover_exp1", "--trials", "0"]) == 2
+    capsys.readouterr()
+    # the example is one fixed run: options it would ignore are refused, not dropped silently
+    for extra in (["--trials", "5"], ["--quick"], ["--seed", "3"]):
+        assert rover.main(["--regime", "example", *extra]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and extra[0] in err[0], err
 
 
 @pytest.mark.slow
-def test_example_regime_writes_the_figure(tmp_path: Path) -> None:
+def test_example_regime_writes_the_figure(tmp_path: Path, capsys) -> None:
     assert study.main(["--regime", "example", "--out", str(tmp_path)]) == 0
     png = tmp_path / "fig4_illustrative.png"
+    out, err = capsys.readouterr()
+    assert f"wrote {png}" in err  # where to look; the figures printed say what they are:
+    assert set(json.loads(out)["rms_tracking_error_z"]) == {"feedback", "mpc", "lbnmpc"}
     assert png.stat().st_size > 10_000
     assert not [p for p in tmp_path.iterdir() if p.name.startswith("tmp")]
 
@@ -29,3 +44,56 @@ def test_an_out_folder_that_cannot_be_made_is_one_line_exit_2(tmp_path: Path, ca
         assert rover.main(["--regime", regime, "--out", str(blocker / "out")]) == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and err[0].startswith(f"rover: --out {blocker}"), err
+
+
+def test_a_negative_seed_is_one_line_exit_2(tmp_path: Path, capsys) -> None:
+    """The trial draws need a seed >= 0: said in one line, not a NumPy traceback."""
+    assert rover.main(["--regime", "rover_exp1", "--seed", "-3", "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--seed" in err[0] and ">= 0" in err[0], err
+
+
+def test_help_lists_the_regimes_what_is_written_and_quick(capsys) -> None:
+    """--help says what each regime is and which files it writes; study's --help points at
+    the rover regimes it hands over."""
+    assert rover.main(["--help"]) == 0
+    text = capsys.readouterr().out
+    for word in ("rover_exp2", "Ackermann", "fig4_illustrative.png", "REGIME.json", "--quick"):
+        assert word in text, word
+    assert study.main(["--help"]) == 0
+    assert "rover_exp1" in capsys.readouterr().out
+
+
+@pytest.mark.slow
+def test_quick_rover_regime_through_study_reports_each_trial(tmp_path: Path, capsys) -> None:
+    """`study --regime rover_exp1 --quick` (study's own smoke option) runs a few trials, says
+    each on stderr as it ends, and writes the figure and the summary."""
+    assert study.main(["--regime", "rover_exp1", "--quick", "--out", str(tmp_path)]) == 0
+    err = capsys.readouterr().err
+    assert "trial 1/2" in err and "trial 2/2" in err
+    assert f"wrote {tmp_path / 'rover_exp1.png'} and {tmp_path / 'rover_exp1.json'}" in err
+    assert (tmp_path / "rover_exp1.json").stat().st_size > 0
+    assert (tmp_path / "rover_exp1.png").stat().st_size > 10_000
+
+
+@pytest.mark.slow
+def test_ctrl_c_during_a_regime_is_one_line_exit_130_and_writes_nothing(tmp_path: Path) -> None:
+    """Ctrl-C after the first trial: no traceback, exit 130, no half-written figure."""
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "scripts.rover", "--regime", "rover_exp1", "--out", str(tmp_path)],
+        cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )  # fmt: skip
+    try:
+        for line in proc.stderr:
+            if "trial 1/20" in line:
+                break
+        proc.send_signal(signal.SIGINT)
+        err = proc.stderr.read()
+        assert proc.wait(60) == 130, err
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(5)
+    assert "Traceback" not in err and err.strip().splitlines()[-1].startswith("rover: interrupted")
+    assert list(tmp_path.iterdir()) == []

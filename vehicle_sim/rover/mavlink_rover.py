@@ -2,15 +2,16 @@
 
 Small and separate from vehicle_sim.mavlink (the multirotor endpoint): HEARTBEAT with
 MAV_TYPE_GROUND_ROVER and the PX4 custom mode (main mode 6 = OFFBOARD), COMMAND_LONG
-MAV_CMD_COMPONENT_ARM_DISARM and MAV_CMD_DO_SET_MODE (acknowledged; MANUAL, AUTO = hold,
-OFFBOARD), AUTOPILOT_VERSION on request (MAV_CMD_REQUEST_MESSAGE 148, or 520), SET_MODE, and
-offboard SET_POSITION_TARGET_LOCAL_NED with velocity + yaw rate: in MAV_FRAME_BODY_NED vx is
-the forward speed; in MAV_FRAME_LOCAL_NED the speed is (vx, vy) projected on the heading.
-Telemetry at ``telemetry_hz``: HEARTBEAT, LOCAL_POSITION_NED, ATTITUDE, ATTITUDE_QUATERNION,
-and at 1 Hz what MAVSDK's health check wants (SYS_STATUS with healthy sensors and the pre-arm
-bit, GPS_RAW_INT, GLOBAL_POSITION_INT and HOME_POSITION about a fixed origin, flat-earth).
-Offboard without a setpoint for ``setpoint_timeout_s`` stops the rover (PX4's offboard loss
-failsafe, here: hold).
+MAV_CMD_COMPONENT_ARM_DISARM and MAV_CMD_DO_SET_MODE (acknowledged; MANUAL, Hold = AUTO_LOITER
+and OFFBOARD; the other AUTO modes, RTL, mission, land and takeoff, are denied),
+AUTOPILOT_VERSION on request (MAV_CMD_REQUEST_MESSAGE 148, or 520), SET_MODE, and offboard
+SET_POSITION_TARGET_LOCAL_NED with velocity + yaw rate: in MAV_FRAME_BODY_NED vx is the forward
+speed; in MAV_FRAME_LOCAL_NED the speed is (vx, vy) projected on the heading. Telemetry at
+``telemetry_hz``: HEARTBEAT, LOCAL_POSITION_NED, ATTITUDE, ATTITUDE_QUATERNION, and at 1 Hz what
+MAVSDK's health check wants (SYS_STATUS with healthy sensors and the pre-arm bit, GPS_RAW_INT,
+GLOBAL_POSITION_INT with the ground velocity and HOME_POSITION about a fixed origin,
+flat-earth). Offboard without a setpoint for ``setpoint_timeout_s`` stops the rover and switches
+to Hold (PX4's offboard loss failsafe).
 A malformed message never stops the endpoint: a mode that is not a number is DENIED, a setpoint
 with a non-finite speed or yaw rate, or without a velocity (a position setpoint, which this
 rover does not fly), is refused with a STATUSTEXT (and is no proof of life), an
@@ -35,6 +36,7 @@ from vehicle_sim.rover.simulator import RoverSim
 _PX4_MAIN_OFFBOARD = 6
 _PX4_MAIN_MANUAL = 1
 _PX4_MAIN_AUTO = 4
+_PX4_SUB_AUTO_LOITER = 3  # PX4's Hold
 _MAV = mavutil.mavlink
 _ORIGIN_LAT_DEG, _ORIGIN_LON_DEG, _ORIGIN_ALT_M = 47.397742, 8.545594, 488.0  # PX4 SITL home
 _M_PER_DEG_LAT = 111_320.0
@@ -88,6 +90,7 @@ class RoverMavlinkEndpoint:
         self._telemetry_period = 1.0 / telemetry_hz
         self._timeout = setpoint_timeout_s
         self.offboard = False
+        self.holding = False  # Hold (AUTO_LOITER), reported as such in HEARTBEAT
         self._last_sp = -math.inf
         self.handler_errors = 0
         self._refused_at: dict[bytes, float] = {}  # refusal text -> when last said [s]
@@ -118,7 +121,7 @@ class RoverMavlinkEndpoint:
                     self.handler_errors += 1
             now = time.monotonic()
             if self.offboard and now - self._last_sp > self._timeout:
-                self.sim.set_setpoint(0.0, 0.0)
+                self._set_mode(_PX4_MAIN_AUTO, _PX4_SUB_AUTO_LOITER)  # offboard loss: Hold
             self.sim.step(min(now - t_prev, 0.1))
             t_prev = now
             if now >= next_tel and self._conn.mav is not None:
@@ -138,19 +141,20 @@ class RoverMavlinkEndpoint:
             ack.target_system, ack.target_component = msg.get_srcSystem(), msg.get_srcComponent()
         self._conn.mav.send(ack)
 
-    def _set_mode(self, main_mode: float) -> bool:
-        if not math.isfinite(main_mode):
+    def _set_mode(self, main_mode: float, sub_mode: float) -> bool:
+        if not (math.isfinite(main_mode) and math.isfinite(sub_mode)):
             return False
         if main_mode == _PX4_MAIN_OFFBOARD:
             if time.monotonic() - self._last_sp > self._timeout:
                 return False  # PX4 refuses OFFBOARD without a setpoint stream
-            self.offboard = True
+            self.offboard, self.holding = True, False
             return True
-        if main_mode in (_PX4_MAIN_MANUAL, _PX4_MAIN_AUTO):  # manual, or AUTO (hold)
-            self.offboard = False
+        hold = main_mode == _PX4_MAIN_AUTO and sub_mode == _PX4_SUB_AUTO_LOITER
+        if main_mode == _PX4_MAIN_MANUAL or hold:
+            self.offboard, self.holding = False, hold
             self.sim.set_setpoint(0.0, 0.0)
             return True
-        return False
+        return False  # RTL, mission, land, takeoff, ...: nothing here flies them
 
     def _handle(self, msg: object) -> None:
         kind = msg.get_type()
@@ -160,7 +164,7 @@ class RoverMavlinkEndpoint:
                     self.sim.arm()
                 else:
                     self.sim.disarm()
-                    self.offboard = False
+                    self.offboard = self.holding = False
                 self._ack(msg, _MAV.MAV_RESULT_ACCEPTED)
             elif msg.command in _VERSION_REQUESTS and (
                 msg.command != _MAV.MAV_CMD_REQUEST_MESSAGE
@@ -172,12 +176,12 @@ class RoverMavlinkEndpoint:
                     0, 0, _UID,
                 )  # fmt: skip
             elif msg.command == _MAV.MAV_CMD_DO_SET_MODE:
-                ok = self._set_mode(msg.param2)
+                ok = self._set_mode(msg.param2, msg.param3)
                 self._ack(msg, _MAV.MAV_RESULT_ACCEPTED if ok else _MAV.MAV_RESULT_DENIED)
             else:
                 self._ack(msg, _MAV.MAV_RESULT_UNSUPPORTED)
         elif kind == "SET_MODE":
-            self._set_mode((msg.custom_mode >> 16) & 0xFF)
+            self._set_mode((msg.custom_mode >> 16) & 0xFF, (msg.custom_mode >> 24) & 0xFF)
         elif kind == "LOG_REQUEST_LIST":  # no logs, said at once as PX4 does (num_logs 0)
             self._conn.mav.log_entry_send(0, 0, 0, 0, 0)
         elif kind == "SET_POSITION_TARGET_LOCAL_NED":
@@ -222,22 +226,28 @@ class RoverMavlinkEndpoint:
         base = _MAV.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
         if self.sim.armed:
             base |= _MAV.MAV_MODE_FLAG_SAFETY_ARMED
-        main = _PX4_MAIN_OFFBOARD if self.offboard else _PX4_MAIN_MANUAL
+        main, sub = (_PX4_MAIN_OFFBOARD if self.offboard else _PX4_MAIN_MANUAL), 0
+        if self.holding:
+            main, sub = _PX4_MAIN_AUTO, _PX4_SUB_AUTO_LOITER
         state = _MAV.MAV_STATE_ACTIVE if self.sim.armed else _MAV.MAV_STATE_STANDBY
         mav = self._conn.mav
         mav.heartbeat_send(
-            _MAV.MAV_TYPE_GROUND_ROVER, _MAV.MAV_AUTOPILOT_PX4, base, main << 16, state
+            _MAV.MAV_TYPE_GROUND_ROVER, _MAV.MAV_AUTOPILOT_PX4, base, main << 16 | sub << 24, state
         )
         t_ms = int(st.t_s * 1000)
-        c, s = math.cos(st.heading_rad), math.sin(st.heading_rad)
-        vx_w = st.speed_mps * c - st.lat_speed_mps * s
-        vy_w = st.speed_mps * s + st.lat_speed_mps * c
-        mav.local_position_ned_send(t_ms, st.x_m, -st.y_m, 0.0, vx_w, -vy_w, 0.0)
+        v_north, v_east = self._ground_velocity_ne_mps()
+        mav.local_position_ned_send(t_ms, st.x_m, -st.y_m, 0.0, v_north, v_east, 0.0)
         mav.attitude_send(t_ms, 0.0, 0.0, -st.heading_rad, 0.0, 0.0, -st.yaw_rate_radps)
         half = -st.heading_rad / 2
         mav.attitude_quaternion_send(
             t_ms, math.cos(half), 0.0, 0.0, math.sin(half), 0.0, 0.0, -st.yaw_rate_radps
         )
+
+    def _ground_velocity_ne_mps(self) -> tuple[float, float]:
+        """The rover's ground velocity (north, east) [m/s], side slip included."""
+        st = self.sim.state
+        c, s = math.cos(st.heading_rad), math.sin(st.heading_rad)
+        return st.speed_mps * c - st.lat_speed_mps * s, -(st.speed_mps * s + st.lat_speed_mps * c)
 
     def _health_telemetry(self) -> None:
         st, mav = self.sim.state, self._conn.mav
@@ -247,6 +257,7 @@ class RoverMavlinkEndpoint:
         t_ms = int(st.t_s * 1000)
         mav.gps_raw_int_send(int(st.t_s * 1e6), 3, lat, lon, alt_mm, 80, 120, 65535, 65535, 12)
         hdg = int(round(math.degrees(-st.heading_rad) * 100.0)) % 36000
-        mav.global_position_int_send(t_ms, lat, lon, alt_mm, 0, 0, 0, 0, hdg)
+        vx_cms, vy_cms = (int(round(v * 100.0)) for v in self._ground_velocity_ne_mps())
+        mav.global_position_int_send(t_ms, lat, lon, alt_mm, 0, vx_cms, vy_cms, 0, hdg)
         lat0, lon0 = _lat_lon_e7(0.0, 0.0)
         mav.home_position_send(lat0, lon0, alt_mm, 0.0, 0.0, 0.0, (1.0, 0.0, 0.0, 0.0), 0, 0, 0)

@@ -68,3 +68,28 @@ def test_a_mavlink_link_drives_the_mavlink_rover_with_the_same_loop(client: str)
         endpoint.close()
     assert drive.reached_end
     assert np.max(np.abs(drive.e_lat_m)) < 0.3  # wall clock under load: generous
+
+
+@pytest.mark.slow
+def test_a_drive_ends_when_someone_else_takes_the_rover_out_of_offboard() -> None:
+    """A pilot (or PX4's offboard-loss failsafe) switches the rover to MANUAL mid-drive: the
+    drive stops at once, says which mode took over, and sends nothing more (no hold)."""
+    import threading
+
+    port = _free_port()
+    sim = RoverSim(rover_preset("husky_50kg"), seed=4)
+    link = PymavlinkLink(f"udpin://127.0.0.1:{port}")
+    endpoint = RoverMavlinkEndpoint(sim, port, setpoint_timeout_s=2.0, mode="udpout")
+    endpoint.start()
+    pilot = threading.Timer(2.0, endpoint._set_mode, args=(1, 0))  # MANUAL, as an RC switch
+    pilot.start()
+    try:
+        drive = drive_path(link, _path(2.0), 0.5, timeout_s=30.0)
+    finally:
+        pilot.cancel()
+        link.close()
+        endpoint.close()
+    assert drive.left_offboard_for == "MANUAL"
+    assert not drive.reached_end
+    assert drive.t_s[-1] - drive.t_s[0] < 10.0  # ended at the switch, not at the timeout
+    assert not endpoint.holding  # no hold was commanded over the pilot

@@ -25,6 +25,8 @@ def test_learning_disabled_pass_repeats_the_last_trial_without_the_gp() -> None:
     assert off.e_head_rad[0] == pytest.approx(records[1].e_head_rad[0], abs=1e-12)
     figs = same_schedule_figures(records[1], off)
     assert figs["learning_disabled_max_e_lat_m"] == off.max_e_lat_m
+    # a slower same-schedule pass is explained by its governor trips, reported beside it
+    assert figs["learning_disabled_safety_trips"] == off.safety_trips
     assert figs["max_lateral_reduction_vs_learning_disabled"] == pytest.approx(
         1.0 - records[1].max_e_lat_m / off.max_e_lat_m
     )
@@ -42,3 +44,32 @@ def test_safety_governor_keeps_a_pass_too_fast_for_its_model_near_the_path() -> 
     assert governed.safety_trips >= 1 and governed.completed
     assert np.min(governed.v_cmd_mps) == base.scheduler.v_init_mps
     assert governed.max_e_lat_m < 0.5 * free.max_e_lat_m
+
+
+def test_the_regime_figure_labels_every_axis_and_says_which_line_is_which_trial() -> None:
+    """Every panel has its quantity and unit on both axes, trials are whole numbers, and the
+    scheduled-speed lines carry a trial colour bar (one line per trial, otherwise unnamed)."""
+    import matplotlib.pyplot as plt
+
+    from experiments.rover.report import figure
+
+    sc = scenario("rover_exp1").with_trials(2)
+    records = run_trials(sc)
+    fig = figure(records, sc.path.s_m, "rover_exp1")
+    try:
+        errors, along, speeds, times = fig.axes[:4]
+        for ax in (errors, along, speeds, times):
+            assert ax.get_xlabel() and ax.get_ylabel(), ax
+        # [Ostafew16] Figs. 9, 12, 17: e_L along the path, first trial against the last
+        labels = [t.get_text() for t in along.get_legend().get_texts()]
+        assert labels == ["trial 1", "trial 2"] and "[m]" in along.get_ylabel()
+        first = along.get_lines()[0]
+        np.testing.assert_array_equal(first.get_ydata(), records[0].e_lat_m)
+        assert "[m]" in errors.get_ylabel() and "[rad]" in errors.get_ylabel()
+        colour_bars = [ax for ax in fig.axes[4:] if ax.get_ylabel() == "trial"]
+        assert len(colour_bars) == 1
+        for ax in (errors, times):
+            ticks = [t for t in ax.get_xticks() if 1 <= t <= len(records)]
+            assert ticks and all(float(t).is_integer() for t in ticks), ticks
+    finally:
+        plt.close(fig)

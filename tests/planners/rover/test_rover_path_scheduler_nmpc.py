@@ -48,6 +48,16 @@ def test_path_from_csv_text_and_bad_rows() -> None:
     assert len(path) == 5 and path.length_m == pytest.approx(2.0)
     with pytest.raises(ValueError, match="line 2"):
         TaughtPath.from_csv_text("0,0\n1,a\n2,0\n")
+    # a non-finite coordinate is named by its line, not as "needs >= 3 rows, got (3, 2)"
+    for bad in ("nan", "inf"):
+        with pytest.raises(ValueError, match=r"line 3: .*not finite"):
+            TaughtPath.from_csv_text(f"x_m,y_m\n0,0\n1,{bad}\n2,0\n")
+    # only the first line may be a header: a later 'nan,...' row is not skipped as one
+    with pytest.raises(ValueError, match=r"line 3: .*not finite"):
+        TaughtPath.from_csv_text("x_m,y_m\n0,0\nnan,1\n2,0\n3,0\n")
+    # a path that never moves has no heading to repeat
+    with pytest.raises(ValueError, match="zero length"):
+        TaughtPath.from_csv_text("0,0\n0,0\n0,0\n")
 
 
 def test_arc_curvature() -> None:

@@ -118,3 +118,70 @@ def test_malformed_messages_get_an_answer_and_never_stop_the_rover() -> None:
     finally:
         gcs.close()
         ep.close()
+
+
+def _latest(gcs: mavutil.mavfile, kind: str, wait_s: float) -> object:
+    """The newest ``kind`` message received within ``wait_s`` seconds after dropping the queue."""
+    while gcs.recv_match(blocking=False) is not None:
+        pass
+    newest = None
+    t_end = time.monotonic() + wait_s
+    while time.monotonic() < t_end:
+        m = gcs.recv_match(type=kind, blocking=True, timeout=0.2)
+        newest = m if m is not None else newest
+    return newest
+
+
+def _command(gcs: mavutil.mavfile, command: int, *params: float) -> int:
+    p = list(params) + [0.0] * (7 - len(params))
+    gcs.mav.command_long_send(1, 1, command, 0, *p)
+    ack = gcs.recv_match(type="COMMAND_ACK", blocking=True, timeout=20)
+    assert ack is not None
+    return ack.result
+
+
+@pytest.mark.slow
+def test_modes_hold_is_reported_other_auto_modes_refused_bad_setpoints_ignored() -> None:
+    """PX4 reports Hold as AUTO_LOITER (main 4, sub 3) and refuses the AUTO modes a rover
+    cannot fly here (RTL, mission, land, takeoff); an offboard stream that stops puts the rover
+    in Hold (PX4's failsafe); a setpoint with NaN speed is ignored, the endpoint keeps running;
+    GLOBAL_POSITION_INT carries the ground velocity (MAVSDK's velocity_ned reads it)."""
+    port = _free_port()
+    ep = RoverMavlinkEndpoint(RoverSim(rover_preset("husky_50kg")), port, setpoint_timeout_s=0.5)
+    ep.start()
+    gcs = mavutil.mavlink_connection(f"udpout:127.0.0.1:{port}", source_system=255)
+    mask = 0b0000_0101_1100_0111  # velocity + yaw rate only
+
+    def stream(speed_mps: float, seconds: float) -> None:
+        t_end = time.monotonic() + seconds
+        while time.monotonic() < t_end:
+            gcs.mav.set_position_target_local_ned_send(
+                0, 1, 1, _MAV.MAV_FRAME_BODY_NED, mask, 0, 0, 0, speed_mps, 0, 0, 0, 0, 0, 0, 0
+            )
+            time.sleep(0.05)
+
+    try:
+        gcs.mav.heartbeat_send(_MAV.MAV_TYPE_GCS, _MAV.MAV_AUTOPILOT_INVALID, 0, 0, 0)
+        assert gcs.recv_match(type="HEARTBEAT", blocking=True, timeout=20) is not None
+        assert _command(gcs, _MAV.MAV_CMD_COMPONENT_ARM_DISARM, 1) == _MAV.MAV_RESULT_ACCEPTED
+        stream(0.0, 0.2)
+        assert _command(gcs, _MAV.MAV_CMD_DO_SET_MODE, 1, 6) == _MAV.MAV_RESULT_ACCEPTED
+        stream(0.8, 2.0)
+        gp = _latest(gcs, "GLOBAL_POSITION_INT", 1.2)
+        assert gp is not None and abs(gp.vx) + abs(gp.vy) > 30  # cm/s
+        gcs.mav.set_position_target_local_ned_send(
+            0, 1, 1, _MAV.MAV_FRAME_BODY_NED, mask, 0, 0, 0, float("nan"), 0, 0, 0, 0, 0, 0, 0
+        )
+        assert _latest(gcs, "HEARTBEAT", 1.2) is not None  # still alive
+        for sub in (5, 4, 6, 2):  # RTL, mission, land, takeoff
+            assert _command(gcs, _MAV.MAV_CMD_DO_SET_MODE, 1, 4, sub) == _MAV.MAV_RESULT_DENIED
+        assert _command(gcs, _MAV.MAV_CMD_DO_SET_MODE, 1, 4, 3) == _MAV.MAV_RESULT_ACCEPTED
+        hb = _latest(gcs, "HEARTBEAT", 1.2)
+        assert (hb.custom_mode >> 16 & 0xFF, hb.custom_mode >> 24) == (4, 3)
+        stream(0.0, 0.2)
+        assert _command(gcs, _MAV.MAV_CMD_DO_SET_MODE, 1, 6) == _MAV.MAV_RESULT_ACCEPTED
+        hb = _latest(gcs, "HEARTBEAT", 1.5)  # no setpoint for longer than the timeout
+        assert (hb.custom_mode >> 16 & 0xFF, hb.custom_mode >> 24) == (4, 3)
+    finally:
+        gcs.close()
+        ep.close()
