@@ -123,9 +123,15 @@ def test_quick_refuses_sizes_it_would_override(capsys):
 
 @pytest.mark.parametrize(
     ("option", "message"),
-    [(["--m", "0"], "m must be >= 1"), (["--seed", "-1"], "seed must be >= 0")],
+    [
+        (["--m", "0"], "m must be >= 1"),
+        (["--seed", "-1"], "seed must be >= 0"),
+        (["--trials", "0"], "trials must be >= 2"),
+        (["--repeats", "-1"], "repeats must be >= 1"),
+        (["--trajectories", "0"], "trajectories must be >= 1"),
+    ],
 )
-def test_bad_inducing_count_or_seed_refused_before_any_flight(option, message, tmp_path, capsys):
+def test_bad_sizes_or_seed_refused_before_any_flight(option, message, tmp_path, capsys):
     """Found when the command line is read (one line, exit 2), not after minutes of flights."""
     code = study_main(["--quick", "--out", str(tmp_path / "s"), *option])
     err = capsys.readouterr().err.strip().splitlines()
