@@ -67,7 +67,14 @@ def parse_args(argv: list[str] | None) -> StudyConfig:
         help="nominal model under the learned residual",
     )
     parser.add_argument("--features", choices=list(FEATURE_SETS), default=None)
-    parser.add_argument("--regime", choices=list(REGIMES), default="paper000")
+    parser.add_argument(
+        "--regime",
+        choices=[*REGIMES, *ROVER_REGIMES],
+        default="paper000",
+        help="the multirotor task (default paper000); "
+        f"{', '.join(ROVER_REGIMES)}: [Ostafew16]'s rover experiments, with their own options "
+        "(study --regime rover_exp1 --help)",
+    )
     parser.add_argument(
         "--refit-rounds",
         type=int,

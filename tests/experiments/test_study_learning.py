@@ -114,6 +114,16 @@ def test_multirotor_regimes_stay_with_the_study_cli(tmp_path):
     assert parse_args(["--regime", "wind_field", "--m", "20"]).m == 20  # was the regime's 60
 
 
+def test_help_and_a_bad_regime_name_the_rover_regimes_too(capsys):
+    """study --regime rover_exp1 runs [Ostafew16]'s rover experiments: --help and the error
+    for an unknown regime must say so, or a user never finds them."""
+    assert study_main(["--help"]) == 0
+    assert "rover_exp1" in capsys.readouterr().out
+    assert study_main(["--regime", "bogus"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "'rover_exp1'" in err[0] and "'wind_field'" in err[0], err
+
+
 def test_quick_refuses_sizes_it_would_override(capsys):
     assert study_main(["--quick", "--m", "50", "--trials", "4"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
