@@ -32,6 +32,9 @@ def main(argv: list[str] | None = None) -> int:
     if args.trials is not None and args.trials < 1:
         print(f"rover: error: --trials must be >= 1, got {args.trials}", file=sys.stderr)
         return 2
+    if args.seed < 0:
+        print(f"rover: error: --seed must be >= 0, got {args.seed}", file=sys.stderr)
+        return 2
     try:  # before any trial: a folder that cannot be made is found now
         check_writable_dir(args.out)
         os.makedirs(args.out, exist_ok=True)

@@ -13,6 +13,14 @@ def test_unknown_regime_exits_2(capsys) -> None:
     assert rover.main(["--regime", "rover_exp1", "--trials", "0"]) == 2
 
 
+def test_a_negative_seed_is_one_line_exit_2_not_a_traceback(tmp_path: Path, capsys) -> None:
+    out = tmp_path / "out"
+    assert study.main(["--regime", "rover_exp1", "--seed", "-1", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == ["rover: error: --seed must be >= 0, got -1"], err
+    assert not out.exists()
+
+
 @pytest.mark.slow
 def test_example_regime_writes_the_figure(tmp_path: Path) -> None:
     assert study.main(["--regime", "example", "--out", str(tmp_path)]) == 0
