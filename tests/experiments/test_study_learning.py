@@ -3,7 +3,13 @@ in its smoke version writes its report."""
 
 from __future__ import annotations
 
+import signal
+import subprocess
+import sys
+import time
+
 import numpy as np
+import psutil
 import pytest
 
 from companion.nmpc_planner import NmpcSettings, load_nmpc
@@ -82,6 +88,30 @@ def test_quick_study_runs_end_to_end_and_writes_report_and_plots(tmp_path, capsy
     for png in pngs:
         assert f"]({png})" in report
     assert (out / "gp_low_speed.npz").is_file() and (out / "gp_cluster.npz").is_file()
+
+
+@pytest.mark.slow
+def test_sigterm_stops_the_study_and_its_workers_in_one_line(tmp_path):
+    """A study stopped by SIGTERM (a batch system, kill) exits 143 with one line, writes
+    nothing, and leaves no worker process flying on (they used to, orphaned)."""
+    out, err = tmp_path / "study", tmp_path / "stderr"
+    args = [sys.executable, "-m", "scripts.study", "--quick", "--out", str(out)]
+    with err.open("w") as sink:
+        proc = subprocess.Popen(args, stderr=sink)
+    while "nominal flight 1/" not in err.read_text():  # a flight has flown: workers busy
+        assert proc.poll() is None, err.read_text()
+        time.sleep(0.1)
+    workers = psutil.Process(proc.pid).children(recursive=True)
+    proc.send_signal(signal.SIGTERM)
+    try:
+        assert proc.wait(timeout=60) == 143
+        last = err.read_text().strip().splitlines()[-1]
+        assert last.startswith("study: stopped by SIGTERM; nothing written"), last
+        assert not out.exists()
+        assert workers and not psutil.wait_procs(workers, timeout=10)[1]
+    finally:
+        for worker in psutil.wait_procs(workers, timeout=0)[1]:
+            worker.kill()
 
 
 def test_study_refuses_bad_input_in_one_line(tmp_path, capsys):
