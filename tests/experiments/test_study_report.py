@@ -61,3 +61,31 @@ def test_report_says_when_a_selection_flew_its_structure_alone_or_the_nominal_pl
     assert "the structure flies alone" in lines["low_speed"]
     assert "its flights fly the nominal planner" in lines["cluster"]
     assert "the learned model flies (first_order_lag + GP)" in lines["flown"]
+
+
+def test_path_legends_hide_no_path():
+    """paths.png: each panel's legend sits beside the axes, not over the flown paths."""
+    import numpy as np
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from experiments.study.jobs import FlightSummary
+    from experiments.study.plots import paths_figure
+    from flightlog.schema import FlightLog
+
+    refs = generate_trajectories(2, seed=0)
+    flights = {}
+    for planner in (NOMINAL, "low_speed"):
+        for i, ref in enumerate(refs):
+            pos = ref.sample(np.linspace(0.0, ref.duration_s, 50)).pos_ned_m
+            log = FlightLog(
+                {"pos_n_m": pos[:, 0], "pos_e_m": pos[:, 1], "mode": np.full(50, "OFFBOARD")}
+            )
+            summary = FlightSummary(i, planner, 0, "completed", 0.1, 0.05, 49, np.ones(3), log)
+            flights.setdefault(planner, []).append(summary)
+    fig = paths_figure(Paper000Result(refs, flights, {}))
+    renderer = FigureCanvasAgg(fig).get_renderer()
+    fig.draw(renderer)
+    for ax in fig.axes:
+        legend = ax.get_legend().get_window_extent(renderer)
+        assert not any(legend.overlaps(other.get_window_extent(renderer)) for other in fig.axes)
+        assert "tracking RMSE 0.050 m" in ax.get_legend().get_texts()[1].get_text()
