@@ -15,6 +15,9 @@ import tempfile
 from dataclasses import replace
 
 import numpy as np
+from matplotlib import colormaps
+from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
 
 from experiments.rover.learner import make_history_gp
 from experiments.rover.scenarios import RoverScenario, scenario
@@ -93,13 +96,21 @@ def same_schedule_figures(last: TrialRecord, disabled: TrialRecord) -> dict:
 
 
 def _plots(records: list[TrialRecord], s_m: np.ndarray, folder: str, name: str) -> None:
-    import matplotlib
+    fig = trials_figure(records, s_m, name)
+    fd, tmp = tempfile.mkstemp(suffix=".png", dir=folder)
+    os.close(fd)
+    os.chmod(tmp, 0o644)
+    fig.savefig(tmp, dpi=90)
+    os.replace(tmp, os.path.join(folder, f"{name}.png"))
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
+def trials_figure(records: list[TrialRecord], s_m: np.ndarray, name: str) -> Figure:
+    """Errors per trial, each trial's scheduled speeds along the path (s_m (N,) [m], one
+    colour per trial, named in a legend) and travel time per trial; trials on whole-number
+    ticks (matplotlib's object API: no global backend state)."""
     j = np.arange(1, len(records) + 1)
-    fig, axes = plt.subplots(3, 1, figsize=(8, 9))
+    fig = Figure(figsize=(8, 9))
+    axes = fig.subplots(3, 1)
     ax = axes[0]
     ax.plot(j, [r.max_e_lat_m for r in records], "o-", label="max |e_L| [m]")
     ax.plot(j, [r.rms_e_lat_m for r in records], "s-", label="RMS e_L [m]")
@@ -109,20 +120,19 @@ def _plots(records: list[TrialRecord], s_m: np.ndarray, folder: str, name: str) 
     ax.legend()
     ax = axes[1]
     for k, r in enumerate(records):
-        ax.plot(s_m, r.schedule_mps, color=plt.cm.viridis(k / max(1, len(records) - 1)))
+        colour = colormaps["viridis"](k / max(1, len(records) - 1))
+        ax.plot(s_m, r.schedule_mps, color=colour, label=f"trial {k + 1}")
     ax.set_xlabel("distance along path [m]")
     ax.set_ylabel("scheduled speed [m/s]")
+    ax.legend(fontsize="small", ncols=max(1, len(records) // 5))
     axes[2].plot(j, [r.travel_time_s for r in records], "o-")
     axes[2].set_xlabel("trial")
     axes[2].set_ylabel("travel time [s]")
+    for ax in (axes[0], axes[2]):
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     fig.suptitle(f"{name}: [Ostafew16] path repeating with LB-NMPC")
     fig.tight_layout()
-    fd, tmp = tempfile.mkstemp(suffix=".png", dir=folder)
-    os.close(fd)
-    os.chmod(tmp, 0o644)
-    fig.savefig(tmp, dpi=90)
-    plt.close(fig)
-    os.replace(tmp, os.path.join(folder, f"{name}.png"))
+    return fig
 
 
 def run_regime(name: str, out_dir: str, trials: int | None = None, seed: int = 0) -> dict:

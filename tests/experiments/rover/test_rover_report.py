@@ -42,3 +42,21 @@ def test_safety_governor_keeps_a_pass_too_fast_for_its_model_near_the_path() -> 
     assert governed.safety_trips >= 1 and governed.completed
     assert np.min(governed.v_cmd_mps) == base.scheduler.v_init_mps
     assert governed.max_e_lat_m < 0.5 * free.max_e_lat_m
+
+
+@pytest.mark.slow
+def test_trials_figure_counts_trials_in_whole_numbers_and_names_each_schedule() -> None:
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from experiments.rover.report import trials_figure
+
+    sc = scenario("rover_exp1", seed=0).with_trials(2)
+    records = run_trials(sc)
+    fig = trials_figure(records, sc.path.s_m, "rover_exp1")
+    FigureCanvasAgg(fig).draw()
+    errors, speeds, times = fig.axes
+    for ax in (errors, times):
+        lo, hi = ax.get_xlim()
+        ticks = [t for t in ax.get_xticks() if lo <= t <= hi]
+        assert ticks == [1.0, 2.0], ticks  # no trial 1.25
+    assert [t.get_text() for t in speeds.get_legend().get_texts()] == ["trial 1", "trial 2"]
