@@ -51,7 +51,10 @@ def main(argv: list[str] | None = None) -> int:
     else:
         from experiments.rover.report import run_regime
 
-        result = run_regime(args.regime, args.out, args.trials, args.seed)
+        def progress(message: str) -> None:
+            print(f"rover: {args.regime} {message}", file=sys.stderr, flush=True)
+
+        result = run_regime(args.regime, args.out, args.trials, args.seed, progress)
     print(json.dumps(result, indent=1))
     return 0
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 import json
 import os
 import tempfile
+from collections.abc import Callable
 from dataclasses import replace
 
 import numpy as np
@@ -135,12 +136,19 @@ def trials_figure(records: list[TrialRecord], s_m: np.ndarray, name: str) -> Fig
     return fig
 
 
-def run_regime(name: str, out_dir: str, trials: int | None = None, seed: int = 0) -> dict:
-    """Run regime ``name`` (rover_exp1..3) and write ``<name>.png`` and ``<name>.json``."""
+def run_regime(
+    name: str,
+    out_dir: str,
+    trials: int | None = None,
+    seed: int = 0,
+    progress: Callable[[str], None] = lambda message: None,
+) -> dict:
+    """Run regime ``name`` (rover_exp1..3) and write ``<name>.png`` and ``<name>.json``;
+    ``progress`` gets one line per trial."""
     sc = scenario(name, seed)
     if trials is not None:
         sc = replace(sc, trials=trials)
-    records = run_trials(sc)
+    records = run_trials(sc, progress=progress)
     summary = summarise(records)
     if sc.scheduler is not None and sc.learning:
         summary.update(same_schedule_figures(records[-1], learning_disabled_pass(sc, records)))

@@ -13,6 +13,7 @@ records.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -210,8 +211,13 @@ def run_trial(
     )  # fmt: skip
 
 
-def run_trials(sc: RoverScenario, gp: LocalGP | None = None) -> list[TrialRecord]:
-    """All trials of a scenario; the schedule follows eq. 31 when the scenario has a scheduler."""
+def run_trials(
+    sc: RoverScenario,
+    gp: LocalGP | None = None,
+    progress: Callable[[str], None] = lambda message: None,
+) -> list[TrialRecord]:
+    """All trials of a scenario; the schedule follows eq. 31 when the scenario has a scheduler.
+    ``progress`` gets one line per trial driven."""
     gp = learner.make_history_gp() if gp is None else gp
     N = len(sc.path)
     if sc.scheduler is None:
@@ -222,6 +228,11 @@ def run_trials(sc: RoverScenario, gp: LocalGP | None = None) -> list[TrialRecord
     for j in range(sc.trials):
         r = run_trial(sc, gp, schedule, j)
         out.append(r)
+        progress(
+            f"trial {j + 1}/{sc.trials}: max |e_L| {r.max_e_lat_m:.3f} m, max |e_H| "
+            f"{r.max_e_head_rad:.3f} rad, {r.travel_time_s:.1f} s"
+            + ("" if r.completed else ", did not reach the end")
+        )
         if sc.scheduler is not None:
             schedule = next_schedule(
                 schedule, r.vertex_e_lat_m, r.vertex_e_head_rad, r.vertex_w_cmd_radps,

@@ -37,3 +37,14 @@ def test_an_out_folder_that_cannot_be_made_is_one_line_exit_2(tmp_path: Path, ca
         assert rover.main(["--regime", regime, "--out", str(blocker / "out")]) == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and err[0].startswith(f"rover: --out {blocker}"), err
+
+
+@pytest.mark.slow
+def test_each_trial_shows_progress_on_stderr(tmp_path: Path, capsys) -> None:
+    """A rover regime runs for minutes: one stderr line per trial, as every command shows."""
+    assert study.main(["--regime", "rover_exp1", "--trials", "2", "--out", str(tmp_path)]) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert [line.split(":")[1] for line in err] == [
+        " rover_exp1 trial 1/2",
+        " rover_exp1 trial 2/2",
+    ]
