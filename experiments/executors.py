@@ -55,8 +55,13 @@ def job_executor(workers: int = 2, scheduler: str | None = None) -> Iterator[Exe
         SchedulerError: bad address, Dask missing, or no scheduler answering within 30 s.
     """
     if scheduler is None:
-        with ProcessPoolExecutor(workers, mp_context=get_context("spawn")) as pool:
+        pool = ProcessPoolExecutor(workers, mp_context=get_context("spawn"))
+        try:
             yield pool
+        except BaseException:
+            _stop_now(pool)
+            raise
+        pool.shutdown()
         return
     check_scheduler_address(scheduler)
     try:
@@ -75,3 +80,16 @@ def job_executor(workers: int = 2, scheduler: str | None = None) -> Iterator[Exe
             yield pool
     finally:
         client.close()
+
+
+def _stop_now(pool: ProcessPoolExecutor) -> None:
+    """Drop the jobs not started and end the running ones: on an error or a stop (Ctrl-C,
+    SIGTERM) the caller wants nothing more from the pool, where a plain shutdown would wait
+    for every queued job. The workers are the pool's own processes
+    (ProcessPoolExecutor.terminate_workers from Python 3.14)."""
+    workers = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for process in workers:
+        process.terminate()
+    for process in workers:
+        process.join()

@@ -178,10 +178,16 @@ class FeatureDefinition:
             if lag and not (carried and c in _VEL and abs(lag) == self.residual_steps)
         ]
         if lagged:
+            fix = (
+                "use the 'velocity', 'state_input' or 'velocity_history' feature set"
+                if model.carries_velocity
+                else f"{model.name} has none: use the 'velocity' feature set, or a model with a "
+                "velocity state (first_order_lag) for 'velocity_history'"
+            )
             raise ValueError(
                 f"the NMPC cannot feed lagged features {lagged} (it carries only the velocity "
                 "one residual interval ago along the horizon, on a model with a velocity "
-                "state); use the 'velocity', 'state_input' or 'velocity_history' feature set"
+                f"state); {fix}"
             )
         uses = {c in _VEL for c, _ in self.inputs if c not in _POS}
         if uses == {True, False} and not model.carries_velocity:

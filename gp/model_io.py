@@ -195,6 +195,9 @@ def _read(path: Path) -> tuple[dict[str, object], dict[str, np.ndarray]]:
         )
         raise ModelFileError(f"{path}: no such model file{hint}")
     try:
+        with path.open("rb") as fh:
+            if fh.read(2) != b"PK":  # np.load would take an .npy or any other bytes too
+                raise ValueError(f"not a {MODEL_SUFFIX} archive as fit-gp writes")
         with np.load(path, allow_pickle=False) as npz:
             arrays = {k: npz[k] for k in npz.files}
     except (ValueError, OSError, EOFError, zipfile.BadZipFile) as exc:

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import importlib
 import json
+import math
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -80,6 +81,13 @@ def format_table(figures: dict[str, float]) -> str:
     return "\n".join(lines)
 
 
+def format_json(figures: dict[str, float]) -> str:
+    """Figures as one JSON object; a figure a part could not measure (NaN, e.g. acados not
+    installed) is null, since NaN is not JSON."""
+    finite = {k: (v if math.isfinite(v) else None) for k, v in figures.items()}
+    return json.dumps(finite, sort_keys=True, allow_nan=False)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     config = parse_args(argv)
 
@@ -87,7 +95,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(message, file=sys.stderr, flush=True)
 
     figures = run_parts(config, progress)
-    print(json.dumps(figures, sort_keys=True) if config.as_json else format_table(figures))
+    print(format_json(figures) if config.as_json else format_table(figures))
     return 0
 
 

@@ -16,11 +16,11 @@ the study's default because of this bench: on the F450 a GP on the velocity and 
 (BENCHMARKS.md, session 11); refused, the lag flew: 1.59 / 1.41. The regime's GP now gets the
 velocity only and earns its place here (BENCHMARKS.md, session 12). Per trajectory, the gain
 is the nominal tracking RMSE divided by the learned one; the figures are their mean and minimum.
+The study's report (which model flew and why) is kept in out/bench/jsbsim_study/.
 """
 
 from __future__ import annotations
 
-import tempfile
 from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
@@ -33,6 +33,7 @@ from experiments.study.paper000 import NOMINAL
 from experiments.study.run import run_study
 
 JSBSIM_VEHICLE = "f450_jsbsim"
+STUDY_OUT = Path("out/bench/jsbsim_study")  # the learning loop's study report, kept
 
 
 def tracking_gains(flights: dict[str, list], planner: str) -> np.ndarray:
@@ -48,18 +49,17 @@ def tracking_gains(flights: dict[str, list], planner: str) -> np.ndarray:
 
 def learning_loop_gains(progress: Callable[[str], None], quick: bool = False) -> dict[str, float]:
     """``jsbsim_tracking_gain`` (mean over trajectories) and ``jsbsim_tracking_gain_min``."""
-    with tempfile.TemporaryDirectory() as tmp:
-        config = StudyConfig(
-            out_dir=Path(tmp),
-            vehicle=JSBSIM_VEHICLE,
-            n_trajectories=4,
-            repeats=2,
-            n_trials=2,
-        )
-        if quick:
-            config = replace(config.quick(), n_trials=2)
-        progress(f"jsbsim: learning loop on {JSBSIM_VEHICLE}, {config.n_trajectories} trajectories")
-        result = run_study(config, progress)
+    config = StudyConfig(
+        out_dir=STUDY_OUT,
+        vehicle=JSBSIM_VEHICLE,
+        n_trajectories=4,
+        repeats=2,
+        n_trials=2,
+    )
+    if quick:
+        config = replace(config.quick(), n_trials=2)
+    progress(f"jsbsim: learning loop on {JSBSIM_VEHICLE}, {config.n_trajectories} trajectories")
+    result = run_study(config, progress)
     gains = tracking_gains(result.paper000.flights, config.selections[0])
     return {
         "jsbsim_tracking_gain": float(gains.mean()),

@@ -18,12 +18,12 @@ Figures:
 The figures come from a reduced study (4 trajectories, one flight each per planner, m = 30);
 ``study`` runs [Kulathunga23]'s full experiment. ``quick=True`` runs the study's smoke version and
 a short paced flight with the uncompiled planner (under a minute; its deadline figure is then
-only a smoke value).
+only a smoke value). Each study's report (which model flew and why) is kept in
+out/bench/loop_study/<regime>/.
 """
 
 from __future__ import annotations
 
-import tempfile
 from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
@@ -42,6 +42,7 @@ from gp.model_io import ResidualModel
 from planners.bspline import BSplineReference
 from vehicle_sim import Simulator, load_sim_config
 
+STUDY_OUT = Path("out/bench/loop_study")  # the studies' reports, kept
 _PACED_POINTS_QUICK = ((0.0, 0.0, -3.0), (3.0, 2.0, -3.0), (6.0, 0.0, -3.0))
 _PACED_POINTS = ((0.0, 0.0, -3.0), (8.0, 4.0, -3.0), (16.0, -4.0, -3.5), (24.0, 0.0, -3.0))
 
@@ -70,12 +71,11 @@ def paced_deadline_miss_fraction(
 
 def run(progress: Callable[[str], None] = print, quick: bool = False) -> dict[str, float]:
     """Run the reduced (or smoke) study and the paced flight; returns the figures."""
-    with tempfile.TemporaryDirectory() as tmp:
-        config = StudyConfig(out_dir=Path(tmp), n_trajectories=4, repeats=1, n_trials=2)
-        if quick:
-            config = replace(config.quick(), n_trials=2)
-        progress(f"loop: study with {config.n_trajectories} trajectories")
-        result = run_study(config, progress)
+    config = StudyConfig(out_dir=STUDY_OUT / "paper000", n_trajectories=4, repeats=1, n_trials=2)
+    if quick:
+        config = replace(config.quick(), n_trials=2)
+    progress(f"loop: study with {config.n_trajectories} trajectories")
+    result = run_study(config, progress)
     model = result.paper000.fits[config.selections[0]].model
     progress("loop: flying the augmented NMPC at 50 Hz on the wall clock")
     points = _PACED_POINTS_QUICK if quick else _PACED_POINTS
@@ -97,18 +97,17 @@ def regime_figures(
     regime: str, prefix: str, progress: Callable[[str], None], quick: bool
 ) -> dict[str, float]:
     """A reduced study of ``regime``: its gp_over_structure and tracking figures, prefixed."""
-    with tempfile.TemporaryDirectory() as tmp:
-        config = StudyConfig(
-            out_dir=Path(tmp),
-            n_trajectories=REGIME_TRAJECTORIES,
-            repeats=REGIME_REPEATS,
-            n_trials=2,
-        )
-        if quick:
-            config = replace(config.quick(), n_trials=2)
-        config = with_regime(config, regime)
-        progress(f"loop: {regime} regime, {config.n_trajectories} trajectories")
-        headline = run_study(config, progress).headline
+    config = StudyConfig(
+        out_dir=STUDY_OUT / regime,
+        n_trajectories=REGIME_TRAJECTORIES,
+        repeats=REGIME_REPEATS,
+        n_trials=2,
+    )
+    if quick:
+        config = replace(config.quick(), n_trials=2)
+    config = with_regime(config, regime)
+    progress(f"loop: {regime} regime, {config.n_trajectories} trajectories")
+    headline = run_study(config, progress).headline
     keep = ("gp_over_structure", "gp_over_structure_settled", "tracking_rmse_nominal_m",
             "tracking_rmse_augmented_m", "tracking_rmse_identified_lag_m")  # fmt: skip
     return {f"{prefix}_{k}": headline[k] for k in keep if k in headline}

@@ -97,10 +97,14 @@ class StudyConfig:
     closed_loop_check: bool = True
 
     def __post_init__(self) -> None:
-        if self.n_trajectories < 1 or self.repeats < 1 or self.n_trials < 2:
+        if self.n_trajectories < 1:
+            raise ValueError(f"trajectories must be >= 1, got {self.n_trajectories}")
+        if self.repeats < 1:
+            raise ValueError(f"repeats must be >= 1 (flights per trajectory), got {self.repeats}")
+        if self.n_trials < 2:
             raise ValueError(
-                "need n_trajectories >= 1, repeats >= 1 and n_trials >= 2, got "
-                f"{self.n_trajectories}, {self.repeats}, {self.n_trials}"
+                f"trials must be >= 2 (trial 1 flies nominal, the learned model the next), "
+                f"got {self.n_trials}"
             )
         if self.m < 1:
             raise ValueError(f"m must be >= 1 (inducing points per output), got {self.m}")

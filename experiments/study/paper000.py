@@ -118,12 +118,7 @@ def run_paper000(
         for check in (fit.check, fit.structure_check):
             if check is not None:
                 progress(f"fit {sel}: {check.describe()}")
-        if not fit.may_fly:
-            progress(f"fit {sel}: {refusal(fit.model)}; its flights fly the nominal planner")
-        elif not fit.gp_earns_its_place:
-            progress(f"fit {sel}: the GP does not beat its structure; the structure flies alone")
-        elif structure_only(fit.model):
-            progress(f"fit {sel}: the structure flies alone (closed-loop check)")
+        progress(f"fit {sel}: {what_flies(fit)}")
     flying = {sel: fit.model if fit.may_fly else None for sel, fit in fits.items()}
     if config.compile_augmented:
         progress("compiling the augmented planners (once per model, cached on disk)")
@@ -177,6 +172,19 @@ def run_paper000(
     for summary in _fly_all(aug_jobs, pool, "augmented", progress):
         flights.setdefault(summary.planner, []).append(summary)
     return Paper000Result(refs, flights, fits, None if lag is None else lag.nominal_model)
+
+
+def what_flies(fit: TrainingResult) -> str:
+    """One line: what a selection's held-out flights fly with ``fit`` and why: the nominal
+    planner (the learned model refused), its structure alone (the GP did not beat it over
+    the horizon, or the closed-loop check chose it) or the learned model."""
+    if not fit.may_fly:
+        return f"{refusal(fit.model)}; its flights fly the nominal planner"
+    if not fit.gp_earns_its_place:
+        return "the GP does not beat its structure; the structure flies alone"
+    if structure_only(fit.model):
+        return "the structure flies alone (closed-loop check)"
+    return f"the learned model flies ({fit.model.features.nominal_model} + GP)"
 
 
 def _refit_on_augmented(

@@ -18,8 +18,15 @@ _N_PATH_PANELS = 4
 
 def plot_paths(result: Paper000Result, path: Path) -> Path:
     """Top views of the first trajectories: reference and one flight of every planner."""
+    paths_figure(result).savefig(path, dpi=90, bbox_inches="tight")
+    return path
+
+
+def paths_figure(result: Paper000Result) -> Figure:
+    """plot_paths' figure: per panel a legend beside the axes (inside, it hid the paths) naming
+    each planner with its flight's tracking RMSE."""
     n = min(_N_PATH_PANELS, len(result.references))
-    fig = Figure(figsize=(5.0 * n, 4.8))
+    fig = Figure(figsize=(7.5 * n, 4.8), layout="constrained")
     for i in range(n):
         ax = fig.add_subplot(1, n, i + 1)
         ref = result.references[i]
@@ -30,10 +37,8 @@ def plot_paths(result: Paper000Result, path: Path) -> Path:
             _plot_flight(ax, flight, planner_label(planner, result.structure_model))
         ax.set(xlabel="east [m]", ylabel="north [m]", title=f"trajectory {i}", aspect="equal")
         ax.grid(alpha=0.3)
-        ax.legend(fontsize="small")
-    fig.tight_layout()
-    fig.savefig(path, dpi=90)
-    return path
+        ax.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.02, 1.0))
+    return fig
 
 
 def _plot_flight(ax, flight: FlightSummary, label: str) -> None:
@@ -43,7 +48,7 @@ def _plot_flight(ax, flight: FlightSummary, label: str) -> None:
         log["pos_e_m"][follow],
         log["pos_n_m"][follow],
         lw=1.0,
-        label=f"{label} ({flight.tracking_rmse_m:.3f} m)",
+        label=f"{label} (tracking RMSE {flight.tracking_rmse_m:.3f} m)",
     )
 
 

@@ -11,6 +11,7 @@ from experiments.study.paper000 import (
     NOMINAL,
     Paper000Result,
     planner_label,
+    what_flies,
 )
 from experiments.study.paper004 import TrialsResult
 
@@ -90,6 +91,7 @@ def render_report(
         "",
         figures_table(figs, result.structure_model),
         "",
+        *_flown_lines(result),
         "Held-out rows of each fit (fit-gp's evaluation, per axis n/e/d, m/s):",
         "",
     ]
@@ -117,6 +119,16 @@ def render_report(
     lines += ["", *[f"- before trial {k}: {c}" for k, c in enumerate(trials.checks, start=2)]]
     lines += ["", *[f"![{p}]({p})" for p in images["trials"]], ""]
     return "\n".join(lines)
+
+
+def _flown_lines(result: Paper000Result) -> list[str]:
+    """Per selection, what its rows above flew and why: the open-loop checks' verdicts
+    (predicting held-out logs over the horizon) and the model that flew (what_flies)."""
+    lines = ["What each selection's held-out flights flew:", ""]
+    for sel, fit in result.fits.items():
+        checks = [c.describe() for c in (fit.check, fit.structure_check) if c is not None]
+        lines.append(f"- `{sel}`: " + "; ".join([*checks, f"**{what_flies(fit)}**"]))
+    return [*lines, ""]
 
 
 def _closed_loop_lines(result: Paper000Result) -> list[str]:

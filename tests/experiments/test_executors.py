@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
+import os
+import time
+
 import numpy as np
+import psutil
 import pytest
 
 from companion.nmpc_planner import NmpcSettings
@@ -56,3 +60,24 @@ def test_study_with_a_malformed_scheduler_exits_2_in_one_line(tmp_path, capsys):
     assert code == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert "tcp://HOST:PORT" in err[-1] and "host:8786" in err[-1]
+
+
+def _write_pid_and_wait(path: str) -> None:
+    """A job that says where it runs, then takes long."""
+    with open(path, "a") as fh:
+        fh.write(f"{os.getpid()}\n")
+    time.sleep(60.0)
+
+
+def test_a_stop_in_the_caller_cancels_queued_jobs_and_ends_running_ones(tmp_path):
+    """Ctrl-C or SIGTERM in the study: its queued flights must not run on, nor its workers
+    outlive it (a plain shutdown waits for every queued job)."""
+    pids = tmp_path / "pids"
+    with pytest.raises(KeyboardInterrupt), job_executor(workers=1) as pool:
+        futures = [pool.submit(_write_pid_and_wait, str(pids)) for _ in range(4)]
+        while not pids.exists():
+            time.sleep(0.05)
+        raise KeyboardInterrupt
+    assert sum(f.cancelled() for f in futures) >= 2  # the pool hands one more out early
+    (pid,) = map(int, pids.read_text().split())
+    assert not psutil.pid_exists(pid) or psutil.Process(pid).status() == psutil.STATUS_ZOMBIE

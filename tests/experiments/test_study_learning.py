@@ -3,7 +3,13 @@ in its smoke version writes its report."""
 
 from __future__ import annotations
 
+import signal
+import subprocess
+import sys
+import time
+
 import numpy as np
+import psutil
 import pytest
 
 from companion.nmpc_planner import NmpcSettings, load_nmpc
@@ -84,6 +90,30 @@ def test_quick_study_runs_end_to_end_and_writes_report_and_plots(tmp_path, capsy
     assert (out / "gp_low_speed.npz").is_file() and (out / "gp_cluster.npz").is_file()
 
 
+@pytest.mark.slow
+def test_sigterm_stops_the_study_and_its_workers_in_one_line(tmp_path):
+    """A study stopped by SIGTERM (a batch system, kill) exits 143 with one line, writes
+    nothing, and leaves no worker process flying on (they used to, orphaned)."""
+    out, err = tmp_path / "study", tmp_path / "stderr"
+    args = [sys.executable, "-m", "scripts.study", "--quick", "--out", str(out)]
+    with err.open("w") as sink:
+        proc = subprocess.Popen(args, stderr=sink)
+    while "nominal flight 1/" not in err.read_text():  # a flight has flown: workers busy
+        assert proc.poll() is None, err.read_text()
+        time.sleep(0.1)
+    workers = psutil.Process(proc.pid).children(recursive=True)
+    proc.send_signal(signal.SIGTERM)
+    try:
+        assert proc.wait(timeout=60) == 143
+        last = err.read_text().strip().splitlines()[-1]
+        assert last.startswith("study: stopped by SIGTERM; nothing written"), last
+        assert not out.exists()
+        assert workers and not psutil.wait_procs(workers, timeout=10)[1]
+    finally:
+        for worker in psutil.wait_procs(workers, timeout=0)[1]:
+            worker.kill()
+
+
 def test_study_refuses_bad_input_in_one_line(tmp_path, capsys):
     code = study_main(["--quick", "--out", str(tmp_path), "--vehicle", "no_such_vehicle"])
     err = capsys.readouterr().err.strip().splitlines()
@@ -114,6 +144,16 @@ def test_multirotor_regimes_stay_with_the_study_cli(tmp_path):
     assert parse_args(["--regime", "wind_field", "--m", "20"]).m == 20  # was the regime's 60
 
 
+def test_help_and_a_bad_regime_name_the_rover_regimes_too(capsys):
+    """study --regime rover_exp1 runs [Ostafew16]'s rover experiments: --help and the error
+    for an unknown regime must say so, or a user never finds them."""
+    assert study_main(["--help"]) == 0
+    assert "rover_exp1" in capsys.readouterr().out
+    assert study_main(["--regime", "bogus"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "'rover_exp1'" in err[0] and "'wind_field'" in err[0], err
+
+
 def test_quick_refuses_sizes_it_would_override(capsys):
     assert study_main(["--quick", "--m", "50", "--trials", "4"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
@@ -123,9 +163,15 @@ def test_quick_refuses_sizes_it_would_override(capsys):
 
 @pytest.mark.parametrize(
     ("option", "message"),
-    [(["--m", "0"], "m must be >= 1"), (["--seed", "-1"], "seed must be >= 0")],
+    [
+        (["--m", "0"], "m must be >= 1"),
+        (["--seed", "-1"], "seed must be >= 0"),
+        (["--trials", "0"], "trials must be >= 2"),
+        (["--repeats", "-1"], "repeats must be >= 1"),
+        (["--trajectories", "0"], "trajectories must be >= 1"),
+    ],
 )
-def test_bad_inducing_count_or_seed_refused_before_any_flight(option, message, tmp_path, capsys):
+def test_bad_sizes_or_seed_refused_before_any_flight(option, message, tmp_path, capsys):
     """Found when the command line is read (one line, exit 2), not after minutes of flights."""
     code = study_main(["--quick", "--out", str(tmp_path / "s"), *option])
     err = capsys.readouterr().err.strip().splitlines()

@@ -79,6 +79,15 @@ def test_lags_the_planner_does_not_carry_are_still_refused(features, nominal, st
     assert "\n" not in str(info.value)
 
 
+def test_velocity_history_on_a_model_without_velocity_is_not_advised_again():
+    """Refused on kinematic_4dof, the fix must not be the same feature set on the same model."""
+    fd = feature_definition("velocity_history", "kinematic_4dof", residual_steps=5)
+    with pytest.raises(ValueError) as info:
+        fd.planner_map(fd.planner_model())
+    assert "kinematic_4dof has none: use the 'velocity' feature set" in str(info.value)
+    assert "(first_order_lag) for 'velocity_history'" in str(info.value)
+
+
 def test_velocity_change_is_the_velocity_minus_the_previous_velocity_state():
     fd = feature_definition("velocity_change", "first_order_lag", residual_steps=5)
     assert fd.input_names[3] == "vel_n_mps[k]-vel_n_mps[k-5]" and fd.max_lag == 5

@@ -87,6 +87,24 @@ def test_missing_wrong_version_and_corrupt_files_are_one_line_errors(small_model
     assert "\n" not in str(info.value)
 
 
+@pytest.mark.parametrize(
+    "content",
+    [
+        b"garbage\n",
+        b"\x93NUMPY\x01\x00v\x00{'descr': '<f8', 'fortran_order': False, 'shape': (0,), }",
+    ],
+    ids=["text", "npy"],
+)
+def test_a_file_that_is_no_npz_archive_is_named_so_in_one_line(tmp_path, content):
+    """Not "holds Python objects" (numpy tries any unknown bytes as a pickle), and no
+    traceback for a single array (.npy) saved under the model's name."""
+    path = tmp_path / "m.npz"
+    path.write_bytes(content)
+    with pytest.raises(ModelFileError, match="not a .npz archive as fit-gp writes") as info:
+        load_model(path)
+    assert "Python objects" not in str(info.value) and "\n" not in str(info.value)
+
+
 def test_a_model_file_holding_python_objects_is_refused_without_suggesting_pickle(
     small_model, tmp_path
 ):

@@ -27,3 +27,14 @@ def test_unknown_part_is_a_one_line_error(capsys):
         bench.main(["--only", "gpu"])
     assert exc.value.code == 2
     assert "unknown part 'gpu'; choose from sim, jsbsim" in capsys.readouterr().err
+
+
+def test_json_gives_a_figure_not_measured_as_null_not_nan():
+    """A part that could not measure a figure (acados not installed) reports NaN; --json must
+    stay standard JSON (NaN is not JSON: strict parsers refuse the whole object)."""
+
+    def refuse(constant: str) -> None:
+        raise ValueError(f"{constant} is not JSON")
+
+    figures = json.loads(bench.format_json({"a_ms": float("nan"), "b": 2.0}), parse_constant=refuse)
+    assert figures == {"a_ms": None, "b": 2.0}
