@@ -69,10 +69,11 @@ def parse_args(argv: list[str] | None) -> StudyConfig:
     parser.add_argument("--features", choices=list(FEATURE_SETS), default=None)
     parser.add_argument(
         "--regime",
-        choices=list(REGIMES),
+        choices=[*REGIMES, *ROVER_REGIMES],
         default="paper000",
-        help=f"the multirotor task; {', '.join(ROVER_REGIMES)} run the rover experiments "
-        "instead (python -m scripts.rover --help: their options)",
+        help="the multirotor task (default paper000); "
+        f"{', '.join(ROVER_REGIMES)}: [Ostafew16]'s rover experiments, with their own options "
+        "(study --regime rover_exp1 --help)",
     )
     parser.add_argument(
         "--refit-rounds",
