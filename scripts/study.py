@@ -20,12 +20,14 @@ or on the workers of a Dask cluster with ``--scheduler`` (same figures either wa
 OUT/report.md with PNG plots and the fitted model files. Progress goes to stderr; the
 headline figures are printed on stdout, then, when the learned model's structure flew alone,
 ``structure_model = NAME``: the model its ``*identified_lag*`` figures flew (first_order_lag,
-px4_velocity_pi). Exit code 0 on success, 2 with a one-line reason on bad input.
+px4_velocity_pi). Exit code 0 on success, 2 with a one-line reason on bad input, 130 on
+Ctrl-C and 143 on SIGTERM (its worker processes stopped, nothing written).
 """
 
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 import time
 from dataclasses import replace
@@ -164,6 +166,7 @@ def main(argv: list[str] | None = None) -> int:
             f"study [{time.perf_counter() - start:6.1f} s] {message}", file=sys.stderr, flush=True
         )
 
+    previous_term = signal.signal(signal.SIGTERM, _terminate)
     try:
         _check_inputs(config)
         result = run_study(config, progress)
@@ -173,12 +176,31 @@ def main(argv: list[str] | None = None) -> int:
     except OutputError as exc:
         print(f"study: error: --out {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt as exc:  # its workers are stopped (experiments.executors)
+        how, code = ("SIGTERM", 143) if isinstance(exc, _Terminated) else ("Ctrl-C", 130)
+        print(
+            f"study: stopped by {how}; nothing written to {config.out_dir} (the report and "
+            "its models appear only when the study completes)",
+            file=sys.stderr,
+        )
+        return code
+    finally:
+        signal.signal(signal.SIGTERM, previous_term)
     for name, value in result.headline.items():
         print(f"{name} = {value:.4f}")
     if result.paper000.structure_model is not None:
         print(f"structure_model = {result.paper000.structure_model}")
     print(f"report: {result.report_path}")
     return 0
+
+
+class _Terminated(KeyboardInterrupt):
+    """SIGTERM, raised in the study like Ctrl-C so that its worker processes are stopped with
+    it instead of flying on without it."""
+
+
+def _terminate(_signum: int, _frame: object) -> None:
+    raise _Terminated
 
 
 def _check_inputs(config: StudyConfig) -> None:
