@@ -9,6 +9,7 @@ import pytest
 
 from experiments.study.fitting import fit_residual
 from flightlog.schema import FlightLog, FlightLogRecorder
+from tests.gp.gp_synthetic_logs import level_flight_row
 
 PERIOD_S = 0.02
 
@@ -24,14 +25,7 @@ def repeated_path_log(seed: int, n_rows: int = 1500, tau_s: float = 0.4) -> Flig
     for k in range(n_rows):
         t = k * PERIOD_S
         cmd = np.array([0.8 * np.sin(0.6 * t), 1.0, 0.0])
-        rec.append({
-            "t_s": t, "mode": "OFFBOARD",
-            "pos_n_m": pos[0], "pos_e_m": pos[1], "pos_d_m": pos[2],
-            "vel_n_mps": vel[0], "vel_e_mps": vel[1], "vel_d_mps": vel[2],
-            "q_w": 1.0, "q_x": 0.0, "q_y": 0.0, "q_z": 0.0,
-            "cmd_vel_n_mps": cmd[0], "cmd_vel_e_mps": cmd[1], "cmd_vel_d_mps": cmd[2],
-            "cmd_yaw_rate_radps": 0.0,
-        })  # fmt: skip
+        rec.append(level_flight_row(t, pos, vel, cmd, mode="OFFBOARD"))
         push = np.array([0.6, 0.0, 0.0]) if pos[1] > 22.0 else np.zeros(3)
         new = cmd + (vel - cmd) * decay + PERIOD_S * push
         pos = pos + PERIOD_S * 0.5 * (vel + new)

@@ -48,15 +48,22 @@ def lag_plant_log(seed, tau_s, drag_per_m, n_rows=900, dt_s=0.02, noise_mps=0.00
     decay = np.exp(-dt_s / tau_s)
     for k in range(n_rows):
         cmd = amp * np.sin(freq * k * dt_s + phase)
-        rec.append({
-            "t_s": k * dt_s,
-            "pos_n_m": pos[0], "pos_e_m": pos[1], "pos_d_m": pos[2],
-            "vel_n_mps": vel[0], "vel_e_mps": vel[1], "vel_d_mps": vel[2],
-            "q_w": 1.0, "q_x": 0.0, "q_y": 0.0, "q_z": 0.0,
-            "cmd_vel_n_mps": cmd[0], "cmd_vel_e_mps": cmd[1], "cmd_vel_d_mps": cmd[2],
-            "cmd_yaw_rate_radps": 0.0,
-        })  # fmt: skip
+        rec.append(level_flight_row(k * dt_s, pos, vel, cmd))
         new = cmd + (vel - cmd) * decay - dt_s * drag_per_m * vel * np.abs(vel)
         pos = pos + dt_s * 0.5 * (vel + new)
         vel = new + noise_mps * rng.normal(size=3)
     return rec.to_log()
+
+
+def level_flight_row(t_s, pos, vel, cmd, mode=None):
+    """One log row of a level vehicle facing north: position [m], velocity and velocity
+    command [m/s], each (3,) NED; ``mode`` (e.g. "OFFBOARD") when given."""
+    row = {
+        "t_s": t_s,
+        "pos_n_m": pos[0], "pos_e_m": pos[1], "pos_d_m": pos[2],
+        "vel_n_mps": vel[0], "vel_e_mps": vel[1], "vel_d_mps": vel[2],
+        "q_w": 1.0, "q_x": 0.0, "q_y": 0.0, "q_z": 0.0,
+        "cmd_vel_n_mps": cmd[0], "cmd_vel_e_mps": cmd[1], "cmd_vel_d_mps": cmd[2],
+        "cmd_yaw_rate_radps": 0.0,
+    }  # fmt: skip
+    return row if mode is None else {**row, "mode": mode}
