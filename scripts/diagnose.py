@@ -138,6 +138,15 @@ def _read_for_diagnosis(path: Path) -> FlightLog:
     return log
 
 
+def _skip_line(path: Path, why: str) -> str:
+    """'diagnose: skipping PATH: WHY', the path said once (a log's errors start with it)."""
+    return (
+        f"diagnose: skipping {why}"
+        if why.startswith(f"{path}:")
+        else (f"diagnose: skipping {path}: {why}")
+    )
+
+
 def _run_batch(args: DiagnoseArgs, sim_config: SimConfig, progress: Progress) -> int:
     """Diagnose each log on its own on the chosen executor, skipping (one line each) the logs
     that cannot be diagnosed; write the report sets and batch.json atomically."""
@@ -150,7 +159,7 @@ def _run_batch(args: DiagnoseArgs, sim_config: SimConfig, progress: Progress) ->
             jobs.append(DiagnosisJob(name, _read_for_diagnosis(path), sim_config))
         except FlightLogError as exc:
             skipped[name] = str(exc)
-            print(f"diagnose: skipping {path}: {exc}", file=sys.stderr)
+            print(_skip_line(path, str(exc)), file=sys.stderr)
     where = args.scheduler or f"{args.workers} local processes"
     progress(f"batch: {len(jobs)} diagnoses on {where}")
     outcomes = []
@@ -161,7 +170,7 @@ def _run_batch(args: DiagnoseArgs, sim_config: SimConfig, progress: Progress) ->
     for outcome in outcomes:
         if outcome.diagnosis is None:
             skipped[outcome.name] = str(outcome.skipped)
-            print(f"diagnose: skipping {path_of[outcome.name]}: {outcome.skipped}", file=sys.stderr)
+            print(_skip_line(path_of[outcome.name], str(outcome.skipped)), file=sys.stderr)
     if not results:
         print(
             f"diagnose: none of the {len(names)} logs can be diagnosed (each skipped above "

@@ -99,6 +99,7 @@ def test_batch_skips_each_log_it_cannot_diagnose_with_its_reason_and_diagnoses_t
     err = capsys.readouterr().err
     skips = [line for line in err.splitlines() if line.startswith("diagnose: skipping ")]
     assert [line.split(": ")[1].removeprefix("skipping ") for line in skips] == logs[:3]
+    assert all(line.count(log) == 1 for line, log in zip(skips, logs, strict=False))
     assert "no velocity command" in skips[0] and "needs faster signals" in skips[1]
     assert "no airborne rows" in skips[2]
     assert "1 report sets in" in err and "3 log(s) skipped (batch.json says why)" in err
