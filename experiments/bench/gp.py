@@ -16,12 +16,21 @@ scikit-learn fit from ~1 min to ~15 min, which made the figure meaningless.
                              conversion included) [us]
     gp_predict_ingraph_us    per-point cost inside a CasADi graph (Function.map over 1,000
                              points), what the NMPC pays per GP query [us]
+    gp_fit_peak_mib          peak memory the SparseGP fit allocates on the n = 20,000 rows [MiB]
+    gp_fit_peak_mib_at_sklearn_n, gp_sklearn_fit_peak_mib
+                             the same for SparseGP and scikit-learn on scikit-learn's 2,000
+                             rows (one restart each: a restart frees its arrays before the
+                             next), the like-for-like pair [MiB]
+Memory is the peak of the Python allocator's traced blocks (tracemalloc: NumPy's arrays and
+Python objects, not BLAS/LAPACK's internal workspace), measured in fits of their own, apart
+from the timed ones (tracing slows allocation).
 ``quick=True`` shrinks everything (n = 1,500, sklearn n = 100) for a smoke test.
 """
 
 from __future__ import annotations
 
 import time
+import tracemalloc
 from collections.abc import Callable
 
 import numpy as np
@@ -56,7 +65,7 @@ def run(progress: Callable[[str], None] = print, quick: bool = False) -> dict[st
     truth = residual_truth(X_test)
 
     progress(f"gp: SparseGP fit, n={n}, m=30")
-    model = SparseGP(inducing=InducingConfig(strategy="low_speed", m=30), random_state=0)
+    model = _sparse_gp()
     t0 = time.perf_counter()
     model.fit(X, Y)
     fit_s = time.perf_counter() - t0
@@ -71,6 +80,12 @@ def run(progress: Callable[[str], None] = print, quick: bool = False) -> dict[st
         sk.fit(X[:n_sklearn], Y[:n_sklearn])
     sk_fit_s = time.perf_counter() - t0
     sk_rmse = float(np.sqrt(np.mean((sk.predict(X_test) - truth) ** 2)))
+
+    progress("gp: peak memory of the fits")
+    peak_mib = _fit_peak_mib(lambda: _sparse_gp().fit(X, Y))
+    peak_small_mib = _fit_peak_mib(lambda: _sparse_gp().fit(X[:n_sklearn], Y[:n_sklearn]))
+    sk_one = GaussianProcessRegressor(kernel, n_restarts_optimizer=0, normalize_y=True)
+    sk_peak_mib = _fit_peak_mib(lambda: sk_one.fit(X[:n_sklearn], Y[:n_sklearn]))
 
     progress("gp: CasADi prediction")
     function = posterior_function(model.posterior_)
@@ -89,7 +104,26 @@ def run(progress: Callable[[str], None] = print, quick: bool = False) -> dict[st
         "gp_predict_us": predict_us,
         "gp_predict_call_us": call_us,
         "gp_predict_ingraph_us": ingraph_us,
+        "gp_fit_peak_mib": peak_mib,
+        "gp_fit_peak_mib_at_sklearn_n": peak_small_mib,
+        "gp_sklearn_fit_peak_mib": sk_peak_mib,
     }
+
+
+def _sparse_gp() -> SparseGP:
+    """The benchmark's SparseGP: low_speed inducing points, m = 30, seeded."""
+    return SparseGP(inducing=InducingConfig(strategy="low_speed", m=30), random_state=0)
+
+
+def _fit_peak_mib(fit: Callable[[], object]) -> float:
+    """Peak traced memory [MiB] while ``fit()`` runs, one BLAS thread (as the timed fits)."""
+    with threadpool_limits(limits=1):
+        tracemalloc.start()
+        try:
+            fit()
+            return tracemalloc.get_traced_memory()[1] / 2**20
+        finally:
+            tracemalloc.stop()
 
 
 def _per_call_us(call: Callable[[], object], n: int) -> float:
