@@ -49,6 +49,9 @@ solver is compared with the others on the same footing. Figures:
                                             state_input features, m = 30 per output) to the
                                             companion's planner ready to fly (loaded, built,
                                             one warm-up plan) [s]
+    nmpc_model_ready_peak_mib               the memory that takes: the rise of the peak
+                                            resident set of a fresh process over its own
+                                            peak after the imports (the baseline) [MiB]
     nmpc_learned_<regime>_median_ms, _p99_ms, _cpu_p99_ms
                                             the companion's planner (fast path, batched
                                             linearisation) with a learned model of each study
@@ -66,10 +69,12 @@ solver is compared with the others on the same footing. Figures:
 from __future__ import annotations
 
 import dataclasses
+import multiprocessing
 import resource
 import tempfile
 import time
 from collections.abc import Callable
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import casadi as ca
@@ -174,6 +179,7 @@ def run(progress: Callable[[str], None] = print, quick: bool = False) -> dict[st
     figures.update(_acados_figures(model, base, residual, world, problems, ipopt_res, progress))
     progress("nmpc: a new model file to a planner ready to fly")
     figures["nmpc_model_ready_s"] = model_ready_s()
+    figures["nmpc_model_ready_peak_mib"] = model_ready_peak_mib()
     for regime, (features_name, m) in REGIME_SHAPES.items():
         progress(f"nmpc: {regime}'s learned model shape ({features_name}, m = {m})")
         figures |= learned_model_figures(regime, features_name, m, 40 if quick else 300)
@@ -334,6 +340,19 @@ def flying_model(
         y_offset=np.zeros(n_out),
     )
     return ResidualModel(features, posterior, np.full(n_out, 0.01), "sgpr")
+
+
+def model_ready_peak_mib() -> float:
+    """The rise [MiB] of a fresh process's peak resident set while :func:`model_ready_s` runs,
+    over its peak once the modules are imported (CasADi's own allocations included)."""
+    with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn")) as pool:
+        return pool.submit(_peak_rise_mib).result()
+
+
+def _peak_rise_mib() -> float:
+    before_kib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss  # Linux: KiB
+    model_ready_s()
+    return (resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before_kib) / 1024.0
 
 
 def model_ready_s() -> float:

@@ -29,6 +29,8 @@ def test_quick_nmpc_part_reports_augmented_acados_and_model_ready_figures():
     ):
         assert math.isfinite(figures[name]) and figures[name] > 0, name
     assert 0.0 <= figures["nmpc_augmented_preempted_fraction"] <= 1.0
+    assert math.isfinite(figures["nmpc_model_ready_peak_mib"])
+    assert figures["nmpc_model_ready_peak_mib"] >= 0.0
     for regime in nmpc.REGIME_SHAPES:  # each regime's learned model, batched vs symbolic
         prefix = f"nmpc_learned_{regime}"
         for name in ("median_ms", "p99_ms", "cpu_p99_ms", "symbolic_median_ms"):
