@@ -256,7 +256,7 @@ def _repeat_inputs(args: argparse.Namespace):  # noqa: ANN202 (a tuple of what r
 def repeat(args: argparse.Namespace) -> int:
     from experiments.rover.experience_file import save_experience
     from experiments.rover.repeat import RepeatOutcome, Trial, repeat_path
-    from experiments.rover.repeat_report import figure_png, summary, trial_line
+    from experiments.rover.repeat_report import figure_png, history_row, summary, trial_line
 
     path, experience, scheduler, gp, memory, schedule = _repeat_inputs(args)
     link = open_link(args)
@@ -266,11 +266,13 @@ def repeat(args: argparse.Namespace) -> int:
            else "no experience yet")
     )  # fmt: skip
     driven: list[Trial] = []
+    history = [*memory.history]
 
     def trial_done(trial: Trial, next_schedule: np.ndarray) -> None:
         print(trial_line(trial), flush=True)
         driven.append(trial)
-        save_experience(experience, gp, path, trial.number, next_schedule)
+        history.append(history_row(trial))
+        save_experience(experience, gp, path, trial.number, next_schedule, np.array(history))
 
     back = None
     if args.drive_back:
@@ -307,12 +309,11 @@ def repeat(args: argparse.Namespace) -> int:
     }  # fmt: skip
     if outcome.trials:
         try:
-            write_text_atomic(
-                Path(args.out) / "repeat.json", json.dumps(summary(outcome, about), indent=1)
-            )
-            first, last = outcome.trials[0].number, outcome.trials[-1].number
-            title = f"{args.path.name}: trials {first}-{last}"
-            write_bytes_atomic(Path(args.out) / "repeat.png", figure_png(outcome, title))
+            rows = np.array(history)
+            text = json.dumps(summary(outcome, about, rows), indent=1)
+            write_text_atomic(Path(args.out) / "repeat.json", text)
+            title = f"{args.path.name}: [Ostafew16] teach and repeat, trials 1-{int(rows[-1, 0])}"
+            write_bytes_atomic(Path(args.out) / "repeat.png", figure_png(rows, title))
             _say(f"wrote {Path(args.out) / 'repeat.json'} and {Path(args.out) / 'repeat.png'}")
         except OutputError as exc:
             _say(f"error: --out {exc}")

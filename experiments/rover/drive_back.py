@@ -17,7 +17,7 @@ import numpy as np
 from companion.link import ZERO_VELOCITY, Link, LinkError, VelocityCommand
 from experiments.rover.link_drive import pose_of, stop_rover
 
-ARRIVED_M = 0.15
+ARRIVED_M = 0.05
 ALIGNED_RAD = 0.05
 _FACING_RAD = 0.15
 _HEADING_GAIN = 1.5  # turn rate per heading error [1/s]
@@ -71,7 +71,8 @@ def drive_back(
             dx, dy = target[0] - x, target[1] - y
             dist = math.hypot(dx, dy)
             bearing_err = _wrap(math.atan2(dy, dx) - th)
-            if phase != "align" and dist < ARRIVED_M:
+            passed = dist < 5 * ARRIVED_M and abs(bearing_err) > math.pi / 2
+            if phase != "align" and (dist < ARRIVED_M or passed):  # there, or just past it
                 phase = "align"
             if phase == "face" and abs(bearing_err) < _FACING_RAD:
                 phase = "drive"

@@ -4,7 +4,9 @@
 memory of a path. This file (NumPy .npz, written atomically) holds every stored experience of
 one path with its vertex and speed bin, the bin geometry, the path's vertices (an experience
 file belongs to one path: a vertex index means nothing on another) and how many trials were
-driven, plus the last speed schedule (N,) [m/s] when a speed scheduler set it.
+driven, plus the last speed schedule (N,) [m/s] when a speed scheduler set it, and one row
+of figures per trial driven with it (:data:`HISTORY_COLUMNS`), so that a report covers every
+run.
 """
 
 from __future__ import annotations
@@ -22,6 +24,9 @@ from planners.rover.path import TaughtPath
 
 FORMAT = "rover-path-experience-v1"
 _PATH_ATOL_M = 1e-3
+HISTORY_COLUMNS = (
+    "trial", "max_e_lat_m", "rms_e_lat_m", "max_e_head_rad", "rms_e_head_rad", "travel_time_s"
+)  # fmt: skip
 
 
 class ExperienceFileError(ValueError):
@@ -30,10 +35,12 @@ class ExperienceFileError(ValueError):
 
 @dataclass(frozen=True)
 class Memory:
-    """What a run starts from: trials driven before, and the schedule they left (or None)."""
+    """What a run starts from: trials driven before, the schedule they left (or None), and
+    their figures, (trials_done, len(HISTORY_COLUMNS))."""
 
     trials_done: int
     schedule_mps: np.ndarray | None
+    history: np.ndarray
 
 
 def save_experience(
@@ -42,6 +49,7 @@ def save_experience(
     path: TaughtPath,
     trials_done: int,
     schedule_mps: np.ndarray | None = None,
+    history: np.ndarray | None = None,
 ) -> None:
     """Write ``gp``'s experiences of ``path`` to ``file`` atomically (OutputError if not)."""
     items = gp.stored()
@@ -56,6 +64,9 @@ def save_experience(
         "bins": np.array([c.speed_bin_mps, c.bin_capacity, c.vertex_window, c.speed_window]),
         "trials_done": np.array(trials_done),
         "schedule_mps": np.zeros(0) if schedule_mps is None else np.asarray(schedule_mps),
+        "history": np.zeros((0, len(HISTORY_COLUMNS)))
+        if history is None
+        else np.asarray(history, dtype=float).reshape(-1, len(HISTORY_COLUMNS)),
     }
     buffer = io.BytesIO()
     np.savez(buffer, **arrays)
@@ -70,7 +81,7 @@ def load_experience(file: Path, gp: LocalGP, path: TaughtPath) -> Memory:
             geometry, or learned on another path.
     """
     if not file.exists():
-        return Memory(0, None)
+        return Memory(0, None, np.zeros((0, len(HISTORY_COLUMNS))))
     fix = "pass another --experience file (or delete this one to start learning anew)"
     try:
         with np.load(file, allow_pickle=False) as npz:
@@ -80,7 +91,7 @@ def load_experience(file: Path, gp: LocalGP, path: TaughtPath) -> Memory:
             f"{file}: not a readable experience file ({type(exc).__name__}); {fix}"
         ) from None
     needed = ("format", "vertex", "speed_bin", "query", "disturbance", "path_xy_m", "bins",
-              "trials_done", "schedule_mps")  # fmt: skip
+              "trials_done", "schedule_mps", "history")  # fmt: skip
     missing = [k for k in needed if k not in data]
     if missing or str(data.get("format")) != FORMAT:
         what = f"lacks {', '.join(missing)}" if missing else f"is {str(data['format'])!r}"
@@ -90,6 +101,8 @@ def load_experience(file: Path, gp: LocalGP, path: TaughtPath) -> Memory:
         data["query"].shape == (n, gp.n_features)
         and data["disturbance"].shape == (n, gp.n_outputs)
         and data["speed_bin"].shape == (n,)
+        and data["history"].ndim == 2
+        and data["history"].shape[1] == len(HISTORY_COLUMNS)
     )
     if not shapes_ok or not all(
         np.all(np.isfinite(data[k])) for k in ("query", "disturbance", "schedule_mps")
@@ -112,4 +125,8 @@ def load_experience(file: Path, gp: LocalGP, path: TaughtPath) -> Memory:
                           strict=True):  # fmt: skip
         gp.add(int(v), (int(b) + 0.5) * c.speed_bin_mps, a, g)
     schedule = data["schedule_mps"]
-    return Memory(int(data["trials_done"]), schedule if len(schedule) == len(path) else None)
+    return Memory(
+        int(data["trials_done"]),
+        schedule if len(schedule) == len(path) else None,
+        data["history"],
+    )

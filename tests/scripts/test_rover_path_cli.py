@@ -120,6 +120,8 @@ def test_teach_and_repeat_in_process_go_on_learning_across_runs(tmp_path: Path, 
     second = _json(rep)
     assert second["trials_before"] == 2 and second["trial"] == [3]
     assert second["experiences_after"] > first["experiences_after"]
+    assert second["all_trials"]["trial"] == [1, 2, 3]  # the report covers every run
+    assert second["all_trials"]["max_e_lat_m"][:2] == first["max_e_lat_m"]
 
 
 @pytest.mark.slow(expected_s=120)
