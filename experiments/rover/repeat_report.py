@@ -70,7 +70,12 @@ def summary(outcome: RepeatOutcome, about: dict, history: np.ndarray) -> dict:
         "reached_end": [t.drive.reached_end for t in ts],
         "experiences": [t.experiences for t in ts],
         "all_trials": {
-            c: _json_numbers(history[:, k].tolist()) for k, c in enumerate(HISTORY_COLUMNS)
+            "trial": [int(n) for n in history[:, 0]],
+            **{
+                c: _json_numbers(history[:, k].tolist())
+                for k, c in enumerate(HISTORY_COLUMNS)
+                if k > 0
+            },
         },
     }
 
