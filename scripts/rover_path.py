@@ -91,7 +91,8 @@ def _pattern(text: str) -> list[tuple[float, float]]:
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
     parser = OneLineParser(
         prog=PROG,
-        description=__doc__.split("\n\n")[2],
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
         epilog="Exit codes: 0 done, 1 failed (rover stopped and sent Hold), 2 bad input, "
         "3 handed over to a pilot (nothing sent), 130 Ctrl-C, 143 SIGTERM.",
     )
@@ -120,7 +121,10 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     )  # fmt: skip
     repeat.add_argument("--trials", type=int, default=3, help="trials in this run")
     speeds = repeat.add_mutually_exclusive_group()
-    speeds.add_argument("--speed", type=_positive, default=None, help="fixed speed [m/s]")
+    speeds.add_argument(
+        "--speed", type=_positive, default=None,
+        help=f"fixed speed [m/s] (default {DEFAULT_SPEED_MPS:g})",
+    )  # fmt: skip
     speeds.add_argument(
         "--scheduler", default=None, help="speed scheduler: experiment_2 or experiment_3 "
         "([Ostafew16] Table I); the schedule is kept in the experience file",

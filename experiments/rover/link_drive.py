@@ -141,12 +141,12 @@ def drive_path(
                 break
             v_now = float(schedule[fix.vertex])
             v_h = np.interp(fix.s_m + v_now * dt * np.arange(K), path.s_m, schedule)
-            model = learner.LocalDisturbance(gp, fix.vertex, v_now) if gp is not None else None
 
             def reference(poses: np.ndarray, vertex: int = fix.vertex) -> np.ndarray:
                 return path.ref_at(project_arc_length(path, poses[:, :2], vertex, window))
 
-            try:
+            try:  # the local GP's factorisation and the NMPC iterations
+                model = learner.LocalDisturbance(gp, fix.vertex, v_now) if gp is not None else None
                 w = float(
                     solver.solve(pose, v_h, reference, w_prev, pose_prev=pose_prev,
                                  s0_m=fix.s_m, model=model, ref0=np.array(path.pose(fix.vertex)))[0]

@@ -20,6 +20,7 @@ from experiments.rover.experience_file import (
     load_experience,
     save_experience,
 )
+from experiments.rover.link_drive import drive_path
 from experiments.rover.repeat import is_loop, repeat_path
 from experiments.rover.teach import TeachError, record_teach
 from planners.rover.path import TaughtPath
@@ -200,3 +201,18 @@ def test_a_teach_pass_whose_position_turns_nan_is_refused() -> None:
     finally:
         link.close()
         endpoint.close()
+
+
+def test_a_failed_solve_stops_the_rover_in_hold_instead_of_crashing() -> None:
+    """A local GP whose kernel matrix cannot be factorised (negative noise variances, as a
+    broken hyperparameter file would give) fails the step: the drive says so and the rover is
+    sent a zero velocity and Hold."""
+    gp = learner.make_history_gp()
+    gp.noise_variances = np.full(3, -1.0)
+    for vertex in range(4):
+        gp.add(vertex, 0.5, np.full(8, 0.1), np.zeros(3))
+    link = InProcessRoverLink.from_preset("husky_50kg")
+    drive = drive_path(link, TaughtPath.from_segments([(4.0, 0.0)]), 0.5, gp=gp)
+    assert drive.stopped_for.startswith("the NMPC solve failed at t=0.0 s")
+    assert not drive.reached_end
+    assert link.read_state().mode == "HOLD"
