@@ -3,10 +3,12 @@ against `vehicle-sim --vehicle husky_50kg` and in process; every refusal is one 
 
 import json
 import math
+import signal
 import socket
 import subprocess
 import sys
 import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -216,3 +218,74 @@ def test_a_lost_link_mid_repeat_stops_with_exit_1(
     summary = _json(tmp_path / "rep")
     assert summary["status"] == "stopped" and summary["reached_end"] == [False]
     assert np.isfinite(summary["max_e_lat_m"][0])
+
+
+def _wait_for(proc: subprocess.Popen, text: str, timeout_s: float = 60.0) -> None:
+    """Read the process's stderr until a line holds ``text``."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        line = proc.stderr.readline()
+        if text in line:
+            return
+        assert line or proc.poll() is None, f"exited {proc.returncode} before {text!r}"
+    raise AssertionError(f"no {text!r} within {timeout_s} s")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("sig", "code"), [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_ctrl_c_or_sigterm_mid_repeat_sends_hold(
+    files: dict[str, Path], tmp_path: Path, sig: signal.Signals, code: int
+) -> None:
+    port = _free_port()
+    endpoint = _endpoint(port)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "scripts.rover_path", "repeat", "--path", str(files["loop"]),
+         "--url", f"udpin://127.0.0.1:{port}", "--experience", str(tmp_path / "e.npz"),
+         "--out", str(tmp_path / "rep")],
+        cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        _wait_for(proc, "no experience yet")
+        deadline = time.monotonic() + 30.0
+        while not endpoint.offboard and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert endpoint.offboard
+        time.sleep(1.0)  # driving
+        proc.send_signal(sig)
+        assert proc.wait(30.0) == code, proc.stderr.read()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(5.0)
+        endpoint.close()
+    assert endpoint.holding and not endpoint.offboard  # the rover was sent Hold
+
+
+@pytest.mark.slow
+def test_ctrl_c_ends_a_pilot_driven_teach_and_writes_the_path(tmp_path: Path) -> None:
+    """A pilot drives in MANUAL; Ctrl-C on the companion ends the recording and the path so
+    far is written."""
+    port = _free_port()
+    endpoint = _endpoint(port)
+    out = tmp_path / "p.csv"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "scripts.rover_path", "teach", "--out", str(out),
+         "--url", f"udpin://127.0.0.1:{port}"],
+        cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        _wait_for(proc, "teaching over pymavlink")
+        endpoint.sim.arm()
+        endpoint.sim.set_setpoint(0.8, 0.0)
+        _wait_for(proc, "armed: recording")
+        time.sleep(4.0)
+        proc.send_signal(signal.SIGINT)
+        assert proc.wait(30.0) == 0, proc.stderr.read()
+        err = proc.stderr.read()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(5.0)
+        endpoint.close()
+    assert "recording ended: Ctrl-C" in err
+    assert out.read_text().startswith("x_m,y_m\n")
