@@ -104,6 +104,12 @@ class LocalGP:
         bin_ = self._bins.setdefault(key, deque(maxlen=self.config.bin_capacity))
         bin_.append((a, g))
 
+    def stored(self) -> list[tuple[int, int, np.ndarray, np.ndarray]]:
+        """Every experience as (vertex, speed bin, query (d,), disturbance (n_out,)), bins in
+        key order and each bin oldest first: adding them in this order to an empty LocalGP of
+        the same config (speed (bin + 0.5) * speed_bin_mps) rebuilds the same bins."""
+        return [(v, l, a, g) for (v, l), b in sorted(self._bins.items()) for a, g in b]
+
     def local_data(self, vertex: int, speed_mps: float) -> tuple[np.ndarray, np.ndarray]:
         """Local dataset for a query: X (k, d), Y (k, n_out), k <= config.max_local_points."""
         c = self.config

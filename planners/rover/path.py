@@ -137,9 +137,13 @@ class TaughtPath:
         d2 = np.sum((self.xy_m[lo:hi] - (x_m, y_m)) ** 2, axis=1)
         return lo + int(np.argmin(d2))
 
-    def localise(self, x_m: float, y_m: float, heading_rad: float, hint: int = 0) -> PathFix:
-        """Errors against the nearest vertex (see module docstring)."""
-        i = self.nearest(x_m, y_m, hint)
+    def localise(
+        self, x_m: float, y_m: float, heading_rad: float, hint: int = 0, window: int = 40
+    ) -> PathFix:
+        """Errors against the nearest vertex (see module docstring), searched as
+        :meth:`nearest` does (a loop's end is outside the window of its start when the window
+        is less than the loop's vertices)."""
+        i = self.nearest(x_m, y_m, hint, window)
         xd, yd, thd = self.pose(i)
         c, s = math.cos(thd), math.sin(thd)
         dx, dy = xd - x_m, yd - y_m
@@ -148,14 +152,14 @@ class TaughtPath:
         return PathFix(i, float(self.s_m[i] + along), e_lat, float(wrap_angle(thd - heading_rad)))
 
     def localise_on_path(
-        self, x_m: float, y_m: float, heading_rad: float, hint: int = 0
+        self, x_m: float, y_m: float, heading_rad: float, hint: int = 0, window: int = 40
     ) -> PathFix:
         """Errors against the path pose at the robot's projection (module docstring).
 
         ``vertex`` is still the nearest vertex; ``s_m`` is the projection's arc length, refined
         once along the interpolated tangent.
         """
-        fix = self.localise(x_m, y_m, heading_rad, hint)
+        fix = self.localise(x_m, y_m, heading_rad, hint, window)
         s_m = fix.s_m
         for _ in range(2):
             xr, yr, thr = self.ref_at(np.array([s_m]))[0]

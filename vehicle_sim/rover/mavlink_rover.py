@@ -252,6 +252,8 @@ class RoverMavlinkEndpoint:
     def _health_telemetry(self) -> None:
         st, mav = self.sim.state, self._conn.mav
         mav.sys_status_send(_SENSORS, _SENSORS, _SENSORS, 200, 12600, -1, 100, 0, 0, 0, 0, 0, 0)
+        if not all(math.isfinite(v) for v in (st.x_m, st.y_m, st.heading_rad)):
+            return  # no fix to give (LOCAL_POSITION_NED still says NaN); the loop lives on
         lat, lon = _lat_lon_e7(st.x_m, -st.y_m)
         alt_mm = int(_ORIGIN_ALT_M * 1000)
         t_ms = int(st.t_s * 1000)

@@ -1,0 +1,218 @@
+"""Teach and repeat over the companion's Links: the teach pass, the path and experience files,
+repeating a loop with learning, and the refusals (too little motion, NaN position, another
+path's experience, damaged files)."""
+
+import math
+import socket
+import threading
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from companion.inprocess_rover_link import InProcessRoverLink
+from companion.pymavlink_link import PymavlinkLink
+from experiments.rover import learner
+from experiments.rover.experience_file import (
+    ExperienceFileError,
+    load_experience,
+    save_experience,
+)
+from experiments.rover.link_drive import drive_path
+from experiments.rover.repeat import is_loop, repeat_path
+from experiments.rover.teach import TeachError, record_teach
+from planners.rover.path import TaughtPath
+from planners.rover.path_file import PathFileError, path_csv_text, read_path_file
+from planners.rover.speed_scheduler import TABLE_I, initial_schedule
+from vehicle_sim.rover import RoverSim, rover_preset
+from vehicle_sim.rover.mavlink_rover import RoverMavlinkEndpoint
+
+LOOP = [(2.0, 0.0), (math.pi * 1.5, 1 / 1.5), (2.0, 0.0), (math.pi * 1.5, 1 / 1.5)]
+
+
+def _taught_loop() -> TaughtPath:
+    return record_teach(InProcessRoverLink.from_preset("husky_50kg"), drive=LOOP).path
+
+
+def test_a_scripted_teach_drive_records_the_pattern_resampled_to_the_spacing() -> None:
+    taught = record_teach(InProcessRoverLink.from_preset("husky_50kg"), drive=LOOP, spacing_m=0.5)
+    length = 4.0 + 3.0 * math.pi
+    assert taught.ended_for == "the teach pattern ended"
+    assert taught.path.length_m == pytest.approx(length, rel=0.05)
+    assert taught.path.spacing_m == pytest.approx(0.5, rel=0.05)
+    assert is_loop(taught.path)
+
+
+def test_a_teach_pass_with_too_little_motion_is_refused() -> None:
+    with pytest.raises(TeachError, match=r"drove 0\.\d\d m while recording.*at least 1 m"):
+        record_teach(InProcessRoverLink.from_preset("husky_50kg"), drive=[(0.4, 0.0)])
+
+
+def test_a_rover_without_a_position_is_refused_on_connecting() -> None:
+    sim = RoverSim(rover_preset("husky_50kg"), pose=(math.nan, 0.0, 0.0))
+    with pytest.raises(Exception, match="non-finite state"):
+        record_teach(InProcessRoverLink(sim), drive=LOOP)
+
+
+def test_the_path_file_round_trips_and_bad_files_are_one_line(tmp_path: Path) -> None:
+    path = _taught_loop()
+    good = tmp_path / "loop.csv"
+    good.write_text(path_csv_text(path))
+    again = read_path_file(good)
+    assert np.allclose(again.xy_m, path.xy_m, atol=0.01)  # resampled again
+    cases = {
+        "missing.csv": (None, "no such path file"),
+        "binary.csv": (b"\x89PNG\x00\xff\xfe", "cannot read it as a CSV text file"),
+        "header.csv": ("lat,lon\n1,2\n", "expected the header 'x_m,y_m'"),
+        "columns.csv": ("x_m,y_m\n0,0\n1,0,5\n2,0\n", "line 3 has 3 columns"),
+        "nan.csv": ("x_m,y_m\n0,0\n1,nan\n2,0\n3,0\n", "path line 3"),
+        "word.csv": ("x_m,y_m\n0,0\n1,zero\n2,0\n", "path line 3"),
+        "short.csv": ("x_m,y_m\n0,0\n1,0\n", "a path needs >= 3"),
+        "empty.csv": ("", "the file is empty"),
+    }
+    for name, (content, message) in cases.items():
+        f = tmp_path / name
+        if isinstance(content, bytes):
+            f.write_bytes(content)
+        elif content is not None:
+            f.write_text(content)
+        with pytest.raises(PathFileError) as err:
+            read_path_file(f)
+        text = str(err.value)
+        assert message in text and str(f) in text and "\n" not in text, (name, text)
+
+
+def test_repeating_a_loop_learns_and_the_experience_file_carries_it_on(tmp_path: Path) -> None:
+    """Two trials on the in-process Link: each stores one experience per vertex and speed bin;
+    saved and loaded into a fresh GP the bins are the same, and a third trial (a later run)
+    adds to them."""
+    path = _taught_loop()
+    link = InProcessRoverLink.from_preset("husky_50kg", seed=1)
+    link.connect(1.0)
+    gp = learner.make_history_gp()
+    sizes: list[int] = []
+    out = repeat_path(link, path, 2, gp, np.full(len(path), 0.5),
+                      on_trial=lambda t, _s: sizes.append(t.experiences))  # fmt: skip
+    assert out.status == "completed", out.detail
+    assert [t.number for t in out.trials] == [1, 2]
+    assert 0 < sizes[0] < sizes[1]
+    f = tmp_path / "exp.npz"
+    save_experience(f, gp, path, 2)
+    gp2 = learner.make_history_gp()
+    memory = load_experience(f, gp2, path)
+    assert memory.trials_done == 2 and memory.schedule_mps is None
+    for (v1, b1, a1, g1), (v2, b2, a2, g2) in zip(gp.stored(), gp2.stored(), strict=True):
+        assert (v1, b1) == (v2, b2) and np.array_equal(a1, a2) and np.array_equal(g1, g2)
+    out = repeat_path(link, path, 1, gp2, np.full(len(path), 0.5), first_number=3)
+    assert out.status == "completed" and out.trials[0].number == 3
+    assert len(gp2) > len(gp)
+
+
+def test_the_speed_scheduler_sets_the_next_trial_from_the_drive() -> None:
+    path = _taught_loop()
+    link = InProcessRoverLink.from_preset("husky_50kg", seed=2)
+    link.connect(1.0)
+    config = TABLE_I["experiment_2"]
+    start = initial_schedule(len(path), config)
+    out = repeat_path(link, path, 2, learner.make_history_gp(), start, config)
+    assert out.status == "completed", out.detail
+    assert np.array_equal(out.trials[0].schedule_mps, start)
+    assert np.mean(out.trials[1].schedule_mps) > np.mean(start)  # small errors: faster
+
+
+def test_an_experience_file_refuses_another_path_and_damage(tmp_path: Path) -> None:
+    path = _taught_loop()
+    gp = learner.make_history_gp()
+    gp.add(3, 0.5, np.zeros(8), np.zeros(3))
+    f = tmp_path / "exp.npz"
+    save_experience(f, gp, path, 1)
+    other = TaughtPath.from_segments([(5.0, 0.0)])
+    with pytest.raises(ExperienceFileError, match="learned on another path"):
+        load_experience(f, learner.make_history_gp(), other)
+    damaged = tmp_path / "damaged.npz"
+    damaged.write_bytes(f.read_bytes()[:200])
+    not_npz = tmp_path / "notes.npz"
+    not_npz.write_text("hello")
+    for bad in (damaged, not_npz):
+        with pytest.raises(ExperienceFileError, match="not a readable experience file"):
+            load_experience(bad, learner.make_history_gp(), path)
+    np.savez(tmp_path / "foreign.npz", weights=np.zeros(3))
+    with pytest.raises(ExperienceFileError, match="lacks"):
+        load_experience(tmp_path / "foreign.npz", learner.make_history_gp(), path)
+    assert load_experience(tmp_path / "none.npz", learner.make_history_gp(), path).trials_done == 0
+
+
+def _free_port() -> int:
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _pilot(endpoint: RoverMavlinkEndpoint, legs: list[tuple[float, float, float]]) -> None:
+    """A pilot in MANUAL: arm, drive (duration_s, speed, yaw rate) legs, disarm."""
+    time.sleep(1.0)
+    endpoint.sim.arm()
+    for duration, v, w in legs:
+        endpoint.sim.set_setpoint(v, w)
+        time.sleep(duration)
+    endpoint.sim.disarm()
+
+
+@pytest.mark.slow
+def test_a_pilot_driven_teach_is_recorded_until_the_rover_disarms() -> None:
+    """Nobody commands the rover over the Link: a pilot drives it in MANUAL from arming to
+    disarming, and the teach pass records that drive."""
+    port = _free_port()
+    endpoint = RoverMavlinkEndpoint(RoverSim(rover_preset("husky_50kg")), port, mode="udpout")
+    endpoint.start()
+    pilot = threading.Thread(
+        target=_pilot, args=(endpoint, [(4.0, 0.6, 0.0), (3.0, 0.6, 0.4)]), daemon=True
+    )
+    pilot.start()
+    link = PymavlinkLink(f"udpin://127.0.0.1:{port}")
+    try:
+        taught = record_teach(link, timeout_s=60.0)
+    finally:
+        link.close()
+        endpoint.close()
+    assert taught.ended_for == "the rover disarmed"
+    assert 2.5 < taught.path.length_m < 5.0
+    assert taught.path.xy_m[-1, 1] > 0.2  # the arc turned left (y is west)
+
+
+@pytest.mark.slow
+def test_a_teach_pass_whose_position_turns_nan_is_refused() -> None:
+    port = _free_port()
+    sim = RoverSim(rover_preset("husky_50kg"))
+    endpoint = RoverMavlinkEndpoint(sim, port, mode="udpout")
+    endpoint.start()
+
+    def estimator_fails() -> None:
+        time.sleep(3.0)
+        sim.state = replace(sim.state, x_m=math.nan)
+
+    threading.Thread(target=estimator_fails, daemon=True).start()
+    link = PymavlinkLink(f"udpin://127.0.0.1:{port}")
+    try:
+        with pytest.raises(TeachError, match=r"position is not finite \(NaN\)"):
+            record_teach(link, drive=[(20.0, 0.0)], timeout_s=30.0)
+    finally:
+        link.close()
+        endpoint.close()
+
+
+def test_a_failed_solve_stops_the_rover_in_hold_instead_of_crashing() -> None:
+    """A local GP whose kernel matrix cannot be factorised (negative noise variances, as a
+    broken hyperparameter file would give) fails the step: the drive says so and the rover is
+    sent a zero velocity and Hold."""
+    gp = learner.make_history_gp()
+    gp.noise_variances = np.full(3, -1.0)
+    for vertex in range(4):
+        gp.add(vertex, 0.5, np.full(8, 0.1), np.zeros(3))
+    link = InProcessRoverLink.from_preset("husky_50kg")
+    drive = drive_path(link, TaughtPath.from_segments([(4.0, 0.0)]), 0.5, gp=gp)
+    assert drive.stopped_for.startswith("the NMPC solve failed at t=0.0 s")
+    assert not drive.reached_end
+    assert link.read_state().mode == "HOLD"

@@ -1,0 +1,291 @@
+"""`rover-path teach` / `rover-path repeat`: the user's teach-and-repeat workflow, end to end
+against `vehicle-sim --vehicle husky_50kg` and in process; every refusal is one line."""
+
+import json
+import math
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from experiments.rover import learner
+from experiments.rover.experience_file import save_experience
+from planners.rover.path import TaughtPath
+from planners.rover.path_file import path_csv_text
+from scripts.rover_path import main
+from vehicle_sim.rover import RoverSim, rover_preset
+from vehicle_sim.rover.mavlink_rover import RoverMavlinkEndpoint
+
+REPO = Path(__file__).resolve().parents[2]
+OPEN = "2:0,1.5:0.5,1:0"  # an open path of 4.5 m, turning left
+LOOP = "2:0,4.712:0.667,2:0,4.712:0.667"  # 13.4 m, back where it started
+
+
+def _free_port() -> int:
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _one_line_error(capsys: pytest.CaptureFixture[str]) -> str:
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1, err
+    return err[0]
+
+
+@pytest.fixture
+def files(tmp_path: Path) -> dict[str, Path]:
+    """A straight 6 m open path, a 16 m loop, and an experience file of the open one."""
+    open_path = TaughtPath.from_segments([(6.0, 0.0)])
+    loop = TaughtPath.from_segments([(3.0, 0.0), (5.0 * math.pi / 2, 0.4)] * 2)
+    out = {"open": tmp_path / "open.csv", "loop": tmp_path / "loop.csv"}
+    out["open"].write_text(path_csv_text(open_path))
+    out["loop"].write_text(path_csv_text(loop))
+    out["open_exp"] = tmp_path / "open.npz"
+    save_experience(out["open_exp"], learner.make_history_gp(), open_path, 1)
+    return out
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["repeat", "--path", "{tmp}/missing.csv"], "no such path file; teach it again"),
+        (["repeat", "--path", "{tmp}/nan.csv"], "nan.csv: path line 3"),
+        (["repeat", "--path", "{tmp}/cols.csv"], "line 2 has 3 columns, expected 2"),
+        (["repeat", "--path", "{tmp}/header.csv"], "expected the header 'x_m,y_m'"),
+        (["repeat", "--path", "{tmp}/binary.csv"], "cannot read it as a CSV text file"),
+        (["repeat", "--path", "{loop}", "--experience", "{open_exp}"], "learned on another path"),
+        (["repeat", "--path", "{loop}", "--experience", "{tmp}/junk.npz"], "not a readable"),
+        (["repeat", "--path", "{open}", "--trials", "2"], "is open (its end is 6.0 m"),
+        (["repeat", "--path", "{loop}", "--scheduler", "fast"], "--scheduler 'fast' is unknown"),
+        (["repeat", "--path", "{loop}", "--speed=-1"], "--speed: must be a finite number"),
+        (["repeat", "--path", "{loop}", "--trials", "0"], "--trials: must be >= 1"),
+        (["repeat", "--path", "{loop}", "--url", "tcp:1.2.3.4:5"], "unsupported MAVLink URL"),
+        (["repeat", "--path", "{loop}", "--link", "inprocess", "--vehicle", "x"], "unknown rover"),
+        (["teach", "--out", "{tmp}/p.csv", "--link", "inprocess"], "pass --drive"),
+        (["teach", "--out", "{tmp}/p.csv", "--drive", "3"], "is not LENGTH_M:CURVATURE_1PM"),
+        (["teach", "--out", "{tmp}/p.csv", "--drive=-3:0"], "need a length > 0"),
+        (["teach", "--out", "{tmp}"], "--out"),
+    ],
+)
+def test_bad_input_is_one_line_and_exit_2(
+    tmp_path: Path, files: dict[str, Path], capsys, argv: list[str], message: str
+) -> None:
+    (tmp_path / "nan.csv").write_text("x_m,y_m\n0,0\n1,nan\n2,0\n3,0\n")
+    (tmp_path / "cols.csv").write_text("x_m,y_m\n0,0,1\n1,0\n2,0\n")
+    (tmp_path / "header.csv").write_text("north,east\n0,0\n1,0\n2,0\n")
+    (tmp_path / "binary.csv").write_bytes(b"\xff\xfe\x00\x89")
+    (tmp_path / "junk.npz").write_text("not numpy")
+    names = {"tmp": tmp_path, **files}
+    args = [a.format(**names) for a in argv]
+    assert main(args) == 2
+    line = _one_line_error(capsys)
+    assert line.startswith("rover-path") and "error:" in line and message in line, line
+
+
+def test_a_teach_pass_with_too_little_motion_is_one_line_exit_1(tmp_path: Path, capsys) -> None:
+    out = tmp_path / "p.csv"
+    argv = ["teach", "--link", "inprocess", "--drive", "0.5:0", "--out", str(out)]
+    assert main(argv) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert "drove 0." in err[-1] and "teach again" in err[-1]
+    assert not out.exists()
+
+
+def _json(folder: Path) -> dict:
+    return json.loads((folder / "repeat.json").read_text())
+
+
+@pytest.mark.slow
+def test_teach_and_repeat_in_process_go_on_learning_across_runs(tmp_path: Path, capsys) -> None:
+    path, exp, rep = tmp_path / "loop.csv", tmp_path / "loop.npz", tmp_path / "rep"
+    assert main(["teach", "--link", "inprocess", "--drive", LOOP, "--out", str(path)]) == 0
+    assert "(a loop)" in capsys.readouterr().err
+    common = ["repeat", "--link", "inprocess", "--path", str(path), "--experience", str(exp)]
+    assert main([*common, "--trials", "2", "--out", str(rep)]) == 0
+    out = capsys.readouterr().out.strip().splitlines()
+    assert [line.split(":")[0] for line in out] == ["trial 1", "trial 2"]
+    first = _json(rep)
+    assert first["trial"] == [1, 2] and first["status"] == "completed"
+    assert first["experiences"][0] < first["experiences"][1]
+    assert (rep / "repeat.png").stat().st_size > 5_000
+    assert main([*common, "--trials", "1", "--scheduler", "experiment_2", "--out", str(rep)]) == 0
+    captured = capsys.readouterr()
+    assert f"{first['experiences_after']} experiences from 2 trials" in captured.err
+    assert captured.out.startswith("trial 3:")
+    second = _json(rep)
+    assert second["trials_before"] == 2 and second["trial"] == [3]
+    assert second["experiences_after"] > first["experiences_after"]
+    assert second["all_trials"]["trial"] == [1, 2, 3]  # the report covers every run
+    assert second["all_trials"]["max_e_lat_m"][:2] == first["max_e_lat_m"]
+
+
+@pytest.mark.slow(expected_s=120)
+def test_teach_and_repeat_against_vehicle_sim(tmp_path: Path) -> None:
+    """The README's recipe: `vehicle-sim --vehicle husky_50kg`, a scripted teach drive of an
+    open path, two trials with --drive-back, then a second run that reloads the experience."""
+    port = _free_port()
+    sim = subprocess.Popen(
+        [sys.executable, "-m", "scripts.vehicle_sim_cli", "--vehicle", "husky_50kg",
+         "--offboard-port", str(port)],
+        cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+
+    def rover_path(*argv: str) -> subprocess.CompletedProcess:
+        return subprocess.run(
+            [sys.executable, "-m", "scripts.rover_path", *argv, "--url", f"udpin:127.0.0.1:{port}"],
+            cwd=REPO, capture_output=True, text=True, timeout=400,
+        )  # fmt: skip
+
+    path, exp, rep = tmp_path / "open.csv", tmp_path / "open.npz", tmp_path / "rep"
+    try:
+        taught = rover_path("teach", "--drive", OPEN, "--out", str(path))
+        assert taught.returncode == 0, taught.stderr
+        assert "open: its end is" in taught.stderr
+        assert path.read_text().startswith("x_m,y_m\n")
+        common = ["--path", str(path), "--experience", str(exp), "--out", str(rep)]
+        run1 = rover_path("repeat", *common, "--trials", "2", "--speed", "0.5", "--drive-back")
+        assert run1.returncode == 0, run1.stderr
+        assert "driving back to the start" in run1.stderr
+        size1, first = exp.stat().st_size, _json(rep)
+        assert first["trial"] == [1, 2] and all(first["reached_end"])
+        assert first["experiences"][0] < first["experiences"][1]
+        run2 = rover_path("repeat", *common, "--trials", "1", "--drive-back")
+        assert run2.returncode == 0, run2.stderr
+        assert "from 2 trials" in run2.stderr and run2.stdout.startswith("trial 3:")
+        second = _json(rep)
+        assert second["experiences_after"] > first["experiences_after"]
+        assert exp.stat().st_size > size1
+    finally:
+        sim.terminate()
+        sim.wait(10.0)
+
+
+def _endpoint(port: int) -> RoverMavlinkEndpoint:
+    endpoint = RoverMavlinkEndpoint(
+        RoverSim(rover_preset("husky_50kg")), port, setpoint_timeout_s=2.0, mode="udpout"
+    )
+    endpoint.start()
+    return endpoint
+
+
+@pytest.mark.slow
+def test_a_pilot_switching_to_manual_mid_repeat_ends_it_with_exit_3(
+    files: dict[str, Path], tmp_path: Path, capsys
+) -> None:
+    port = _free_port()
+    endpoint = _endpoint(port)
+    pilot = threading.Timer(4.0, endpoint._set_mode, args=(1, 0))  # MANUAL, as an RC switch
+    pilot.start()
+    argv = ["repeat", "--path", str(files["loop"]), "--url", f"udpin://127.0.0.1:{port}",
+            "--experience", str(tmp_path / "e.npz"), "--out", str(tmp_path / "rep")]  # fmt: skip
+    try:
+        code = main(argv)
+    finally:
+        pilot.cancel()
+        endpoint.close()
+    err = capsys.readouterr().err
+    assert code == 3, err
+    assert "left OFFBOARD for MANUAL during trial 1" in err
+    assert not endpoint.holding  # nothing was commanded over the pilot
+    assert _json(tmp_path / "rep")["status"] == "handed_over"
+
+
+@pytest.mark.slow
+def test_a_lost_link_mid_repeat_stops_with_exit_1(
+    files: dict[str, Path], tmp_path: Path, capsys
+) -> None:
+    port = _free_port()
+    endpoint = _endpoint(port)
+    cut = threading.Timer(4.0, endpoint.close)  # the radio goes: no more telemetry
+    cut.start()
+    argv = ["repeat", "--path", str(files["loop"]), "--url", f"udpin://127.0.0.1:{port}",
+            "--experience", str(tmp_path / "e.npz"), "--out", str(tmp_path / "rep")]  # fmt: skip
+    try:
+        code = main(argv)
+    finally:
+        cut.cancel()
+        endpoint.close()
+    err = capsys.readouterr().err
+    assert code == 1, err
+    assert "trial 1 stopped: link lost" in err and "sent Hold" in err
+    summary = _json(tmp_path / "rep")
+    assert summary["status"] == "stopped" and summary["reached_end"] == [False]
+    assert np.isfinite(summary["max_e_lat_m"][0])
+
+
+def _wait_for(proc: subprocess.Popen, text: str, timeout_s: float = 60.0) -> None:
+    """Read the process's stderr until a line holds ``text``."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        line = proc.stderr.readline()
+        if text in line:
+            return
+        assert line or proc.poll() is None, f"exited {proc.returncode} before {text!r}"
+    raise AssertionError(f"no {text!r} within {timeout_s} s")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("sig", "code"), [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_ctrl_c_or_sigterm_mid_repeat_sends_hold(
+    files: dict[str, Path], tmp_path: Path, sig: signal.Signals, code: int
+) -> None:
+    port = _free_port()
+    endpoint = _endpoint(port)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "scripts.rover_path", "repeat", "--path", str(files["loop"]),
+         "--url", f"udpin://127.0.0.1:{port}", "--experience", str(tmp_path / "e.npz"),
+         "--out", str(tmp_path / "rep")],
+        cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        _wait_for(proc, "no experience yet")
+        deadline = time.monotonic() + 30.0
+        while not endpoint.offboard and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert endpoint.offboard
+        time.sleep(1.0)  # driving
+        proc.send_signal(sig)
+        assert proc.wait(30.0) == code, proc.stderr.read()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(5.0)
+        endpoint.close()
+    assert endpoint.holding and not endpoint.offboard  # the rover was sent Hold
+
+
+@pytest.mark.slow
+def test_ctrl_c_ends_a_pilot_driven_teach_and_writes_the_path(tmp_path: Path) -> None:
+    """A pilot drives in MANUAL; Ctrl-C on the companion ends the recording and the path so
+    far is written."""
+    port = _free_port()
+    endpoint = _endpoint(port)
+    out = tmp_path / "p.csv"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "scripts.rover_path", "teach", "--out", str(out),
+         "--url", f"udpin://127.0.0.1:{port}"],
+        cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        _wait_for(proc, "teaching over pymavlink")
+        endpoint.sim.arm()
+        endpoint.sim.set_setpoint(0.8, 0.0)
+        _wait_for(proc, "armed: recording")
+        time.sleep(4.0)
+        proc.send_signal(signal.SIGINT)
+        assert proc.wait(30.0) == 0, proc.stderr.read()
+        err = proc.stderr.read()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(5.0)
+        endpoint.close()
+    assert "recording ended: Ctrl-C" in err
+    assert out.read_text().startswith("x_m,y_m\n")
