@@ -56,6 +56,22 @@ def test_a_cause_whose_fit_sits_on_its_search_bound_is_not_named():
     assert best.effects["payload"]["mass_ratio"] == pytest.approx(1.8, rel=1e-3)
 
 
+def test_a_cause_a_later_one_makes_redundant_is_dropped():
+    """Body drag (0.03 per axis) with a trace of isotropic drag (0.002), under 0.01 N of noise:
+    isotropic_drag is taken first (it explains most of a nearly isotropic drag), then
+    body_drag; given body_drag, what isotropic_drag adds is below the floor (0.3 % of the
+    weight), though measurable at this noise, so it is dropped: only body_drag is named."""
+    truth = {
+        "body_drag": {"c_n_per_mps2": (0.03, 0.03, 0.03)},
+        "isotropic_drag": {"k_n_per_mps2": 0.002},
+    }
+    data = with_residual(synthetic(n=1200), truth, noise_n=0.01)
+    said: list[str] = []
+    result = select_causes(data, {}, BATTERY, FORCE_CAUSES, progress=said.append)
+    assert "accepted isotropic_drag" in said and "accepted body_drag" in said
+    assert result.accepted == ("body_drag",)
+
+
 def test_noise_alone_names_nothing():
     data = with_residual(synthetic(n=1200), {}, noise_n=0.3)
     result = select_causes(data, {}, BATTERY, FORCE_CAUSES)
