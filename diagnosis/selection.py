@@ -206,7 +206,7 @@ def select_causes(
     # Backward pass: a cause accepted early (the simplest of near-equals) may be made redundant
     # by a later one (isotropic_drag taken first for a body drag that body_drag then fits in
     # full). Drop an accepted cause whose removal, the others refitted, costs less than the
-    # floor and is not significant.
+    # floor or is not significant (what the forward pass would not have accepted).
     for score in list(accepted):
         if len(chosen) < 2:
             break

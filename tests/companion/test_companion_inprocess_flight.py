@@ -235,3 +235,67 @@ def test_cli_log_onto_the_mission_file_is_refused_and_the_mission_kept(
     err = capsys.readouterr().err
     assert code == 2 and err.count("\n") == 1 and "is an input being read" in err, err
     assert mission.read_text() == LINE.read_text()
+
+
+class RecordingLink(InProcessLink):
+    """The real in-process link, recording what the companion sends once ``recording``."""
+
+    def __init__(self, sim: Simulator) -> None:
+        super().__init__(sim)
+        self.recording = False
+        self.sent: list[object] = []
+
+    def send_velocity(self, command: VelocityCommand) -> None:
+        if self.recording:
+            self.sent.append(command)
+        super().send_velocity(command)
+
+    def hold(self):
+        if self.recording:
+            self.sent.append("hold")
+        return super().hold()
+
+    def land(self):
+        if self.recording:
+            self.sent.append("land")
+        return super().land()
+
+
+def test_ctrl_c_while_following_brakes_before_holding_and_landing() -> None:
+    """A flight ended mid-mission sends zero velocity first (the vehicle brakes even if HOLD
+    never comes), then HOLD, then LAND, and nothing else."""
+    sim = Simulator(load_sim_config("iris"), seed=0)
+    link = RecordingLink(sim)
+    mission = load_mission(LINE)
+
+    following_since: list[float] = []
+
+    def operator(tick) -> None:  # Ctrl-C after 3 s of following, at speed
+        if tick.state.mode == "OFFBOARD":
+            following_since.append(tick.t_s)
+            if tick.t_s - following_since[0] >= 3.0:
+                link.recording = True
+                raise KeyboardInterrupt
+
+    outcome = fly_mission(
+        link, make_planner("pd", 3.0), reference_of(mission), mission, RunnerConfig(), operator,
+        lambda _m: None,
+    )  # fmt: skip
+    assert outcome.status == "interrupted" and outcome.disarmed
+    assert link.sent == [VelocityCommand((0.0, 0.0, 0.0), 0.0), "hold", "land"]
+
+
+def test_a_vehicle_slow_but_short_of_the_goal_has_not_reached_it() -> None:
+    """Commands limited to 0.2 m/s cover 0.2 m/s x (the reference's 6.7 s + 5 s of settle time)
+    = 2.3 m of the 20 m line: slower than arrive_speed_mps (0.3 m/s) but 17.7 m short, so the
+    goal is not reached (slow is not arrived)."""
+    sim = Simulator(load_sim_config("iris"), seed=0)
+    mission = load_mission(LINE)
+    reference = reference_of(mission)
+    outcome = fly_mission(
+        InProcessLink(sim), make_planner("pd", 0.2), reference, mission,
+        RunnerConfig(settle_timeout_s=5.0), lambda _tick: None, lambda _m: None,
+    )  # fmt: skip
+    assert outcome.status == "goal_not_reached", outcome.detail
+    assert outcome.goal_error_m == pytest.approx(20.0 - 0.2 * (reference.duration_s + 5.0), abs=0.5)
+    assert outcome.disarmed

@@ -67,6 +67,18 @@ class CountingInProcessLink(InProcessLink):
 
 @pytest.mark.parametrize("mode", PILOT_MODES)
 def test_pilot_takeover_in_process_hands_over_and_commands_nothing(mode: str) -> None:
+    _take_over_in_process(mode, TAKEOVER_AFTER_S)
+
+
+def test_a_takeover_soon_after_offboard_is_handed_over_at_once() -> None:
+    """Once telemetry has shown OFFBOARD, any other mode is the pilot's, even within the grace
+    the runner allows telemetry to first report OFFBOARD (2.5 s): no setpoint follows it."""
+    _take_over_in_process("POSCTL", 0.5)
+
+
+def _take_over_in_process(mode: str, after_s: float) -> None:
+    """Fly LINE in process; ``after_s`` of following in OFFBOARD, the pilot switches to
+    ``mode``: the companion hands over and sends nothing more."""
     sim = Simulator(load_sim_config("iris"), seed=5)
     link = CountingInProcessLink(sim)
     mission = load_mission(LINE)
@@ -76,7 +88,7 @@ def test_pilot_takeover_in_process_hands_over_and_commands_nothing(mode: str) ->
         if tick.state.mode != "OFFBOARD" or link.counting:
             return
         following_since.append(tick.t_s)
-        if tick.t_s - following_since[0] >= TAKEOVER_AFTER_S:
+        if tick.t_s - following_since[0] >= after_s:
             assert sim.set_mode(FlightMode[mode]).accepted
             link.counting = True
 

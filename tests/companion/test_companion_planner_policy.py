@@ -73,6 +73,14 @@ def test_good_command_is_sent_saturated_with_reference_time_and_ref_pos() -> Non
     assert d.pred_vel_ned_mps is None
 
 
+def test_a_command_within_the_limits_is_sent_unchanged_and_a_descent_is_held_to_down_mps():
+    """0.5 m/s horizontal is under 2 m/s: not scaled up to the limit; 2 m/s down is cut to
+    1 m/s (down_mps), a -3 rad/s yaw rate to -0.5 rad/s."""
+    sent = LIMITS.apply(np.array([0.3, -0.4, 2.0]), -3.0)
+    assert sent == VelocityCommand((0.3, -0.4, 1.0), -0.5)
+    assert LIMITS.apply(np.zeros(3), 0.2) == VelocityCommand((0.0, 0.0, 0.0), 0.2)
+
+
 @pytest.mark.parametrize(
     ("answer", "reason"),
     [

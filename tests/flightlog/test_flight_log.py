@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from flightlog.reader import read_log
+from flightlog.reader import log_rates_hz, rate_shortfalls, read_log
 from flightlog.schema import (
     REQUIRED_COLUMNS,
     FlightLogError,
@@ -135,3 +135,15 @@ def test_gaps_are_an_error_on_request_and_split_otherwise(tmp_path):
     parts = split_at_gaps(read_flight_log(path), max_gap_s=0.5)
     assert [p.n_rows for p in parts] == [3, 2, 1]
     assert parts[1]["t_s"][0] == 1.5
+
+
+def test_a_csv_logs_rate_is_its_row_spacing_across_a_gap():
+    """A companion CSV written at 10 Hz (0.1 s rows) for 10 s, then 10 s of nothing (the
+    link dropped), then 10 s more: 10 Hz, fast enough for fit-gp and diagnose; 200 rows over
+    the 30 s span (6.7 Hz) would be refused for rows the log does have."""
+    rec = FlightLogRecorder({"source": "test"})
+    for i in [*range(100), *range(200, 300)]:
+        rec.append(_row(0.1 * i))
+    log = rec.to_log()
+    assert log_rates_hz(log) == {"local_position": 10.0, "velocity_command": 10.0}
+    assert rate_shortfalls(log, "fit-gp") == rate_shortfalls(log, "diagnose") == []

@@ -10,9 +10,14 @@ from gp.lag_identification import identify_velocity_lag
 from gp.training import TrainingConfig, train_residual_model
 
 
-def lag_log(tau_s, tau_d_s, seed=0, n_rows=1500, dt_s=0.02, noise_mps=0.002, vertical=True):
+def lag_log(
+    tau_s, tau_d_s, seed=0, n_rows=1500, dt_s=0.02, noise_mps=0.002, vertical=True, horizontal=True
+):
     """A log of a vehicle whose velocity follows piecewise-constant commands with a first-order
-    lag (exact discretisation), plus measurement-like noise [m/s]."""
+    lag (exact discretisation), plus noise [m/s] added to the velocity at every step.
+
+    ``vertical``: True for down commands up to 1 m/s, False for none, or a number: down commands
+    up to that many m/s. ``horizontal``: False commands no north or east velocity."""
     rng = np.random.default_rng(seed)
     taus = np.array([tau_s, tau_s, tau_d_s])
     rec = FlightLogRecorder({"source": "synthetic-lag"})
@@ -20,7 +25,9 @@ def lag_log(tau_s, tau_d_s, seed=0, n_rows=1500, dt_s=0.02, noise_mps=0.002, ver
     cmd = np.zeros(3)
     for k in range(n_rows):
         if k % 60 == 0:
-            cmd = rng.uniform(-2.0, 2.0, 3) * np.array([1.0, 1.0, 0.5 if vertical else 0.0])
+            down = 1.0 if vertical is True else float(vertical)
+            north_east = 2.0 if horizontal else 0.0
+            cmd = rng.uniform(-1.0, 1.0, 3) * np.array([north_east, north_east, down])
         rec.append(
             {
                 "t_s": k * dt_s,
@@ -55,6 +62,28 @@ def test_identifies_randomly_drawn_time_constants(seed):
     assert np.linalg.norm(found.lag_rmse_mps) < 0.2 * np.linalg.norm(found.kinematic_rmse_mps)
 
 
+def test_one_step_errors_are_the_added_noise_with_the_lag_and_the_lag_itself_without():
+    """With the identified lag the one-step prediction misses by the velocity noise added at
+    each step (0.002 m/s) on every axis; the kinematic prediction v(k+1) = u(k) misses by the
+    whole lag, the RMS of v(k+1) - u(k) over the log's rows."""
+    log = lag_log(0.5, 0.3, seed=3)
+    found = identify_velocity_lag([log])
+    np.testing.assert_allclose(found.lag_rmse_mps, 0.002, rtol=0.1)
+    vel = np.column_stack([log[f"vel_{a}_mps"] for a in "ned"])
+    cmd = np.column_stack([log[f"cmd_vel_{a}_mps"] for a in "ned"])
+    kinematic = np.sqrt(np.mean((vel[1:] - cmd[:-1]) ** 2, axis=0))
+    np.testing.assert_allclose(found.kinematic_rmse_mps, kinematic, rtol=1e-9)
+    assert found.n_rows == log.n_rows - 1
+
+
+def test_a_weakly_excited_vertical_axis_is_identified():
+    """Down commands of up to 0.1 m/s leave an RMS command gap above 0.02 m/s: enough to fit
+    the vertical time constant, which differs from the horizontal one."""
+    found = identify_velocity_lag([lag_log(0.5, 0.3, seed=3, vertical=0.1)])
+    assert found.vertical_identified
+    assert found.tau_d_s == pytest.approx(0.3, rel=0.05)
+
+
 def test_unexcited_vertical_axis_takes_the_horizontal_time_constant():
     found = identify_velocity_lag([lag_log(0.6, 0.2, vertical=False)])
     assert not found.vertical_identified
@@ -70,6 +99,9 @@ def test_hover_only_logs_are_refused_in_one_line():
     assert "\n" not in str(exc.value)
     with pytest.raises(DatasetError, match="no usable rows"):
         identify_velocity_lag([log.slice(0, 2)])
+    # climbs and descents only: the vertical axis moves, the horizontal lag is not in the log
+    with pytest.raises(DatasetError, match="never command a horizontal velocity change"):
+        identify_velocity_lag([lag_log(0.5, 0.5, horizontal=False)])
 
 
 def test_training_against_first_order_lag_identifies_missing_time_constants():

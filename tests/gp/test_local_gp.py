@@ -36,6 +36,16 @@ def test_local_dataset_draws_only_from_neighbouring_vertices_and_speeds():
     assert X.shape[0] <= config.max_local_points
 
 
+def test_reversing_and_driving_forward_slowly_are_different_speed_bins():
+    """Bin l holds speeds in [l w, (l + 1) w): -0.1 m/s is bin -1, +0.1 m/s bin 0, so a slow
+    reverse never lends its experience to a slow forward pass (speed window 0)."""
+    gp = _local(ExperienceBinsConfig(speed_bin_mps=0.25, vertex_window=0, speed_window=0))
+    gp.add(3, -0.1, [0.0, 0.0], [1.0])
+    gp.add(3, 0.1, [0.0, 0.0], [2.0])
+    np.testing.assert_array_equal(gp.local_data(3, 0.2)[1][:, 0], [2.0])
+    np.testing.assert_array_equal(gp.local_data(3, -0.2)[1][:, 0], [1.0])
+
+
 def test_prediction_equals_exact_gp_on_the_local_data():
     rng = np.random.default_rng(0)
     gp = _local()

@@ -61,6 +61,37 @@ def test_optimising_inducing_positions_does_not_lower_the_bound():
     assert not np.allclose(moved.inducing_points_, fixed.inducing_points_)
 
 
+def _sine(seed: int, n: int = 300) -> tuple[np.ndarray, np.ndarray]:
+    """y = sin(6 x) + N(0, NOISE_STD^2) on x in [0, 5] m: a period of 1.05 m."""
+    rng = np.random.default_rng(seed)
+    X = rng.uniform(0.0, 5.0, (n, 1))
+    return X, np.sin(6.0 * X[:, 0]) + NOISE_STD * rng.normal(size=n)
+
+
+def test_restarts_escape_a_start_that_explains_everything_as_noise():
+    """From a 100 m lengthscale over 5 m of data and the whole variance as noise, L-BFGS-B
+    stays where it starts (flat in the lengthscale); a random restart finds the sine, and the
+    noise it leaves is the noise that was added."""
+    X, y = _sine(0)
+    poor = {"kernel": SquaredExponentialARD(np.array([100.0]), 0.01), "noise_variance": 0.5}
+    model = SparseGP(
+        **poor, inducing=InducingConfig("random", m=30), n_restarts=3, random_state=0
+    ).fit(X, y)
+    np.testing.assert_allclose(np.sqrt(model.noise_variances_), NOISE_STD, rtol=0.2)
+    assert model.kernels_[0].lengthscales[0] < 1.0  # shorter than the period
+
+
+def test_a_fit_on_a_restart_subsample_reports_the_bound_on_all_rows():
+    """The restarts run on a subsample (100 of 300 rows), but the model is then refined on
+    every row: its bound is the one a fit without subsampling reaches, not the subsample's."""
+    X, y = _sine(1)
+    fits = [
+        SparseGP(inducing=InducingConfig("random", m=30), restart_subsample=rows).fit(X, y)
+        for rows in (100, 2000)
+    ]
+    assert fits[0].objective_[0] == pytest.approx(fits[1].objective_[0], rel=1e-4)
+
+
 def test_estimator_api_stores_params_and_returns_self_with_fixed_shapes():
     kern = SquaredExponentialARD(np.ones(2), 1.0)
     inducing = InducingConfig("random", m=5)

@@ -63,6 +63,27 @@ def test_sqp_whose_qps_daqp_cannot_factor_reports_failure():
     assert "QP failed" in out.reason
 
 
+@pytest.mark.parametrize("side", [1.0, -1.0])
+def test_a_state_row_the_input_bounds_cannot_meet_is_reported_violated(side):
+    """A state row asking for du_0 in [5, 6] (or [-6, -5]) with |du| <= 1: no du meets both,
+    so the solution violates one of them by at least 2 (the best split is du_0 = 3: row short
+    by 2, bound exceeded by 2), whichever one the solver gives up."""
+    qp = CondensedQp(2, 1, 1, rho=1e5, eps=1.0)
+    row = side * np.array([5.0, 6.0])
+    _, violation = qp.solve(
+        hess=np.eye(2),
+        grad=np.zeros(2),
+        a_x=np.array([[1.0, 0.0]]),
+        lba_x=np.array([row.min()]),
+        uba_x=np.array([row.max()]),
+        a_h=np.zeros((1, 2)),
+        lba_h=np.array([-1.0]),
+        lbx=-np.ones(2),
+        ubx=np.ones(2),
+    )
+    assert violation >= 2.0 - 1e-9
+
+
 def test_qp_data_with_nan_or_infinite_bounds_fail_without_raising():
     """DAQP (through CasADi) raises on ill-posed bounds (NaN, lower bound +inf): a solve on
     such data is a failed QP, as the SQP reports it, not an exception."""

@@ -18,8 +18,10 @@ from planners.velocity_history import with_velocity_history
 SEED = 20261127
 
 
-def _formulation(rng: np.random.Generator) -> NmpcFormulation:
-    """first_order_lag with velocity history and a drawn smooth residual g(vel, vel_prev)."""
+def _formulation(rng: np.random.Generator, batch: bool = False) -> NmpcFormulation:
+    """first_order_lag with velocity history and a drawn smooth residual g(vel, vel_prev) =
+    tanh(W z); with ``batch``, also given in NumPy form (g and dg/dz = (1 - g^2) W at many rows),
+    as a GP's mean flies, so the fast path's own NumPy RK4 and history shift linearise it."""
     features = feature_definition(
         "velocity_history", "first_order_lag", residual_steps=5, tau_s=0.7, tau_d_s=0.4
     )
@@ -28,7 +30,13 @@ def _formulation(rng: np.random.Generator) -> NmpcFormulation:
     weights = ca.DM(rng.normal(0.0, 0.5, (3, 6)))
     fn = ca.Function("g", [z], [ca.tanh(weights @ z)])
     config = NmpcConfig(horizon_steps=8, n_obstacles=2)
-    return NmpcFormulation(model, config, ResidualTerm(fn, features.planner_map(model)))
+
+    def g_batch(zs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        g = np.tanh(zs @ np.asarray(weights).T)  # (n, 3)
+        return g, (1.0 - g**2)[:, :, None] * np.asarray(weights)[None, :, :]
+
+    residual = ResidualTerm(fn, features.planner_map(model), g_batch if batch else None)
+    return NmpcFormulation(model, config, residual)
 
 
 def test_the_step_shifts_the_velocity_into_the_history():
@@ -42,9 +50,10 @@ def test_the_step_shifts_the_velocity_into_the_history():
     assert not np.allclose(x_next[vel], x[vel])  # the velocity itself moved on
 
 
-def test_batched_qp_data_equals_the_symbolic_linearisation_with_history():
+@pytest.mark.parametrize("batch", [False, True])
+def test_batched_qp_data_equals_the_symbolic_linearisation_with_history(batch):
     rng = np.random.default_rng(SEED)
-    f = _formulation(rng)
+    f = _formulation(rng, batch)
     lins = {
         kind: GaussNewtonSqp(f, SqpOptions(linearisation=kind))._lin
         for kind in ("batched", "symbolic")

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from planners.rover.path import TaughtPath
+from planners.rover.path import TaughtPath, project_arc_length
 from planners.rover.speed_scheduler import TABLE_I, next_schedule
 from planners.rover.unicycle_nmpc import (
     ConstantDisturbance,
@@ -43,6 +43,31 @@ def test_errors_on_the_path_carry_no_vertex_spacing_on_a_turn() -> None:
     assert left.e_lat_m == pytest.approx(sagitta - 0.1, abs=0.002)
 
 
+@pytest.mark.parametrize("radius", [0.7, 1.3])
+def test_a_fix_off_an_arc_projects_along_the_radius(radius: float) -> None:
+    """A robot 0.3 m inside or outside a 1 m-radius left arc, on the radius through the
+    midpoint between two vertices, projects onto that midpoint (the chord's perpendicular
+    bisector), although the nearest vertex's tangent puts it radius * sin(0.125) - 0.125 =
+    -0.038 or +0.037 m along; e_L is the offset (positive outside: right of a left turn) plus
+    the chord's sagitta spacing^2 / 8."""
+    path = TaughtPath.from_segments([(1.0, 0.0), (math.pi / 2, 1.0), (1.0, 0.0)])
+    i = int(np.searchsorted(path.s_m, 1.5))
+    s = 0.5 * (path.s_m[i] + path.s_m[i + 1])
+    x, y = 1.0 + radius * math.sin(s - 1.0), 1.0 - radius * math.cos(s - 1.0)
+    assert abs(path.localise(x, y, s - 1.0).s_m - s) > 0.03
+    fix = path.localise_on_path(x, y, s - 1.0)
+    assert fix.s_m == pytest.approx(s, abs=0.005)
+    assert fix.e_lat_m == pytest.approx(radius - 1.0 + path.spacing_m**2 / 8, abs=0.002)
+
+
+def test_arc_length_of_points_beside_a_path_heading_north() -> None:
+    """On a straight path from (0, 0) north to (0, 10), a point's arc length is its north
+    coordinate [m], whatever its sideways offset."""
+    path = TaughtPath.from_csv_text("0,0\n0,5\n0,10\n")
+    points = np.array([[0.0, 2.3], [0.4, 2.3], [-0.4, 6.61]])
+    np.testing.assert_allclose(project_arc_length(path, points, hint=0), [2.3, 2.3, 6.61])
+
+
 def test_path_from_csv_text_and_bad_rows() -> None:
     path = TaughtPath.from_csv_text("x_m,y_m\n0,0\n1,0\n2,0\n", spacing_m=0.5)
     assert len(path) == 5 and path.length_m == pytest.approx(2.0)
@@ -76,6 +101,16 @@ def test_scheduler_raises_lowers_and_keeps_by_eq_31() -> None:
     assert out == pytest.approx([0.65, 0.4, 0.5, 0.4])
 
 
+def test_feature_counts_in_the_deadband_keep_the_speed() -> None:
+    """Eq. 31 with lambda_F = 30 and lambda_db = 1.1: more than 30 features (the rest small)
+    raise the speed, fewer than 30 / 1.1 = 27.3 lower it, 28 and 30 keep it."""
+    c = TABLE_I["experiment_2"]
+    feats = np.array([31.0, 30.0, 28.0, 27.0])
+    small = np.full(4, 0.01)
+    out = next_schedule(np.full(4, 0.5), small, small, small, feats, c)
+    assert out == pytest.approx([0.5 + c.gamma_up_mps, 0.5, 0.5, 0.5 - c.gamma_down_mps])
+
+
 def test_scheduler_never_schedules_below_the_first_trials_speed() -> None:
     # [Ostafew16] reports no scheduled speed below 0.35 m/s; errors everywhere keep v_init
     for c in TABLE_I.values():
@@ -96,9 +131,30 @@ def test_nmpc_turns_towards_a_path_on_its_left_and_learned_drift_changes_the_ans
     nmpc.reset()
     w1 = nmpc.solve(np.zeros(3), v, ref, 0.0, model=drift)
     assert w1[0] < w0[0]
-    poses = unicycle_rollout(np.zeros(3), v, w1, np.tile([0.0, 0.2, 0.0], (K, 1)), 0.1)
-    assert poses.shape == (K + 1, 3)
-    assert nmpc.last_rollout is not None
+    assert nmpc.last_rollout is not None  # the plan was predicted with the learned push
+    np.testing.assert_allclose(nmpc.last_rollout.g, np.tile([0.0, 0.2, 0.0], (K, 1)))
+
+
+@pytest.mark.parametrize("heading", [0.0, math.pi / 2])
+def test_rollout_adds_the_disturbance_in_the_robot_frame(heading: float) -> None:
+    """0.5 m/s ahead plus a 0.2 m/s push to the robot's left for 1.5 s, no turning: 0.75 m
+    along the heading and 0.3 m to its left; a yaw disturbance of 0.1 rad/s turns it 0.15 rad."""
+    K, dt = 15, 0.1
+    c, s = math.cos(heading), math.sin(heading)
+    poses = unicycle_rollout(
+        np.array([1.0, 2.0, heading]),
+        np.full(K, 0.5),
+        np.zeros(K),
+        np.tile([0.0, 0.2, 0.0], (K, 1)),
+        dt,
+    )
+    np.testing.assert_allclose(
+        poses[-1], [1.0 + 0.75 * c - 0.3 * s, 2.0 + 0.75 * s + 0.3 * c, heading], atol=1e-12
+    )
+    turned = unicycle_rollout(
+        np.zeros(3), np.zeros(K), np.zeros(K), np.tile([0.0, 0.0, 0.1], (K, 1)), dt
+    )
+    np.testing.assert_allclose(turned[-1], [0.0, 0.0, 0.15], atol=1e-12)
 
 
 class _LinearYawModel:
