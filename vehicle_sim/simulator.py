@@ -26,6 +26,7 @@ from vehicle_sim.backends import backend_name, make_backend
 from vehicle_sim.builtin_plant import BuiltinPlant, PlantBackend
 from vehicle_sim.commander import ActiveSetpoint, Commander, CommandResult
 from vehicle_sim.config import GRAVITY_MPS2, SimConfig
+from vehicle_sim.manual_control import Sticks, check_sticks
 from vehicle_sim.mission_plan import MissionItem
 from vehicle_sim.params import Px4Params
 from vehicle_sim.truth_log import truth_row
@@ -277,6 +278,25 @@ class Simulator:
         else:
             self._pending.append((self._k + self._delay_steps, sp))
 
+    def set_sticks(self, sticks: Sticks) -> bool:
+        """Take a pilot's stick reading (an RC or a joystick's MANUAL_CONTROL, normalised: see
+        :class:`vehicle_sim.manual_control.Sticks`). It flies POSCTL and ALTCTL, may take the
+        vehicle out of an auto mode or OFFBOARD (COM_RC_OVERRIDE) and keeps the
+        manual-control-loss failsafe (COM_RC_LOSS_T, NAV_RCL_ACT) quiet. Returns False, and
+        does nothing, when COM_RC_IN_MODE is 0 (RC only) or 4 (stick input disabled): PX4 then
+        ignores a MAVLink joystick.
+
+        Raises:
+            ValueError: a value that is not finite or outside its range; nothing changes then.
+        """
+        check_sticks(sticks)
+        if int(self._params.get("COM_RC_IN_MODE")) in (0, 4):
+            return False
+        x = self._plant.x
+        self._commander.on_sticks(self.t_s, sticks, x[ph.POS : ph.POS + 3].copy(), fc.yaw_of(x))
+        self._sync_mode()
+        return True
+
     def drain_events(self) -> list[tuple[int, str]]:
         """(MAV_SEVERITY, text) events since the last drain."""
         events = list(self._commander.events)
@@ -478,7 +498,12 @@ class Simulator:
         x = self._plant.x
         contact = self._plant.aux[ph.AUX_CONTACT] > 0.5
         self._commander.update(
-            self.t_s, x[ph.POS : ph.POS + 3], fc.yaw_of(x), contact, 1.0 - float(x[ph.DISCHARGE])
+            self.t_s,
+            x[ph.POS : ph.POS + 3],
+            fc.yaw_of(x),
+            contact,
+            1.0 - float(x[ph.DISCHARGE]),
+            x[ph.VEL : ph.VEL + 3],
         )
         self._sync_mode()
 

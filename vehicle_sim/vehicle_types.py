@@ -18,6 +18,7 @@ class FlightMode(enum.Enum):
     """PX4 flight modes the simulator implements; values are PX4's MAVLink custom_mode."""
 
     POSCTL = 196608
+    ALTCTL = 131072
     HOLD = 50593792
     TAKEOFF = 33816576
     LAND = 100925440

@@ -26,6 +26,7 @@ from vehicle_sim.mavlink.commands import (
     Notice,
     handle_command,
 )
+from vehicle_sim.mavlink.manual_control import parse_manual_control
 from vehicle_sim.mavlink.mission_protocol import MissionProtocol, MissionReply
 from vehicle_sim.mavlink.offboard import SetpointResult, parse_global_setpoint, parse_setpoint
 from vehicle_sim.mavlink.scheduler import RateScheduler
@@ -319,14 +320,30 @@ class Dispatcher:
 
         return handle
 
-    def _manual_control(self, msg, scheduler, now_ns) -> list[Outgoing]:
-        """MANUAL_CONTROL (MAVSDK's manual_control, a joystick in QGC): no stick input is
-        simulated, so the modes hold; said once a second rather than ignored."""
+    def _manual_control(self, msg, _scheduler, _now_ns) -> list[Outgoing]:
+        """MANUAL_CONTROL (MAVSDK's manual_control, QGC's virtual joystick): the sticks fly
+        POSCTL/ALTCTL and may override auto modes or OFFBOARD (``Simulator.set_sticks``).
+        Another system's is counted as ``wrong_target``; out-of-range axes are clamped and an
+        axis marked invalid drops the message, each said in a STATUSTEXT; sticks that the
+        simulator ignores (COM_RC_IN_MODE 0 or 4) are said to be ignored too."""
         if msg.target not in (0, SYSTEM_ID):
             self._stats.add("wrong_target")
             return []
-        text = "Manual control input is not simulated: sticks ignored"
-        return self._not_flown(text)(msg, scheduler, now_ns)
+        parsed = parse_manual_control(msg.x, msg.y, msg.z, msg.r)
+        notices: list[Notice] = []
+        if parsed.problem:
+            notices.append((MAV_SEVERITY_WARNING, parsed.problem))
+        if parsed.sticks is None:
+            self._stats.add("manual_control_rejected")
+        elif self._sim.set_sticks(parsed.sticks):
+            self._stats.add("manual_control_accepted")
+        else:
+            self._stats.add("manual_control_rejected")
+            mode = int(self._sim.get_param("COM_RC_IN_MODE"))
+            notices.append(
+                (MAV_SEVERITY_WARNING, f"Manual control ignored: COM_RC_IN_MODE is {mode}")
+            )
+        return self._notices(tuple(notices))
 
     def _ftp(self, msg, _scheduler, _now_ns) -> list[Outgoing]:
         return [Outgoing(services.ftp_nak_reply(msg))]
