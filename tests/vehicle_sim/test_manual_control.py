@@ -93,12 +93,9 @@ def test_manual_control_wire_values() -> None:
     assert parsed.sticks == Sticks(1.0, -0.5, 0.5, 0.25) and parsed.problem == ""
     parsed = parse_manual_control(1500, 0, -1000, 0)  # MAVSDK's z of -1 gives -1000
     assert parsed.sticks == Sticks(1.0, 0.0, 0.0, 0.0)
-    assert (
-        parsed.problem
-        == "Manual control: x 1500 outside -1000..1000, z -1000 outside 0..1000; clamped"
-    )
+    assert parsed.problem == "Sticks clamped: x 1500 not in -1000..1000, z -1000 not in 0..1000"
     parsed = parse_manual_control(0, 0, INT16_MAX, 0)
-    assert parsed.sticks is None and "axis z marked invalid" in parsed.problem
+    assert parsed.sticks is None and parsed.problem == "Sticks ignored: axis z invalid (INT16_MAX)"
 
 
 # -- the simulator flying them ------------------------------------------------------------------

@@ -340,9 +340,7 @@ class Dispatcher:
         else:
             self._stats.add("manual_control_rejected")
             mode = int(self._sim.get_param("COM_RC_IN_MODE"))
-            notices.append(
-                (MAV_SEVERITY_WARNING, f"Manual control ignored: COM_RC_IN_MODE is {mode}")
-            )
+            notices.append((MAV_SEVERITY_WARNING, f"Sticks ignored: COM_RC_IN_MODE is {mode}"))
         return self._notices(tuple(notices))
 
     def _ftp(self, msg, _scheduler, _now_ns) -> list[Outgoing]:

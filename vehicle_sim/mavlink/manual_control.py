@@ -40,16 +40,15 @@ def parse_manual_control(x: int, y: int, z: int, r: int) -> StickParse:
     if invalid:
         return StickParse(
             None,
-            f"Manual control: axis {', '.join(invalid)} marked invalid (INT16_MAX); "
-            "message ignored",
+            f"Sticks ignored: axis {', '.join(invalid)} invalid (INT16_MAX)",
         )
     clamped: list[str] = []
     values: dict[str, float] = {}
     for name, lo, hi in AXIS_RANGES:
         value = raw[name]
         if not lo <= value <= hi:
-            clamped.append(f"{name} {value} outside {lo}..{hi}")
+            clamped.append(f"{name} {value} not in {lo}..{hi}")
             value = min(max(value, lo), hi)
         values[name] = value / 1000.0
-    problem = f"Manual control: {', '.join(clamped)}; clamped" if clamped else ""
+    problem = f"Sticks clamped: {', '.join(clamped)}" if clamped else ""
     return StickParse(Sticks(**values), problem)
