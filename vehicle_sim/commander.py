@@ -475,6 +475,8 @@ class Commander:
         self._stick_cmd = None
         if self.mode in MANUAL_MODES and self.armed and not self._landed:
             self._trigger(self.failsafes.manual_control_lost(), t, pos_ned_m, yaw_rad)
+        else:
+            self.events.append((SEVERITY_NOTICE, "Manual control lost"))
 
     def _lock_centred_sticks(self, pos_ned_m: np.ndarray, vel_ned_mps: np.ndarray | None) -> None:
         """A centred stick lets the vehicle brake, then holds where it stopped (PX4's manual

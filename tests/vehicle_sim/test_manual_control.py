@@ -185,6 +185,7 @@ def test_sticks_that_stop_outside_the_manual_modes_change_nothing() -> None:
     _fly(sim, Sticks(1.0, 0.0, 0.5, 0.0), 1.0)  # in HOLD, override off: not flown
     sim.step(3.0)
     assert sim.state.mode is FlightMode.HOLD
+    assert (5, "Manual control lost") in sim.drain_events()  # said, nothing done
     assert np.hypot(*sim.state.pos_ned_m[:2]) < 0.1
 
 
