@@ -81,6 +81,10 @@ PX4_PARAMS: dict[str, Px4ParamSpec] = {
     "COM_RC_STICK_OV": _F(30.0, "stick deflection that overrides auto/offboard [%]", 5.0, 80.0),
     "MAN_DEADZONE": _F(0.1, "stick deadzone around centre, fraction of full deflection", 0.0, 1.0),
     "MAV_SYS_ID": _i(1, "MAVLink system id", 1, 250),
+    "MC_ORBIT_RAD_MAX": _F(1000.0, "max orbit radius (MAV_CMD_DO_ORBIT) [m]", 1.0, 10000.0),
+    "MC_ORBIT_YAW_MOD": _i(
+        0, "orbit yaw: 0 to centre, 1 initial, 2 free, 3 tangent, 4 stick", 0, 4
+    ),
     "MC_PITCHRATE_D": _F(0.003, "pitch rate D [1/(rad/s^2)]", 0.0),
     "MC_PITCHRATE_I": _F(0.2, "pitch rate I", 0.0),
     "MC_PITCHRATE_MAX": _F(220.0, "max pitch rate [deg/s]", 0.0, 1800.0),

@@ -28,6 +28,7 @@ from vehicle_sim.commander import ActiveSetpoint, Commander, CommandResult
 from vehicle_sim.config import GRAVITY_MPS2, SimConfig
 from vehicle_sim.manual_control import Sticks, check_sticks
 from vehicle_sim.mission_plan import MissionItem
+from vehicle_sim.orbit import Orbit
 from vehicle_sim.params import Px4Params
 from vehicle_sim.truth_log import truth_row
 from vehicle_sim.vehicle_types import (
@@ -264,6 +265,42 @@ class Simulator:
                 f"reposition target must be 3 finite or NaN values, got {target_ned_m}"
             )
         return self._command(lambda c, t, p, y: c.reposition(p, target))
+
+    def orbit(
+        self,
+        radius_m: float = math.nan,
+        velocity_mps: float = math.nan,
+        yaw_behaviour: float = math.nan,
+        centre_ne_m: tuple[float, float] | None = None,
+        down_m: float | None = None,
+    ) -> CommandResult:
+        """Fly PX4's Orbit mode (MAV_CMD_DO_ORBIT): circle ``centre_ne_m`` (local north, east
+        [m]; None: the current orbit's centre, else here) at ``radius_m`` [m] (negative:
+        counter-clockwise) and ``velocity_mps`` [m/s] at ``down_m`` (local NED [m]; None: the
+        current orbit's, else here), yaw per ``yaw_behaviour`` (ORBIT_YAW_BEHAVIOUR 0-4); NaN
+        keeps a value of the orbit flown (see :mod:`vehicle_sim.orbit` for defaults and
+        limits). Needs the vehicle flying.
+
+        Raises:
+            ValueError: an infinite value, or a centre or altitude that is not finite.
+        """
+        values = (radius_m, velocity_mps, yaw_behaviour)
+        if any(math.isinf(v) for v in values) or (
+            centre_ne_m is not None and not all(math.isfinite(v) for v in centre_ne_m)
+        ):
+            raise ValueError(f"orbit {values} around {centre_ne_m} needs finite or NaN values")
+        if down_m is not None and not math.isfinite(down_m):
+            raise ValueError(f"orbit altitude {down_m!r} must be finite (None: keep)")
+        return self._command(
+            lambda c, t, p, y: c.start_orbit(
+                p, y, radius_m, velocity_mps, yaw_behaviour, centre_ne_m, down_m
+            )
+        )
+
+    @property
+    def orbit_status(self) -> Orbit | None:
+        """The orbit flown now (None outside ORBIT), for ORBIT_EXECUTION_STATUS."""
+        return self._commander.orbit if self._commander.mode is FlightMode.ORBIT else None
 
     def set_velocity_setpoint(self, sp: VelocitySetpoint) -> None:
         """Take a velocity setpoint (acted on in OFFBOARD, after any command delay).

@@ -19,6 +19,7 @@ class FlightMode(enum.Enum):
 
     POSCTL = 196608
     ALTCTL = 131072
+    ORBIT = 16973824  # PX4 reports Orbit as POSCTL (main 3) sub mode ORBIT (1)
     HOLD = 50593792
     TAKEOFF = 33816576
     LAND = 100925440

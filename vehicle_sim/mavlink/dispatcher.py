@@ -7,6 +7,7 @@ to send. Touches only the simulator's public API and the link's scheduler; no so
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -38,6 +39,7 @@ if TYPE_CHECKING:
     from vehicle_sim import Simulator
 
 _FACTORY = mavlink2.MAVLink(None)
+INT32_MAX = 2**31 - 1
 
 
 @dataclass(frozen=True)
@@ -151,11 +153,14 @@ class Dispatcher:
 
     def _command_int(self, msg, scheduler, _now_ns) -> list[Outgoing]:
         """COMMAND_INT -> the COMMAND_LONG parameters: x, y in degrees for a global frame (else
-        metres, [MAVLink] COMMAND_INT), z as altitude above mean sea level."""
+        metres, [MAVLink] COMMAND_INT; INT32_MAX is NaN, "unset"), z as altitude above mean sea
+        level. DO_ORBIT's z is AMSL in every frame, as PX4 reads it (which ignores the frame):
+        MAVSDK's do_orbit sends its absolute altitude in MAV_FRAME_GLOBAL_RELATIVE_ALT."""
         x, y, z = float(msg.x), float(msg.y), float(msg.z)
+        x, y = (math.nan if v == INT32_MAX else v for v in (x, y))  # INT32_MAX: unset
         if msg.frame in _GLOBAL_FRAMES:
             x, y = x / 1e7, y / 1e7
-            if msg.frame in _RELATIVE_ALT_FRAMES:
+            if msg.frame in _RELATIVE_ALT_FRAMES and msg.command != mavlink2.MAV_CMD_DO_ORBIT:
                 z += self._telemetry.origin.alt_amsl_m + self._sim.state.home_alt_amsl_offset_m
         else:
             x, y = x / 1e4, y / 1e4
