@@ -32,6 +32,7 @@ from vehicle_sim.orbit import Orbit
 from vehicle_sim.params import Px4Params
 from vehicle_sim.truth_log import truth_row
 from vehicle_sim.vehicle_types import (
+    MAX_SETPOINT_POS_M,
     FlightMode,
     LandedState,
     VehicleState,
@@ -289,8 +290,14 @@ class Simulator:
             centre_ne_m is not None and not all(math.isfinite(v) for v in centre_ne_m)
         ):
             raise ValueError(f"orbit {values} around {centre_ne_m} needs finite or NaN values")
-        if down_m is not None and not math.isfinite(down_m):
-            raise ValueError(f"orbit altitude {down_m!r} must be finite (None: keep)")
+        if centre_ne_m is not None and max(map(abs, centre_ne_m)) > MAX_SETPOINT_POS_M:
+            north, east = centre_ne_m
+            raise ValueError(
+                f"orbit centre N {north:.0f} E {east:.0f} m is beyond "
+                f"{MAX_SETPOINT_POS_M / 1e3:g} km of home"
+            )
+        if down_m is not None and not abs(down_m) <= MAX_SETPOINT_POS_M:
+            raise ValueError(f"orbit altitude {down_m!r} must be finite and within reach")
         return self._command(
             lambda c, t, p, y: c.start_orbit(
                 p, y, radius_m, velocity_mps, yaw_behaviour, centre_ne_m, down_m

@@ -314,7 +314,12 @@ class MavlinkEndpoint:
         if orbit is None or state.t_s < self._orbit_due_s:
             return
         self._orbit_due_s = state.t_s + ORBIT_STATUS_PERIOD_S
-        self._broadcast(orbit_execution_status(orbit, self._telemetry.origin, state.t_s))
+        try:
+            msg = orbit_execution_status(orbit, self._telemetry.origin, state.t_s)
+        except ValueError:
+            self._stats.add("handler_errors")
+            return
+        self._broadcast(msg)
 
     def _drain(self, link: UdpLink) -> None:
         for _ in range(MAX_DATAGRAMS_PER_PASS):

@@ -30,7 +30,8 @@ def start_orbit(sim: Simulator, p: tuple[float, ...], origin: GeodeticOrigin) ->
     """Run DO_ORBIT's parameters ``p`` (param1..param7, degrees and metres AMSL) on ``sim``.
 
     Raises:
-        ValueError: an infinite parameter or a latitude outside [-90, 90] deg.
+        ValueError: an infinite parameter, a latitude outside [-90, 90] deg or a longitude
+            outside [-180, 180] deg.
     """
     radius, velocity, yaw_behaviour = p[0], p[1], p[2]
     lat, lon, alt = p[4], p[5], p[6]
@@ -38,6 +39,8 @@ def start_orbit(sim: Simulator, p: tuple[float, ...], origin: GeodeticOrigin) ->
         raise ValueError("orbit parameters must be finite or NaN")
     if math.isfinite(lat) and not -90.0 <= lat <= 90.0:
         raise ValueError(f"orbit centre latitude {lat:g} deg is not in [-90, 90]")
+    if math.isfinite(lon) and not -180.0 <= lon <= 180.0:
+        raise ValueError(f"orbit centre longitude {lon:g} deg is not in [-180, 180]")
     north, east, down = origin.to_local(lat, lon, alt if math.isfinite(alt) else 0.0)
     centre = (north, east) if math.isfinite(lat) and math.isfinite(lon) else None
     return sim.orbit(radius, velocity, yaw_behaviour, centre, down if math.isfinite(alt) else None)
@@ -50,6 +53,8 @@ def orbit_execution_status(
     (negative counter-clockwise), the centre in MAV_FRAME_GLOBAL (degE7) and its AMSL
     altitude [m], as PX4 sends it."""
     lat, lon, alt = origin.to_global((*orbit.centre_ne_m, orbit.down_m))
+    if not (abs(lat) <= 90.0 and abs(lon) <= 180.0 and math.isfinite(alt)):
+        raise ValueError(f"orbit centre {lat}, {lon}, {alt} is not a place on earth")
     radius = math.copysign(orbit.radius_m, orbit.velocity_mps)
     return _FACTORY.orbit_execution_status_encode(
         int(t_s * 1e6),
