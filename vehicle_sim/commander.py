@@ -9,7 +9,7 @@ vehicle was armed. A reposition (MAV_CMD_DO_REPOSITION, MAVSDK's goto) flies to 
 Sticks (MANUAL_CONTROL, an RC or a joystick) fly POSCTL and ALTCTL as PX4's manual position /
 altitude modes: velocity from the sticks, and where a stick is centred the vehicle brakes, then
 holds position (POSCTL only; ALTCTL only stops), altitude and heading. Without sticks ever
-received, POSCTL and ALTCTL hold where they were entered, as before. Moving a stick beyond
+received, POSCTL and ALTCTL hold where they were entered. Moving a stick beyond
 COM_RC_STICK_OV takes a flying vehicle out of an auto mode (COM_RC_OVERRIDE bit 0, PX4's
 default) or OFFBOARD (bit 1, off by default) into POSCTL ("Pilot took over using sticks").
 Sticks that stop for COM_RC_LOSS_T in POSCTL/ALTCTL trigger NAV_RCL_ACT (see
