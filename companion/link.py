@@ -17,7 +17,7 @@ from typing import Literal, Protocol, get_args
 import numpy as np
 
 FlightModeName = Literal[
-    "MANUAL", "POSCTL", "HOLD", "TAKEOFF", "LAND", "RTL", "MISSION", "OFFBOARD", "UNKNOWN"
+    "MANUAL", "POSCTL", "ALTCTL", "HOLD", "TAKEOFF", "LAND", "RTL", "MISSION", "OFFBOARD", "UNKNOWN"
 ]
 FLIGHT_MODE_NAMES: tuple[str, ...] = get_args(FlightModeName)
 

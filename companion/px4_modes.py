@@ -10,6 +10,7 @@ from companion.link import FlightModeName
 
 PX4_MAIN_SUB: dict[str, tuple[int, int]] = {
     "POSCTL": (3, 0),
+    "ALTCTL": (2, 0),
     "HOLD": (4, 3),
     "TAKEOFF": (4, 2),
     "LAND": (4, 6),

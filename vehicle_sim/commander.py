@@ -1,9 +1,19 @@
 """PX4-like commander: arming, modes, takeoff/land sequencing, auto-disarm, offboard failsafe,
-return to launch, reposition and AUTO.MISSION (through :class:`MissionNavigator`).
+return to launch, reposition, AUTO.MISSION (through :class:`MissionNavigator`) and a pilot's
+sticks (:mod:`vehicle_sim.manual_control`); Orbit (MAV_CMD_DO_ORBIT, :mod:`vehicle_sim.orbit`).
 
 RTL follows PX4's navigator ([PX4-params] RTL_RETURN_ALT): climb to RTL_RETURN_ALT above home
 (or stay higher), fly to above home at MPC_XY_CRUISE, then land there. Home is where the
 vehicle was armed. A reposition (MAV_CMD_DO_REPOSITION, MAVSDK's goto) flies to a point in HOLD.
+
+Sticks (MANUAL_CONTROL, an RC or a joystick) fly POSCTL and ALTCTL as PX4's manual position /
+altitude modes: velocity from the sticks, and where a stick is centred the vehicle brakes, then
+holds position (POSCTL only; ALTCTL only stops), altitude and heading. Without sticks ever
+received, POSCTL and ALTCTL hold where they were entered. Moving a stick beyond
+COM_RC_STICK_OV takes a flying vehicle out of an auto mode (COM_RC_OVERRIDE bit 0, PX4's
+default) or OFFBOARD (bit 1, off by default) into POSCTL ("Pilot took over using sticks").
+Sticks that stop for COM_RC_LOSS_T in POSCTL/ALTCTL trigger NAV_RCL_ACT (see
+:meth:`Commander.update`).
 
 A pure state machine on simulated time: the simulator calls the command methods, calls
 :meth:`Commander.update` after each stretch of physics, asks :meth:`Commander.next_deadline`
@@ -21,8 +31,17 @@ import numpy as np
 
 from vehicle_sim import flight_control as fc
 from vehicle_sim.failsafe import FailsafeAction, FailsafeMonitor, Trigger
+from vehicle_sim.manual_control import StickCommand, Sticks, deflection, stick_command
 from vehicle_sim.mission_plan import MissionItem
 from vehicle_sim.navigator import MissionNavigator
+from vehicle_sim.orbit import (
+    DEFAULT_VELOCITY_MPS,
+    RADIUS_MIN_M,
+    Orbit,
+    OrbitSetpoint,
+    limit_orbit,
+    orbit_setpoint,
+)
 from vehicle_sim.params import Px4Params
 from vehicle_sim.vehicle_types import FlightMode, LandedState
 
@@ -35,13 +54,22 @@ MAX_TAKEOFF_ALT_M = 500.0
 RTL_ACCEPT_ALT_M = 0.3  # the RTL climb is done this close to the return altitude
 RTL_ACCEPT_XY_M = 0.5  # the RTL return is done this close above home (then it lands)
 RTL_POLL_S = 0.05  # how often RTL progress is checked
+MANUAL_POLL_S = 0.05  # how often the brake-then-hold of centred sticks is checked
+ORBIT_POLL_S = 0.02  # how often the orbit's setpoint follows the vehicle round
+BRAKED_XY_MPS = 0.3  # a centred horizontal stick holds position below this speed
+BRAKED_Z_MPS = 0.2  # a centred throttle holds altitude below this vertical speed
+MANUAL_MODES = frozenset({FlightMode.POSCTL, FlightMode.ALTCTL})
+AUTO_MODES = frozenset(
+    {FlightMode.HOLD, FlightMode.TAKEOFF, FlightMode.LAND, FlightMode.RTL, FlightMode.MISSION}
+)
+OVERRIDE_AUTO_BIT, OVERRIDE_OFFBOARD_BIT = 1, 2  # COM_RC_OVERRIDE
 
 # Commander.fill_setpoint writes the whole setpoint vector in this order
 SETPOINT_LAYOUT = (
     (fc.SP_POS, fc.SP_VEL, fc.SP_YAW, fc.SP_YAW_RATE, fc.SP_VMAX_XY, fc.SP_VMAX_UP),
-    (fc.SP_VMAX_DN, fc.SP_TILT, fc.SP_IDLE, fc.SP_ARMED, fc.SP_ACC_MAX, fc.N_SP),
+    (fc.SP_VMAX_DN, fc.SP_TILT, fc.SP_IDLE, fc.SP_ARMED, fc.SP_ACC_MAX, fc.SP_ACC_FF, fc.N_SP),
 )
-if SETPOINT_LAYOUT != ((0, 3, 6, 7, 8, 9), (10, 11, 12, 13, 14, 15)):
+if SETPOINT_LAYOUT != ((0, 3, 6, 7, 8, 9), (10, 11, 12, 13, 14, 15, 18)):
     raise ImportError(f"setpoint layout {SETPOINT_LAYOUT} changed: update Commander.fill_setpoint")
 
 RtlPhase = Literal["climb", "return"]
@@ -87,6 +115,7 @@ class _SetpointParams:
     land_alt1: float
     land_alt2: float
     acc_hor: float
+    vel_manual: float
 
     @classmethod
     def of(cls, params: Px4Params) -> _SetpointParams:
@@ -104,6 +133,7 @@ class _SetpointParams:
             p("MPC_LAND_ALT1"),
             p("MPC_LAND_ALT2"),
             p("MPC_ACC_HOR"),
+            p("MPC_VEL_MANUAL"),
         )
 
     def __deepcopy__(self, memo: dict[int, object]) -> _SetpointParams:
@@ -160,6 +190,13 @@ class Commander:
         self.mode_epoch = 0  # increments on every mode change (the simulator resets yaw then)
         self._sp_params_version = -1  # params.version _sp_params was read at
         self._sp_params: _SetpointParams | None = None
+        self._sticks_t: float | None = None  # when sticks last arrived (None: never)
+        self._sticks_lost = False
+        self._stick_cmd: StickCommand | None = None  # None: no live sticks
+        self._xy_locked = self._z_locked = True  # centred sticks hold (after braking)
+        self._yaw_rad = 0.0  # as of the last update [rad]
+        self.orbit: Orbit | None = None  # the orbit flown in ORBIT (kept for a new command)
+        self._orbit_sp: OrbitSetpoint | None = None
 
     # --- commands -------------------------------------------------------------------------
     def arm(self, t: float, pos_ned_m: np.ndarray, force: bool = False) -> CommandResult:
@@ -219,6 +256,8 @@ class Commander:
             return self._start_mission(pos_ned_m, yaw_rad)
         if mode is FlightMode.RTL:
             return self._start_rtl(pos_ned_m, yaw_rad)
+        if mode is FlightMode.ORBIT and mode is not self.mode:
+            return self.start_orbit(pos_ned_m, yaw_rad, math.nan, math.nan, math.nan, None, None)
         if mode is FlightMode.OFFBOARD and not self._setpoint_fresh(t):
             return self._reject("Offboard denied: no setpoint stream")
         if mode is not self.mode:
@@ -234,6 +273,57 @@ class Commander:
         self._hold_pos = np.array(target, dtype=float)
         self._set_mode(FlightMode.HOLD)
         return _ok()
+
+    def start_orbit(
+        self,
+        pos_ned_m: np.ndarray,
+        yaw_rad: float,
+        radius_m: float,
+        velocity_mps: float,
+        yaw_behaviour: float,
+        centre_ne_m: tuple[float, float] | None,
+        down_m: float | None,
+    ) -> CommandResult:
+        """Orbit (MAV_CMD_DO_ORBIT as PX4's FlightTaskOrbit takes it): NaN radius, velocity or
+        yaw behaviour keep those of the orbit flown now (else 1 m, 1 m/s, MC_ORBIT_YAW_MOD); a
+        negative radius orbits counter-clockwise, a negative velocity reverses; None centre
+        keeps the current orbit's, else the vehicle's position (the MAVLink definition; PX4
+        puts it 1 m north of the vehicle); None altitude: the current orbit's, else here."""
+        if not self.armed or self._landed:
+            return self._deny("Orbit denied: not flying")
+        if not (math.isnan(yaw_behaviour) or yaw_behaviour in (0, 1, 2, 3, 4)):
+            return self._deny(f"Orbit denied: yaw behaviour {yaw_behaviour:g} is not 0-4")
+        now = self.orbit if self.mode is FlightMode.ORBIT else None
+        clockwise = now is None or now.velocity_mps >= 0.0
+        radius = RADIUS_MIN_M if now is None else now.radius_m
+        if not math.isnan(radius_m):
+            clockwise, radius = radius_m > 0.0, abs(radius_m)
+        speed = DEFAULT_VELOCITY_MPS if now is None else abs(now.velocity_mps)
+        if not math.isnan(velocity_mps):
+            speed = velocity_mps
+        radius, velocity, note = limit_orbit(radius, speed if clockwise else -speed, self.params)
+        if math.isnan(yaw_behaviour):
+            yaw_behaviour = (
+                self.params.get("MC_ORBIT_YAW_MOD") if now is None else now.yaw_behaviour
+            )
+        if centre_ne_m is None:
+            centre_ne_m = (pos_ned_m[0], pos_ned_m[1]) if now is None else now.centre_ne_m
+        if down_m is None:
+            down_m = pos_ned_m[2] if now is None else now.down_m
+        self.orbit = Orbit(
+            (float(centre_ne_m[0]), float(centre_ne_m[1])),
+            float(down_m),
+            radius,
+            velocity,
+            int(yaw_behaviour),
+            float(yaw_rad),
+        )
+        self._orbit_sp = orbit_setpoint(self.orbit, (pos_ned_m[0], pos_ned_m[1]), self.params)
+        self._hold(pos_ned_m, yaw_rad)
+        self._set_mode(FlightMode.ORBIT)
+        if note:
+            self.events.append((SEVERITY_NOTICE, note))
+        return _ok(note)
 
     def set_mission(self, items: tuple[MissionItem, ...]) -> None:
         """Replace the mission (an empty one clears it); it starts from its first item."""
@@ -364,6 +454,25 @@ class Commander:
         """A setpoint arrived (proof of life for offboard)."""
         self._last_sp_t = t
 
+    def on_sticks(self, t: float, sticks: Sticks, pos_ned_m: np.ndarray, yaw_rad: float) -> None:
+        """Sticks arrived (validated by the caller): they fly POSCTL/ALTCTL from now on, and a
+        stick moved beyond COM_RC_STICK_OV takes a flying vehicle out of an auto mode or
+        OFFBOARD as COM_RC_OVERRIDE allows (PX4's commander, "Pilot took over using sticks")."""
+        if self._sticks_lost:
+            self.events.append((SEVERITY_INFO, "Manual control regained"))
+        self._sticks_t, self._sticks_lost = t, False
+        self._stick_cmd = stick_command(sticks, self.params)
+        bits = int(self.params.get("COM_RC_OVERRIDE"))
+        overridable = (self.mode in AUTO_MODES and bits & OVERRIDE_AUTO_BIT) or (
+            self.mode is FlightMode.OFFBOARD and bits & OVERRIDE_OFFBOARD_BIT
+        )
+        moved = deflection(sticks) > 0.01 * self.params.get("COM_RC_STICK_OV")
+        if overridable and moved and self.armed and not self._landed:
+            self._pending = None  # the pilot takes over from a pending failsafe too
+            self._hold(pos_ned_m, yaw_rad)
+            self._set_mode(FlightMode.POSCTL)
+            self.events.append((SEVERITY_INFO, "Pilot took over using sticks"))
+
     # --- time -------------------------------------------------------------------------------
     def update(
         self,
@@ -372,11 +481,23 @@ class Commander:
         yaw_rad: float,
         contact: bool,
         battery_remaining: float = 1.0,
+        vel_ned_mps: np.ndarray | None = None,
     ) -> None:
         """Advance the state machine to time ``t`` given the vehicle's state (battery charge
-        remaining as a fraction)."""
+        remaining as a fraction, velocity NED [m/s] (3,) for the brake-then-hold of centred
+        sticks; None counts as at rest).
+
+        Manual-control loss: in POSCTL/ALTCTL, once sticks have been received, COM_RC_LOSS_T
+        without them triggers NAV_RCL_ACT through the failsafe framework ("Failsafe: manual
+        control lost, ..."). Never before the first sticks: PX4 without any RC or joystick does
+        not fail over for it either (it has none to lose; it only refuses the manual modes,
+        which the simulator lets a ground station enter to hold). In OFFBOARD and the auto
+        modes a loss is only noted (as PX4 with every COM_RCL_EXCEPT bit set): those modes do
+        not use sticks, and the companion must keep its own mode when a joystick goes away."""
         self._landed = contact
         self._height_m = float(self._home[2] - pos_ned_m[2])
+        self._yaw_rad = float(yaw_rad)
+        self._check_sticks_lost(t, pos_ned_m, yaw_rad)
         if not self.armed:
             return
         if not contact:
@@ -403,7 +524,41 @@ class Commander:
             self.events.append((SEVERITY_INFO, "Takeoff complete, holding"))
         if self.mode is FlightMode.OFFBOARD and not self._setpoint_fresh(t):
             self._trigger(self.failsafes.offboard_lost(), t, pos_ned_m, yaw_rad)
+        if self.mode in MANUAL_MODES and self._stick_cmd is not None:
+            self._lock_centred_sticks(pos_ned_m, vel_ned_mps)
+        if self.mode is FlightMode.ORBIT and self.orbit is not None:
+            self._orbit_sp = orbit_setpoint(self.orbit, (pos_ned_m[0], pos_ned_m[1]), self.params)
         self._failsafe_checks(t, pos_ned_m, yaw_rad, battery_remaining)
+
+    def _check_sticks_lost(self, t: float, pos_ned_m: np.ndarray, yaw_rad: float) -> None:
+        """Sticks older than COM_RC_LOSS_T are lost: no longer flown, and in a manual mode of
+        a flying vehicle NAV_RCL_ACT runs (see :meth:`update`)."""
+        if self._sticks_t is None or self._sticks_lost:
+            return
+        if t - self._sticks_t < self.params.get("COM_RC_LOSS_T") - 1e-9:
+            return
+        self._sticks_lost = True
+        self._stick_cmd = None
+        if self.mode in MANUAL_MODES and self.armed and not self._landed:
+            self._trigger(self.failsafes.manual_control_lost(), t, pos_ned_m, yaw_rad)
+        else:
+            self.events.append((SEVERITY_NOTICE, "Manual control lost"))
+
+    def _lock_centred_sticks(self, pos_ned_m: np.ndarray, vel_ned_mps: np.ndarray | None) -> None:
+        """A centred stick lets the vehicle brake, then holds where it stopped (PX4's manual
+        position/altitude tasks lock the position once slow)."""
+        cmd = self._stick_cmd
+        vel = np.zeros(3) if vel_ned_mps is None else vel_ned_mps
+        if cmd.horizontal or self.mode is FlightMode.ALTCTL:
+            self._xy_locked = False
+        elif not self._xy_locked and math.hypot(vel[0], vel[1]) < BRAKED_XY_MPS:
+            self._hold_pos[:2] = pos_ned_m[:2]
+            self._xy_locked = True
+        if cmd.down_mps != 0.0:
+            self._z_locked = False
+        elif not self._z_locked and abs(vel[2]) < BRAKED_Z_MPS:
+            self._hold_pos[2] = pos_ned_m[2]
+            self._z_locked = True
 
     def next_deadline(self, t: float) -> float:
         """Latest simulated time to which physics may run before :meth:`update` is due."""
@@ -422,6 +577,8 @@ class Commander:
             deadline = _earlier(deadline, t + TAKEOFF_POLL_S)
         if mode is FlightMode.RTL or mode is FlightMode.MISSION:
             deadline = _earlier(deadline, t + RTL_POLL_S)
+        if mode is FlightMode.ORBIT:
+            deadline = _earlier(deadline, t + ORBIT_POLL_S)
         if mode is FlightMode.LAND and self._height_m > p("MPC_LAND_ALT2"):
             deadline = _earlier(deadline, t + RTL_POLL_S)  # the descent slows with height
         if self._pending is not None:
@@ -431,6 +588,10 @@ class Commander:
             deadline = _earlier(deadline, link_lost_s + 1e-3)
         if mode is FlightMode.OFFBOARD and self._last_sp_t is not None:
             deadline = _earlier(deadline, self._last_sp_t + p("COM_OF_LOSS_T"))
+        if self._sticks_t is not None and not self._sticks_lost:
+            deadline = _earlier(deadline, self._sticks_t + p("COM_RC_LOSS_T"))
+            if mode in MANUAL_MODES:
+                deadline = _earlier(deadline, t + MANUAL_POLL_S)
         return deadline
 
     def landed_state(self, contact: bool, climbing: bool) -> LandedState:
@@ -449,6 +610,7 @@ class Commander:
         pos = self._hold_pos
         pos_n, pos_e, pos_d = pos[0], pos[1], pos[2]
         vel_n = vel_e = vel_d = math.nan
+        acc_n = acc_e = 0.0
         yaw, yaw_rate = self._hold_yaw, 0.0
         vmax_xy, vmax_up, vmax_dn, acc_max = p.xy_cruise, p.z_v_auto_up, p.z_v_auto_dn, p.acc_hor
         idle = contact
@@ -476,10 +638,33 @@ class Commander:
                 active.pos_ned_m is not None and active.pos_ned_m[2] < self._home[2] - LIFT_OFF_M
             )
             idle = contact and not wants_climb
+        elif mode is FlightMode.ORBIT and self._orbit_sp is not None:
+            pos_n = pos_e = math.nan
+            pos_d = self.orbit.down_m
+            vel_n, vel_e = self._orbit_sp.vel_ne_mps
+            acc_n, acc_e = self._orbit_sp.acc_ne_mps2
+            yaw = self._orbit_sp.yaw_rad
+            if math.isnan(yaw):  # uncontrolled or on the yaw stick
+                stick = self._stick_cmd
+                yaw_rate = 0.0 if stick is None else stick.yaw_rate_radps
+            vmax_xy, acc_max = p.xy_vel_max, 0.0
+        elif mode in MANUAL_MODES and self._stick_cmd is not None:
+            cmd = self._stick_cmd
+            c, s = math.cos(self._yaw_rad), math.sin(self._yaw_rad)
+            if not self._xy_locked:
+                pos_n = pos_e = math.nan
+                vel_n = c * cmd.forward_mps - s * cmd.right_mps
+                vel_e = s * cmd.forward_mps + c * cmd.right_mps
+            if not self._z_locked:
+                pos_d, vel_d = math.nan, cmd.down_mps
+            yaw, yaw_rate = math.nan, cmd.yaw_rate_radps
+            vmax_xy = min(p.vel_manual, p.xy_vel_max)
+            vmax_up, vmax_dn = p.z_vel_max_up, p.z_vel_max_dn
+            idle = contact and not -cmd.down_mps >= CLIMB_INTENT_MPS
         sp[:] = (
             pos_n, pos_e, pos_d, vel_n, vel_e, vel_d, yaw, yaw_rate,
             vmax_xy, vmax_up, vmax_dn, p.tilt_rad,
-            1.0 if idle else 0.0, 1.0 if self.armed else 0.0, acc_max,
+            1.0 if idle else 0.0, 1.0 if self.armed else 0.0, acc_max, acc_n, acc_e, 0.0,
         )  # fmt: skip
 
     def _setpoint_params(self) -> _SetpointParams:
@@ -509,6 +694,7 @@ class Commander:
         if mode is not self.mode:
             self.mode = mode
             self.mode_epoch += 1
+            self._xy_locked = self._z_locked = mode not in MANUAL_MODES  # brake, then hold
 
     def _disarm(self, text: str, severity: int) -> None:
         self.armed = False

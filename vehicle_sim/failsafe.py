@@ -1,12 +1,15 @@
 """PX4-like failsafe conditions and their actions (pure, on simulated time).
 
 Conditions ([PX4-params]): offboard setpoints lost for COM_OF_LOSS_T (action COM_OBL_RC_ACT),
+a pilot's sticks lost for COM_RC_LOSS_T in a manual mode (action NAV_RCL_ACT; the commander
+watches the sticks),
 no ground-station heartbeat for COM_DL_LOSS_T while NAV_DLL_ACT is set (data-link loss), and
 battery below BAT_LOW_THR (a warning), BAT_CRIT_THR and BAT_EMERGEN_THR (action
 COM_LOW_BAT_ACT). As in PX4's failsafe framework (v1.14+), the vehicle first holds for
 COM_FAIL_ACT_T so a pilot can take over, then the action runs (at once when that delay is 0);
-a mode change by the pilot in the meantime cancels it. Without RC in the simulator, PX4's
-position/altitude/manual fallbacks are a hold.
+a mode change by the pilot in the meantime cancels it. COM_OBL_RC_ACT's position, altitude
+and manual fallbacks (0-2) are a hold here, also while sticks are live (PX4 would hand the
+vehicle to them).
 """
 
 from __future__ import annotations
@@ -26,6 +29,12 @@ OFFBOARD_LOSS_ACTIONS: dict[int, FailsafeAction] = {
 # NAV_DLL_ACT: 0 disabled, 1 hold, 2 return, 3 land, 5 terminate, 6 disarm.
 DATALINK_LOSS_ACTIONS: dict[int, FailsafeAction] = {
     1: "hold", 2: "rtl", 3: "land", 5: "disarm", 6: "disarm",
+}  # fmt: skip
+
+# NAV_RCL_ACT: 1 hold, 2 return, 3 land, 5 terminate, 6 disarm (4, an old "RC auto recovery",
+# is no longer PX4's: a hold).
+MANUAL_CONTROL_LOSS_ACTIONS: dict[int, FailsafeAction] = {
+    1: "hold", 2: "rtl", 3: "land", 4: "hold", 5: "disarm", 6: "disarm",
 }  # fmt: skip
 
 
@@ -54,6 +63,10 @@ class FailsafeMonitor:
     def offboard_lost(self) -> Trigger:
         action = int(self._params.get("COM_OBL_RC_ACT"))
         return Trigger(OFFBOARD_LOSS_ACTIONS.get(action, "hold"), "offboard setpoints lost")
+
+    def manual_control_lost(self) -> Trigger:
+        action = int(self._params.get("NAV_RCL_ACT"))
+        return Trigger(MANUAL_CONTROL_LOSS_ACTIONS.get(action, "hold"), "manual control lost")
 
     def check(
         self, t_s: float, flying: bool, battery_remaining: float

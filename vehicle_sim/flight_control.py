@@ -14,7 +14,8 @@ Arrays (all float64):
         [rad/s], velocity limits horizontal / up / down [m/s], tilt limit [rad], ground-idle
         flag (motors at idle, integrators reset), armed flag, acceleration limit [m/s^2] of the
         velocity setpoint (auto modes: the setpoint is slewed at this rate and the slew is fed
-        forward as acceleration, like PX4's trajectory generator; 0 = steps pass unchanged).
+        forward as acceleration, like PX4's trajectory generator; 0 = steps pass unchanged),
+        acceleration feed-forward NED [m/s^2] (NaN = 0; e.g. an orbit's centripetal one).
     controller state ``cs`` (N_CTRL,): velocity integral [m/s^2], rate integral, previous
         rates [rad/s], yaw setpoint [rad], last velocity setpoint [m/s], last thrust vector
         (normalised, NED).
@@ -34,8 +35,8 @@ from vehicle_sim.physics import POS, QUAT, RATES, VEL
 
 SP_POS, SP_VEL, SP_YAW, SP_YAW_RATE = 0, 3, 6, 7
 SP_VMAX_XY, SP_VMAX_UP, SP_VMAX_DN, SP_TILT = 8, 9, 10, 11
-SP_IDLE, SP_ARMED, SP_ACC_MAX = 12, 13, 14
-N_SP = 15
+SP_IDLE, SP_ARMED, SP_ACC_MAX, SP_ACC_FF = 12, 13, 14, 15
+N_SP = 18
 
 CS_VEL_INT, CS_RATE_INT, CS_PREV_RATES, CS_YAW_SP, CS_VEL_SP, CS_THR_SP = 0, 3, 6, 9, 10, 13
 N_CTRL = 16
@@ -127,6 +128,10 @@ def velocity_control(x, acc, sp, cs, cp, dt, thr):
         vsp[1] = cs[CS_VEL_SP + 1] + s * d1
         vsp[2] = cs[CS_VEL_SP + 2] + s * d2
         acc_ff[0], acc_ff[1], acc_ff[2] = s * d0 / dt, s * d1 / dt, s * d2 / dt
+    for i in range(3):
+        a_ff = sp[SP_ACC_FF + i]
+        if math.isfinite(a_ff):
+            acc_ff[i] += a_ff
     g = cp[C_G]
     hover = cp[C_THR_HOVER]
     err = np.empty(3)

@@ -60,7 +60,9 @@ def _i(default: int, doc: str, lo: float, hi: float) -> Px4ParamSpec:
 # PX4's names, types, defaults and bounds (PX4 v1.14 parameter metadata, [PX4-params]); the
 # modules defining them: commander (COM_*), navigator (NAV_*, MIS_*, RTL_*), mc_pos_control
 # (MPC_*), mc_att_control (MC_*_P, MC_*RATE_MAX), mc_rate_control (MC_*RATE_*), battery (BAT*),
-# mavlink (MAV_*), and the airframe system (SYS_*).
+# mavlink (MAV_*), manual_control (MAN_DEADZONE) and the airframe system (SYS_*). The stick
+# parameters (COM_RC_*, NAV_RCL_ACT, MAN_DEADZONE, MPC_VEL_MANUAL, MPC_MAN_Y_MAX, MPC_*_EXPO)
+# are those of PX4's parameter reference (docs.px4.io, "Parameter Reference") for v1.15.
 PX4_PARAMS: dict[str, Px4ParamSpec] = {
     "BAT1_N_CELLS": _i(4, "cells in series of battery 1 (the simulated pack)", 0, 16),
     "BAT_CRIT_THR": _F(0.07, "critical battery level, fraction of capacity", 0.05, 0.5),
@@ -74,7 +76,15 @@ PX4_PARAMS: dict[str, Px4ParamSpec] = {
     "COM_OBL_RC_ACT": _i(0, "offboard-loss action: 0-3, 5 hold, 4 land", 0, 7),
     "COM_OF_LOSS_T": _F(1.0, "offboard setpoint timeout [s]", 0.0, 60.0),
     "COM_RC_IN_MODE": _i(3, "manual control input: 0 RC, 1 joystick, 2-3 either, 4 none", 0, 4),
+    "COM_RC_LOSS_T": _F(0.5, "manual control (RC or joystick) loss timeout [s]", 0.0, 35.0),
+    "COM_RC_OVERRIDE": _i(1, "stick override bits: 0 auto modes, 1 offboard", 0, 3),
+    "COM_RC_STICK_OV": _F(30.0, "stick deflection that overrides auto/offboard [%]", 5.0, 80.0),
+    "MAN_DEADZONE": _F(0.1, "stick deadzone around centre, fraction of full deflection", 0.0, 1.0),
     "MAV_SYS_ID": _i(1, "MAVLink system id", 1, 250),
+    "MC_ORBIT_RAD_MAX": _F(1000.0, "max orbit radius (MAV_CMD_DO_ORBIT) [m]", 1.0, 10000.0),
+    "MC_ORBIT_YAW_MOD": _i(
+        0, "orbit yaw: 0 to centre, 1 initial, 2 free, 3 tangent, 4 stick", 0, 4
+    ),
     "MC_PITCHRATE_D": _F(0.003, "pitch rate D [1/(rad/s^2)]", 0.0),
     "MC_PITCHRATE_I": _F(0.2, "pitch rate I", 0.0),
     "MC_PITCHRATE_MAX": _F(220.0, "max pitch rate [deg/s]", 0.0, 1800.0),
@@ -103,18 +113,23 @@ PX4_PARAMS: dict[str, Px4ParamSpec] = {
         5.0, "below this height the landing descends at MPC_LAND_SPEED [m]", 0.0, 122.0
     ),
     "MPC_LAND_SPEED": _F(0.7, "landing descent speed near the ground [m/s]", 0.6),
+    "MPC_MAN_Y_MAX": _F(150.0, "max yaw rate from the yaw stick [deg/s]", 0.0, 400.0),
     "MPC_THR_HOVER": _F(0.5, "hover thrust, normalised (set from the preset)", 0.1, 0.8),
     "MPC_THR_MAX": _F(1.0, "max collective thrust, normalised", 0.0, 1.0),
     "MPC_THR_MIN": _F(0.12, "min collective thrust in flight, normalised", 0.05, 0.5),
     "MPC_TILTMAX_AIR": _F(45.0, "max tilt [deg]", 20.0, 89.0),
     "MPC_TKO_SPEED": _F(1.5, "takeoff climb speed [m/s]", 1.0, 5.0),
+    "MPC_VEL_MANUAL": _F(10.0, "max horizontal speed from the sticks in POSCTL [m/s]", 3.0, 20.0),
     "MPC_XY_CRUISE": _F(5.0, "horizontal speed in auto modes [m/s]", 3.0, 20.0),
+    "MPC_XY_MAN_EXPO": _F(0.6, "expo of the horizontal sticks [1]", 0.0, 1.0),
     "MPC_XY_P": _F(0.95, "horizontal position P [1/s]", 0.0, 2.0),
     "MPC_XY_VEL_D_ACC": _F(0.2, "horizontal velocity D [1]", 0.1, 2.0),
     "MPC_XY_VEL_I_ACC": _F(0.4, "horizontal velocity I [1/s]", 0.0, 60.0),
     "MPC_XY_VEL_MAX": _F(12.0, "max horizontal speed [m/s]", 0.0, 20.0),
     "MPC_XY_VEL_P_ACC": _F(1.8, "horizontal velocity P [1/s]", 1.2, 5.0),
     "MPC_Z_P": _F(1.0, "vertical position P [1/s]", 0.0, 1.5),
+    "MPC_YAW_EXPO": _F(0.6, "expo of the yaw stick [1]", 0.0, 1.0),
+    "MPC_Z_MAN_EXPO": _F(0.6, "expo of the throttle stick [1]", 0.0, 1.0),
     "MPC_Z_VEL_D_ACC": _F(0.0, "vertical velocity D [1]", 0.0, 2.0),
     "MPC_Z_VEL_I_ACC": _F(2.0, "vertical velocity I [1/s]", 0.2, 3.0),
     "MPC_Z_VEL_MAX_DN": _F(1.5, "max descent speed [m/s]", 0.5, 4.0),
@@ -123,6 +138,7 @@ PX4_PARAMS: dict[str, Px4ParamSpec] = {
     "MPC_Z_V_AUTO_DN": _F(1.5, "descent speed in auto modes [m/s]", 0.5, 4.0),
     "MPC_Z_V_AUTO_UP": _F(3.0, "climb speed in auto modes [m/s]", 0.5, 8.0),
     "NAV_DLL_ACT": _i(0, "data-link loss action: 0 off, 1 hold, 2 RTL, 3 land, 5-6", 0, 6),
+    "NAV_RCL_ACT": _i(2, "manual control loss action: 1 hold, 2 RTL, 3 land, 5-6 disarm", 1, 6),
     "RTL_RETURN_ALT": _F(60.0, "return altitude above home in RTL [m]", 0.0, 150.0),
     "SYS_AUTOCONFIG": _i(0, "reset parameters on next boot: 0 keep, 1-2 reset", 0, 2),
     "SYS_AUTOSTART": _i(4001, "airframe id (4001: generic quadcopter)", 0, 9999999),

@@ -26,10 +26,13 @@ from vehicle_sim.backends import backend_name, make_backend
 from vehicle_sim.builtin_plant import BuiltinPlant, PlantBackend
 from vehicle_sim.commander import ActiveSetpoint, Commander, CommandResult
 from vehicle_sim.config import GRAVITY_MPS2, SimConfig
+from vehicle_sim.manual_control import Sticks, check_sticks
 from vehicle_sim.mission_plan import MissionItem
+from vehicle_sim.orbit import Orbit
 from vehicle_sim.params import Px4Params
 from vehicle_sim.truth_log import truth_row
 from vehicle_sim.vehicle_types import (
+    MAX_SETPOINT_POS_M,
     FlightMode,
     LandedState,
     VehicleState,
@@ -264,6 +267,48 @@ class Simulator:
             )
         return self._command(lambda c, t, p, y: c.reposition(p, target))
 
+    def orbit(
+        self,
+        radius_m: float = math.nan,
+        velocity_mps: float = math.nan,
+        yaw_behaviour: float = math.nan,
+        centre_ne_m: tuple[float, float] | None = None,
+        down_m: float | None = None,
+    ) -> CommandResult:
+        """Fly PX4's Orbit mode (MAV_CMD_DO_ORBIT): circle ``centre_ne_m`` (local north, east
+        [m]; None: the current orbit's centre, else here) at ``radius_m`` [m] (negative:
+        counter-clockwise) and ``velocity_mps`` [m/s] at ``down_m`` (local NED [m]; None: the
+        current orbit's, else here), yaw per ``yaw_behaviour`` (ORBIT_YAW_BEHAVIOUR 0-4); NaN
+        keeps a value of the orbit flown (see :mod:`vehicle_sim.orbit` for defaults and
+        limits). Needs the vehicle flying.
+
+        Raises:
+            ValueError: an infinite value, or a centre or altitude that is not finite.
+        """
+        values = (radius_m, velocity_mps, yaw_behaviour)
+        if any(math.isinf(v) for v in values) or (
+            centre_ne_m is not None and not all(math.isfinite(v) for v in centre_ne_m)
+        ):
+            raise ValueError(f"orbit {values} around {centre_ne_m} needs finite or NaN values")
+        if centre_ne_m is not None and max(map(abs, centre_ne_m)) > MAX_SETPOINT_POS_M:
+            north, east = centre_ne_m
+            raise ValueError(
+                f"orbit centre N {north:.0f} E {east:.0f} m is beyond "
+                f"{MAX_SETPOINT_POS_M / 1e3:g} km of home"
+            )
+        if down_m is not None and not abs(down_m) <= MAX_SETPOINT_POS_M:
+            raise ValueError(f"orbit altitude {down_m!r} must be finite and within reach")
+        return self._command(
+            lambda c, t, p, y: c.start_orbit(
+                p, y, radius_m, velocity_mps, yaw_behaviour, centre_ne_m, down_m
+            )
+        )
+
+    @property
+    def orbit_status(self) -> Orbit | None:
+        """The orbit flown now (None outside ORBIT), for ORBIT_EXECUTION_STATUS."""
+        return self._commander.orbit if self._commander.mode is FlightMode.ORBIT else None
+
     def set_velocity_setpoint(self, sp: VelocitySetpoint) -> None:
         """Take a velocity setpoint (acted on in OFFBOARD, after any command delay).
 
@@ -276,6 +321,25 @@ class Simulator:
             self._active = self._to_ned(sp)
         else:
             self._pending.append((self._k + self._delay_steps, sp))
+
+    def set_sticks(self, sticks: Sticks) -> bool:
+        """Take a pilot's stick reading (an RC or a joystick's MANUAL_CONTROL, normalised: see
+        :class:`vehicle_sim.manual_control.Sticks`). It flies POSCTL and ALTCTL, may take the
+        vehicle out of an auto mode or OFFBOARD (COM_RC_OVERRIDE) and keeps the
+        manual-control-loss failsafe (COM_RC_LOSS_T, NAV_RCL_ACT) quiet. Returns False, and
+        does nothing, when COM_RC_IN_MODE is 0 (RC only) or 4 (stick input disabled): PX4 then
+        ignores a MAVLink joystick.
+
+        Raises:
+            ValueError: a value that is not finite or outside its range; nothing changes then.
+        """
+        check_sticks(sticks)
+        if int(self._params.get("COM_RC_IN_MODE")) in (0, 4):
+            return False
+        x = self._plant.x
+        self._commander.on_sticks(self.t_s, sticks, x[ph.POS : ph.POS + 3].copy(), fc.yaw_of(x))
+        self._sync_mode()
+        return True
 
     def drain_events(self) -> list[tuple[int, str]]:
         """(MAV_SEVERITY, text) events since the last drain."""
@@ -478,7 +542,12 @@ class Simulator:
         x = self._plant.x
         contact = self._plant.aux[ph.AUX_CONTACT] > 0.5
         self._commander.update(
-            self.t_s, x[ph.POS : ph.POS + 3], fc.yaw_of(x), contact, 1.0 - float(x[ph.DISCHARGE])
+            self.t_s,
+            x[ph.POS : ph.POS + 3],
+            fc.yaw_of(x),
+            contact,
+            1.0 - float(x[ph.DISCHARGE]),
+            x[ph.VEL : ph.VEL + 3],
         )
         self._sync_mode()
 

@@ -18,6 +18,8 @@ class FlightMode(enum.Enum):
     """PX4 flight modes the simulator implements; values are PX4's MAVLink custom_mode."""
 
     POSCTL = 196608
+    ALTCTL = 131072
+    ORBIT = 16973824  # PX4 reports Orbit as POSCTL (main 3) sub mode ORBIT (1)
     HOLD = 50593792
     TAKEOFF = 33816576
     LAND = 100925440

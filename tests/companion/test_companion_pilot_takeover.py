@@ -1,7 +1,8 @@
 """The companion never fights a pilot: a mode change it did not ask for hands the vehicle over.
 
 Mid-mission, "the pilot" (in process: the simulator's own mode switch; over MAVLink: a second,
-GCS-like pymavlink client on its own link) switches the vehicle out of OFFBOARD. The companion
+GCS-like pymavlink client on its own link, commanding a mode or moving its joystick's sticks
+with COM_RC_OVERRIDE's offboard bit set) switches the vehicle out of OFFBOARD. The companion
 must stop streaming, command nothing (checked on the endpoint's received-message counters over
 MAVLink), end with status "handed_over" and the one-line reason, and the vehicle must do what
 the pilot chose.
@@ -33,6 +34,7 @@ from companion.runner import (
 from tests.companion.test_companion_mission_on_every_link import LINE, free_udp_port
 from vehicle_sim import FlightMode, Simulator, load_sim_config
 from vehicle_sim.mavlink import EndpointConfig, LinkConfig, MavlinkEndpoint
+from vehicle_sim.mavlink.params import int32_as_float
 
 os.environ.setdefault("MAVLINK20", "1")
 from pymavlink import mavutil  # noqa: E402
@@ -288,3 +290,100 @@ def test_a_pilot_switch_during_the_climb_is_handed_over_too() -> None:
     assert outcome.status == "handed_over", outcome.detail
     assert outcome.detail.startswith("pilot took control in POSCTL at t=")
     assert link.sent_after == [] and sim.state.mode is FlightMode.POSCTL
+
+
+STICKS_FORWARD_S = 3.0  # the pilot pushes forward this long, then centres and keeps sending
+
+
+def _pilot_takes_over_with_sticks(
+    port: int, endpoint: MavlinkEndpoint, marks: dict, done: threading.Event
+) -> None:
+    """A pilot with a MAVLink joystick (QGC's virtual one) on its own link: allows the stick
+    override of OFFBOARD (COM_RC_OVERRIDE 3), waits for OFFBOARD plus a while, then pushes the
+    pitch stick forward, centres it and keeps sending centred sticks (so the manual-control-loss
+    failsafe stays quiet) until ``done``; notes every mode seen after its takeover."""
+    gcs = mavutil.mavlink_connection(f"udpout:127.0.0.1:{port}", source_system=245)
+    rate_s = 0.1  # 10 Hz, as QGC's joystick
+    try:
+        gcs.mav.heartbeat_send(6, 8, 0, 0, 0)
+        gcs.mav.param_set_send(1, 1, b"COM_RC_OVERRIDE", int32_as_float(3), 6)
+        deadline = time.monotonic() + 90.0
+        offboard_since = None
+        while time.monotonic() < deadline:
+            gcs.mav.heartbeat_send(6, 8, 0, 0, 0)
+            if endpoint.state.mode is FlightMode.OFFBOARD:
+                offboard_since = offboard_since or time.monotonic()
+                if time.monotonic() - offboard_since >= TAKEOVER_AFTER_S:
+                    break
+            time.sleep(rate_s)
+        marks["before_sticks"] = endpoint.stats
+        pushed_at = time.monotonic()
+        modes_after: set[FlightMode] = set()
+        while not done.is_set() and time.monotonic() < deadline:
+            forward = time.monotonic() - pushed_at < STICKS_FORWARD_S
+            gcs.mav.manual_control_send(1, 600 if forward else 0, 0, 500, 0, 0)
+            mode = endpoint.state.mode
+            if mode is FlightMode.POSCTL and "switched_at" not in marks:
+                marks["switched_at"] = time.monotonic()
+                marks["after_switch"] = endpoint.stats
+            if "switched_at" in marks:
+                modes_after.add(mode)
+            time.sleep(rate_s)
+        marks["modes_after"] = modes_after
+    finally:
+        gcs.close()
+
+
+@pytest.mark.slow
+def test_pilot_sticks_in_offboard_take_over_and_the_companion_yields() -> None:
+    """COM_RC_OVERRIDE's offboard bit set, a pilot moving the sticks beyond COM_RC_STICK_OV
+    puts the vehicle in POSCTL (PX4's "Pilot took over using sticks"); the companion, flying
+    over pymavlink against a real endpoint, hands over: it stops its setpoints, never asks for
+    OFFBOARD again, sends no command, and says so in one line."""
+    companion_port = free_udp_port()
+    links = (LinkConfig("offboard", remote=("127.0.0.1", companion_port)), LinkConfig("gcs"))
+    endpoint = MavlinkEndpoint(
+        Simulator(load_sim_config("iris"), seed=7), EndpointConfig(links=links)
+    ).start()
+    link = PymavlinkLink(f"udpin://127.0.0.1:{companion_port}")
+    mission = load_mission(LINE)
+    marks: dict = {}
+    done = threading.Event()
+    pilot = threading.Thread(
+        target=_pilot_takes_over_with_sticks,
+        args=(endpoint.local_ports["gcs"], endpoint, marks, done),
+    )
+    pilot.start()
+    lines: list[str] = []
+    outcome: FlightOutcome | None = None
+    try:
+        outcome = fly_mission(
+            link,
+            make_planner("pd", 3.0),
+            reference_of(mission),
+            mission,
+            RunnerConfig(),
+            lambda _tick: None,
+            lines.append,
+        )
+        at_return = endpoint.stats
+        time.sleep(STICKS_FORWARD_S + 1.0)  # anything still streaming or commanding shows now
+        later = endpoint.stats
+        final_mode = endpoint.state.mode
+    finally:
+        done.set()
+        pilot.join(10.0)
+        link.close()
+        endpoint.stop()
+    assert outcome is not None and outcome.status == "handed_over", outcome
+    assert outcome.detail.startswith("pilot took control in POSCTL at t=")
+    assert "\n" not in outcome.detail
+    assert any(line.startswith(outcome.detail) for line in lines)
+    assert final_mode is FlightMode.POSCTL
+    assert marks["modes_after"] == {FlightMode.POSCTL}  # never back to OFFBOARD
+    switch = marks["after_switch"]
+    assert later.commands_received == switch.commands_received  # no command after the pilot's
+    assert later.setpoints_accepted + later.setpoints_rejected == (
+        at_return.setpoints_accepted + at_return.setpoints_rejected
+    )
+    assert later.manual_control_accepted > switch.manual_control_accepted  # the pilot flies

@@ -12,7 +12,7 @@ from companion.waypoint_reference import WaypointReference
 # PX4 custom_mode values as docs/mavlink_protocol.md lists them (checked against PX4's
 # px4_custom_mode.h).
 PROTOCOL_CUSTOM_MODES = {
-    "POSCTL": 196608, "HOLD": 50593792, "TAKEOFF": 33816576, "LAND": 100925440,
+    "POSCTL": 196608, "ALTCTL": 131072, "HOLD": 50593792, "TAKEOFF": 33816576, "LAND": 100925440,
     "RTL": 84148224, "MISSION": 67371008, "OFFBOARD": 393216, "MANUAL": 65536,
 }  # fmt: skip
 

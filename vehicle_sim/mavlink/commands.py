@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 
 from pymavlink.dialects.v20 import common as mavlink2
 
+from vehicle_sim.mavlink.orbit import start_orbit
 from vehicle_sim.mavlink.scheduler import RateScheduler
 from vehicle_sim.mavlink.telemetry import TELEMETRY_BUILDERS, TelemetryContext
 from vehicle_sim.vehicle_types import FlightMode
@@ -38,6 +39,7 @@ CMD_NAV_LAND = mavlink2.MAV_CMD_NAV_LAND
 CMD_NAV_TAKEOFF = mavlink2.MAV_CMD_NAV_TAKEOFF
 CMD_DO_SET_MODE = mavlink2.MAV_CMD_DO_SET_MODE
 CMD_DO_REPOSITION = mavlink2.MAV_CMD_DO_REPOSITION
+CMD_DO_ORBIT = mavlink2.MAV_CMD_DO_ORBIT
 CMD_MISSION_START = mavlink2.MAV_CMD_MISSION_START
 CMD_DO_SET_MISSION_CURRENT = mavlink2.MAV_CMD_DO_SET_MISSION_CURRENT
 CMD_COMPONENT_ARM_DISARM = mavlink2.MAV_CMD_COMPONENT_ARM_DISARM
@@ -164,6 +166,11 @@ def reposition(p: Params, ctx: CommandContext) -> CommandOutcome:
     return _from_sim(ctx.sim.reposition((north, east, down)))
 
 
+def do_orbit(p: Params, ctx: CommandContext) -> CommandOutcome:
+    """DO_ORBIT (MAVSDK's do_orbit): PX4's Orbit mode, see :mod:`vehicle_sim.mavlink.orbit`."""
+    return _from_sim(start_orbit(ctx.sim, p, ctx.telemetry.origin))
+
+
 def _mission_item(value: float, ctx: CommandContext) -> int | None:
     """A mission item index from a command parameter: None for NaN or negative ("no change");
     ValueError for anything that is not an item of the uploaded mission."""
@@ -244,6 +251,7 @@ def get_message_interval(p: Params, ctx: CommandContext) -> CommandOutcome:
 COMMAND_HANDLERS: dict[int, Handler] = {
     CMD_NAV_RETURN_TO_LAUNCH: return_to_launch,
     CMD_DO_REPOSITION: reposition,
+    CMD_DO_ORBIT: do_orbit,
     CMD_MISSION_START: mission_start,
     CMD_DO_SET_MISSION_CURRENT: set_mission_current,
     CMD_NAV_LAND: land,

@@ -7,6 +7,7 @@ to send. Touches only the simulator's public API and the link's scheduler; no so
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -26,6 +27,7 @@ from vehicle_sim.mavlink.commands import (
     Notice,
     handle_command,
 )
+from vehicle_sim.mavlink.manual_control import parse_manual_control
 from vehicle_sim.mavlink.mission_protocol import MissionProtocol, MissionReply
 from vehicle_sim.mavlink.offboard import SetpointResult, parse_global_setpoint, parse_setpoint
 from vehicle_sim.mavlink.scheduler import RateScheduler
@@ -37,6 +39,7 @@ if TYPE_CHECKING:
     from vehicle_sim import Simulator
 
 _FACTORY = mavlink2.MAVLink(None)
+INT32_MAX = 2**31 - 1
 
 
 @dataclass(frozen=True)
@@ -150,11 +153,14 @@ class Dispatcher:
 
     def _command_int(self, msg, scheduler, _now_ns) -> list[Outgoing]:
         """COMMAND_INT -> the COMMAND_LONG parameters: x, y in degrees for a global frame (else
-        metres, [MAVLink] COMMAND_INT), z as altitude above mean sea level."""
+        metres, [MAVLink] COMMAND_INT; INT32_MAX is NaN, "unset"), z as altitude above mean sea
+        level. DO_ORBIT's z is AMSL in every frame, as PX4 reads it (which ignores the frame):
+        MAVSDK's do_orbit sends its absolute altitude in MAV_FRAME_GLOBAL_RELATIVE_ALT."""
         x, y, z = float(msg.x), float(msg.y), float(msg.z)
+        x, y = (math.nan if v == INT32_MAX else v for v in (x, y))  # INT32_MAX: unset
         if msg.frame in _GLOBAL_FRAMES:
             x, y = x / 1e7, y / 1e7
-            if msg.frame in _RELATIVE_ALT_FRAMES:
+            if msg.frame in _RELATIVE_ALT_FRAMES and msg.command != mavlink2.MAV_CMD_DO_ORBIT:
                 z += self._telemetry.origin.alt_amsl_m + self._sim.state.home_alt_amsl_offset_m
         else:
             x, y = x / 1e4, y / 1e4
@@ -319,14 +325,28 @@ class Dispatcher:
 
         return handle
 
-    def _manual_control(self, msg, scheduler, now_ns) -> list[Outgoing]:
-        """MANUAL_CONTROL (MAVSDK's manual_control, a joystick in QGC): no stick input is
-        simulated, so the modes hold; said once a second rather than ignored."""
+    def _manual_control(self, msg, _scheduler, _now_ns) -> list[Outgoing]:
+        """MANUAL_CONTROL (MAVSDK's manual_control, QGC's virtual joystick): the sticks fly
+        POSCTL/ALTCTL and may override auto modes or OFFBOARD (``Simulator.set_sticks``).
+        Another system's is counted as ``wrong_target``; out-of-range axes are clamped and an
+        axis marked invalid drops the message, each said in a STATUSTEXT; sticks that the
+        simulator ignores (COM_RC_IN_MODE 0 or 4) are said to be ignored too."""
         if msg.target not in (0, SYSTEM_ID):
             self._stats.add("wrong_target")
             return []
-        text = "Manual control input is not simulated: sticks ignored"
-        return self._not_flown(text)(msg, scheduler, now_ns)
+        parsed = parse_manual_control(msg.x, msg.y, msg.z, msg.r)
+        notices: list[Notice] = []
+        if parsed.problem:
+            notices.append((MAV_SEVERITY_WARNING, parsed.problem))
+        if parsed.sticks is None:
+            self._stats.add("manual_control_rejected")
+        elif self._sim.set_sticks(parsed.sticks):
+            self._stats.add("manual_control_accepted")
+        else:
+            self._stats.add("manual_control_rejected")
+            mode = int(self._sim.get_param("COM_RC_IN_MODE"))
+            notices.append((MAV_SEVERITY_WARNING, f"Sticks ignored: COM_RC_IN_MODE is {mode}"))
+        return self._notices(tuple(notices))
 
     def _ftp(self, msg, _scheduler, _now_ns) -> list[Outgoing]:
         return [Outgoing(services.ftp_nak_reply(msg))]

@@ -37,6 +37,7 @@ from vehicle_sim.mavlink.config import EndpointConfig
 from vehicle_sim.mavlink.dispatcher import Dispatcher, Outgoing
 from vehicle_sim.mavlink.link import Address, UdpLink
 from vehicle_sim.mavlink.obstacle_distance import obstacle_distance_message
+from vehicle_sim.mavlink.orbit import ORBIT_STATUS_PERIOD_S, orbit_execution_status
 from vehicle_sim.mavlink.stats import EndpointStats, StatsCounter
 from vehicle_sim.mavlink.statustext import CHUNK_ID_MAX, NoticeLimiter, statustext_chunks
 from vehicle_sim.mavlink.telemetry import (
@@ -109,6 +110,7 @@ class MavlinkEndpoint:
         self._sim0_s = 0.0  # ... and the simulated time it stands for [s]
         self._pending: list[tuple[int, float]] = []
         self._obstacles_due_s = 0.0  # next OBSTACLE_DISTANCE [s of simulated time]
+        self._orbit_due_s = 0.0  # next ORBIT_EXECUTION_STATUS [s of simulated time]
         self._trace: deque[SetpointActuation] = deque(maxlen=TRACE_LENGTH)
         self._notice_limiter = NoticeLimiter(NOTICE_REPEAT_S, NOTICE_MEMORY)
         self._factory = mavlink2.MAVLink(None)
@@ -239,6 +241,7 @@ class MavlinkEndpoint:
                 self._broadcast(extended_sys_state(state, self._telemetry))
             self._stream(state, time.perf_counter())
             self._stream_obstacles(state)
+            self._stream_orbit(state)
             wait_s = 0.0 if catching_up else cfg.tick_s  # no sleeping while behind
             readable, _, _ = select.select(sockets, [], [], wait_s)
             for link in self._links:
@@ -304,6 +307,19 @@ class MavlinkEndpoint:
         msg = obstacle_distance_message(self.sim.range_scan(), sensor.min_range_m)
         for link in self._links:
             self._send_to_peers(link, msg)
+
+    def _stream_orbit(self, state: VehicleState) -> None:
+        """ORBIT_EXECUTION_STATUS at 2 Hz of simulated time while the vehicle orbits."""
+        orbit = self.sim.orbit_status
+        if orbit is None or state.t_s < self._orbit_due_s:
+            return
+        self._orbit_due_s = state.t_s + ORBIT_STATUS_PERIOD_S
+        try:
+            msg = orbit_execution_status(orbit, self._telemetry.origin, state.t_s)
+        except ValueError:
+            self._stats.add("handler_errors")
+            return
+        self._broadcast(msg)
 
     def _drain(self, link: UdpLink) -> None:
         for _ in range(MAX_DATAGRAMS_PER_PASS):

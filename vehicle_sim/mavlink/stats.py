@@ -22,6 +22,9 @@ class EndpointStats:
         commands_unsupported: of those, answered UNSUPPORTED.
         setpoints_accepted: SET_POSITION_TARGET_LOCAL_NED passed to the simulator.
         setpoints_rejected: setpoints refused (frame, type_mask, NaN, absurd values).
+        manual_control_accepted: MANUAL_CONTROL sticks passed to the simulator.
+        manual_control_rejected: MANUAL_CONTROL dropped (an axis marked invalid, or stick
+            input disabled by COM_RC_IN_MODE).
         params_unknown: parameter requests for unknown names or indices.
         handler_errors: messages whose handling raised (the loop kept running).
         messages_sent: MAVLink messages sent (one per peer).
@@ -45,6 +48,8 @@ class EndpointStats:
     commands_unsupported: int = 0
     setpoints_accepted: int = 0
     setpoints_rejected: int = 0
+    manual_control_accepted: int = 0
+    manual_control_rejected: int = 0
     params_unknown: int = 0
     handler_errors: int = 0
     messages_sent: int = 0
