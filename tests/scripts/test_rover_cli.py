@@ -97,3 +97,27 @@ def test_ctrl_c_during_a_regime_is_one_line_exit_130_and_writes_nothing(tmp_path
             proc.wait(5)
     assert "Traceback" not in err and err.strip().splitlines()[-1].startswith("rover: interrupted")
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.slow
+def test_ctrl_c_during_the_example_is_one_line_exit_130_and_writes_nothing(tmp_path: Path) -> None:
+    """The example runs its three controllers for a few seconds before writing its figure:
+    Ctrl-C then is the same one line and exit 130 as in a regime, not a traceback."""
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "scripts.rover", "--regime", "example", "--out", str(tmp_path)],
+        cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )  # fmt: skip
+    try:
+        for line in proc.stderr:
+            if "example: feedback, MPC and LB-NMPC" in line:
+                break
+        proc.send_signal(signal.SIGINT)
+        err = proc.stderr.read()
+        assert proc.wait(60) == 130, err
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(5)
+    assert "Traceback" not in err and err.strip().splitlines()[-1].startswith("rover: interrupted")
+    assert list(tmp_path.iterdir()) == []
