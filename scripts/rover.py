@@ -6,8 +6,9 @@ Regimes ([Ostafew16] section 5; the robots are vehicle_sim.rover's presets):
   rover_exp3  100 m loop, speed scheduler, 10 trials, 600 kg Ackermann (DMRV)
   example     section 3.4's illustrative example: feedback vs MPC vs LB-NMPC (Fig. 4)
 
-Writes into --out: REGIME.png (max and RMS e_L [m] / e_H [rad] per trial, the scheduled speed
-along the path per trial, travel time per trial) and REGIME.json (the per-trial numbers and
+Writes into --out: REGIME.png (max and RMS e_L [m] / e_H [rad] per trial, e_L along the path
+in the first and the last trial, the scheduled speed along the path per trial, travel time per
+trial) and REGIME.json (the per-trial numbers and
 the reductions 1 - last / first trial); `example` writes fig4_illustrative.png and takes no
 --trials or --seed. Each trial is said on stderr as it ends, then the files written; the
 summary is printed on stdout (for `example`, each controller's RMS tracking error of z).

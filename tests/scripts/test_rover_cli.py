@@ -60,6 +60,8 @@ def test_help_lists_the_regimes_what_is_written_and_quick(capsys) -> None:
     text = capsys.readouterr().out
     for word in ("rover_exp2", "Ackermann", "fig4_illustrative.png", "REGIME.json", "--quick"):
         assert word in text, word
+    # each panel of the regime's figure (experiments.rover.report.figure) is named
+    assert "e_L along the path in the first and the last trial" in " ".join(text.split())
     assert study.main(["--help"]) == 0
     assert "rover_exp1" in capsys.readouterr().out
 
