@@ -121,7 +121,8 @@ def figure(records: list[TrialRecord], s_m: np.ndarray, name: str) -> matplotlib
     ax.set_ylabel("path error [m] or [rad]")
     ax.legend()
     ax = axes[1]
-    for k, style in ((0, "r"), (len(records) - 1, "k")):
+    first_and_last = {0: "r", len(records) - 1: "k"}  # one entry when one trial
+    for k, style in first_and_last.items():
         r = records[k]
         ax.plot(r.s_m, r.e_lat_m, style, lw=0.8, label=f"trial {k + 1}")
     ax.axhline(0.0, color="0.6", lw=0.5)
