@@ -35,8 +35,13 @@ QUICK_TRIALS = 2
 
 
 def _seed(text: str) -> int:
-    """A trial seed (argparse ``type``): NumPy's generators take integers >= 0 only."""
-    value = int(text)
+    """A trial seed (argparse ``type``): NumPy's generators take integers >= 0 only. Both
+    refusals are said here, since argparse names the function in its own ("invalid _seed
+    value")."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be an integer >= 0, got {text!r}") from None
     if value < 0:
         raise argparse.ArgumentTypeError(f"must be >= 0, got {value}")
     return value

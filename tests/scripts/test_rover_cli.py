@@ -51,6 +51,9 @@ def test_a_negative_seed_is_one_line_exit_2(tmp_path: Path, capsys) -> None:
     assert rover.main(["--regime", "rover_exp1", "--seed", "-3", "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--seed" in err[0] and ">= 0" in err[0], err
+    assert rover.main(["--regime", "rover_exp1", "--seed", "x", "--out", str(tmp_path)]) == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert "argument --seed: must be an integer >= 0, got 'x'" in line  # not "invalid _seed"
 
 
 def test_help_lists_the_regimes_what_is_written_and_quick(capsys) -> None:
