@@ -220,6 +220,14 @@ def summarise_ulog(path: str | Path) -> dict[str, object]:
     }
 
 
+def parameters_give_a_config(summary: Mapping[str, object]) -> bool:
+    """Whether a ULog the mapping refuses still gives a sim config from its PX4 parameters
+    alone (vehicle-sim config-from-log): a multirotor by MAV_TYPE that logged MPC_THR_HOVER.
+    ``summary`` is :func:`summarise_ulog`'s."""
+    params = summary.get("px4_params") or {}
+    return summary.get("mav_type") in px4.MAV_TYPE_MULTIROTOR and "MPC_THR_HOVER" in params
+
+
 def logger_dropouts(ulog) -> list[float]:
     """[count, total s, longest s] of the gaps PX4's logger recorded in pyulog's ``ulog``
     (messages it could not write, e.g. to a slow SD card: no topic has data in them)."""
