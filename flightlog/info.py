@@ -119,11 +119,13 @@ def describe_unusable_ulog(summary: dict, reason: str) -> list[str]:
 def _firmware_and_dropouts(meta: dict) -> list[str]:
     """A ULog's firmware line (also when the log records no version) and, if its logger dropped
     messages, how many and for how long."""
+    hardware = meta.get("hardware")
+    board = f"on {hardware}" if hardware else "on a board not logged (no ver_hw)"
     if meta.get("firmware"):
-        lines = [f"firmware: PX4 {meta['firmware']} on {meta.get('hardware')}"]
+        lines = [f"firmware: PX4 {meta['firmware']} {board}"]
     else:
         lines = [
-            f"firmware: PX4, version not logged (no ver_sw_release), on {meta.get('hardware')}; "
+            f"firmware: PX4, version not logged (no ver_sw_release), {board}; "
             "flight modes read with the numbering before v1.15"
         ]
     count, total_s, longest_s = meta.get("logger_dropouts") or (0, 0.0, 0.0)
