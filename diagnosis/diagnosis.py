@@ -37,7 +37,7 @@ from diagnosis.force_model import (
     gust_intensity_mps,
     predicted_residual,
 )
-from diagnosis.forces import GRAVITY_MPS2, ForceData, force_data, with_thrust_n
+from diagnosis.forces import GRAVITY_MPS2, ForceData, ForceDataError, force_data, with_thrust_n
 from diagnosis.identifiability import FLIGHT_FOR, NotIdentifiable, check_identifiability
 from diagnosis.noise_floor import white_noise_std
 from diagnosis.replay import ReplayResult, replay, windows
@@ -192,6 +192,7 @@ def diagnose(
     force_names = [n for n in FORCE_CAUSES if n not in excluded]
     if force_names:
         data = force_data(logs, sim_config.mass_kg)
+        _require_held_out_rows(data, config.selection.block_s)
         progress(f"force residual: {data.n_rows} airborne rows")
         selection = select_causes(data, base, battery, force_names, config.selection, progress)
         effects = _complete(selection.effects, data, battery)
@@ -486,6 +487,20 @@ def _recheck_with_fitted_control(
             restored.append(originals[cause.name])
             effects, current = trial, with_it
     return restored, effects, current
+
+
+def _require_held_out_rows(data: ForceData, block_s: float) -> None:
+    """ForceDataError (one line) unless the airborne rows fall in both training and held-out
+    blocks (selection.train_test_masks): a flight too short for that has nothing to judge a
+    cause on, and its held-out force residual would be an empty array."""
+    train, test = train_test_masks(data, block_s)
+    if not (train.any() and test.any()):
+        raise ForceDataError(
+            f"too little flight to hold any out: the {data.n_rows} airborne rows all fall in "
+            f"{'training' if train.any() else 'held-out'} blocks (the diagnosis alternates "
+            f"{block_s:g} s blocks of each); use a longer flight (more than {2 * block_s:g} s "
+            "in the air)"
+        )
 
 
 def _added(

@@ -231,10 +231,10 @@ def force_data(logs: list[FlightLog], mass_kg: float) -> ForceData:
         alt = -log["pos_d_m"]
         armed = log["armed"] > 0.5 if log.has("armed") else np.ones(log.n_rows, bool)
         air = (alt > MIN_AIRBORNE_ALT_M) & armed & (log["thrust_n"] > 0.0)
-        rows += log.n_rows
+        rows += log.n_rows  # each count fails its condition of ``air`` (a NaN fails it too)
         disarmed += int(np.sum(~armed))
-        low += int(np.sum(alt <= MIN_AIRBORNE_ALT_M))
-        no_thrust += int(np.sum(log["thrust_n"] <= 0.0))
+        low += int(np.sum(~(alt > MIN_AIRBORNE_ALT_M)))
+        no_thrust += int(np.sum(~(log["thrust_n"] > 0.0)))
         battery = log["battery_v"] if log.has("battery_v") else np.full(log.n_rows, np.nan)
         q = log.stack("q_w", "q_x", "q_y", "q_z")
         acc = acceleration(log)
@@ -255,8 +255,8 @@ def force_data(logs: list[FlightLog], mass_kg: float) -> ForceData:
     if not any(len(p["t_s"]) for p in parts):
         raise ForceDataError(
             f"no airborne rows (altitude > 1 cm, armed, thrust > 0) in the logs: of {rows} rows, "
-            f"{disarmed} disarmed, {low} at or below 1 cm, {no_thrust} without thrust; use a log "
-            "of a flight"
+            f"{disarmed} disarmed, {low} not above 1 cm, {no_thrust} without thrust (NaN counts "
+            "as failing); use a log of a flight"
         )
     cols = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
     g = np.array([0.0, 0.0, GRAVITY_MPS2])

@@ -100,7 +100,7 @@ def windows(logs: Sequence[FlightLog], window_s: float = 2.0) -> list[Window]:
         t = log["t_s"]
         for run_start, run_stop in airborne_runs(log):
             anchor = int(np.searchsorted(t, t[run_start] + LEAD_IN_S))
-            while True:
+            while anchor < run_stop:  # a run within LEAD_IN_S of the log's end has no anchor
                 stop = int(np.searchsorted(t, t[anchor] + window_s))
                 if stop >= run_stop:
                     break

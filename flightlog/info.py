@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from flightlog import px4
 from flightlog.reader import NEEDS_HZ, log_rates_hz, rate_shortfalls
 from flightlog.schema import FlightLog
-from flightlog.ulog import damage_note
+from flightlog.ulog import damage_note, parameters_give_a_config
 
 
 def mode_spans(log: FlightLog) -> list[tuple[str, float, float]]:
@@ -109,8 +108,7 @@ def describe_unusable_ulog(summary: dict, reason: str) -> list[str]:
     if not summary["modes"]:
         lines.append("modes: not recorded")
     lines.append(f"fit-gp, diagnose, convert: cannot use this log: {reason}")
-    params = summary.get("px4_params") or {}
-    if summary.get("mav_type") in px4.MAV_TYPE_MULTIROTOR and "MPC_THR_HOVER" in params:
+    if parameters_give_a_config(summary):
         lines.append(
             "config-from-log: from its PX4 parameters only (hover thrust: the MPC_THR_HOVER "
             "parameter, not measured)"
@@ -121,11 +119,13 @@ def describe_unusable_ulog(summary: dict, reason: str) -> list[str]:
 def _firmware_and_dropouts(meta: dict) -> list[str]:
     """A ULog's firmware line (also when the log records no version) and, if its logger dropped
     messages, how many and for how long."""
+    hardware = meta.get("hardware")
+    board = f"on {hardware}" if hardware else "on a board not logged (no ver_hw)"
     if meta.get("firmware"):
-        lines = [f"firmware: PX4 {meta['firmware']} on {meta.get('hardware')}"]
+        lines = [f"firmware: PX4 {meta['firmware']} {board}"]
     else:
         lines = [
-            f"firmware: PX4, version not logged (no ver_sw_release), on {meta.get('hardware')}; "
+            f"firmware: PX4, version not logged (no ver_sw_release), {board}; "
             "flight modes read with the numbering before v1.15"
         ]
     count, total_s, longest_s = meta.get("logger_dropouts") or (0, 0.0, 0.0)

@@ -78,10 +78,16 @@ MAV_TYPE_MULTIROTOR: dict[int, str] = {
 }  # fmt: skip
 MAV_TYPE_VTOL = frozenset({19, 20, 21, 22, 23, 24, 25})
 MAV_TYPE_NAMES: dict[int, str] = {
-    **MAV_TYPE_MULTIROTOR, 1: "fixed wing", 10: "ground rover", 11: "surface boat",
-    12: "submarine", 19: "VTOL tailsitter duo", 20: "VTOL tailsitter quad",
+    **MAV_TYPE_MULTIROTOR, 0: "generic vehicle", 1: "fixed wing", 10: "ground rover",
+    11: "surface boat", 12: "submarine", 19: "VTOL tailsitter duo", 20: "VTOL tailsitter quad",
     21: "VTOL tiltrotor", 22: "VTOL standard", 23: "VTOL tailsitter",
 }  # fmt: skip
+
+
+def vehicle_name(mav_type: int | None) -> str | None:
+    """A MAV_TYPE in words ("quadrotor", "generic vehicle" for 0, "MAV_TYPE 42" for one not
+    listed); None when the log has no MAV_TYPE (0 is a type, not a missing one)."""
+    return None if mav_type is None else MAV_TYPE_NAMES.get(mav_type, f"MAV_TYPE {mav_type}")
 
 
 def mode_names(nav_state: np.ndarray, firmware: str | None = None) -> np.ndarray:

@@ -209,7 +209,7 @@ def summarise_ulog(path: str | Path) -> dict[str, object]:
     return {
         "firmware": firmware,
         "hardware": ulog.msg_info_dict.get("ver_hw"),
-        "vehicle": px4.MAV_TYPE_NAMES.get(mav_type, f"MAV_TYPE {mav_type}") if mav_type else None,
+        "vehicle": px4.vehicle_name(mav_type),
         "mav_type": mav_type,
         "duration_s": (t1 - t0) * 1e-6,
         "rates_hz": {name: _rate(topic, span) for name, topic in sorted(topics.items())},
@@ -218,6 +218,14 @@ def summarise_ulog(path: str | Path) -> dict[str, object]:
         "px4_params": {k: float(v) for k, v in params.items()},
         "logger_dropouts": logger_dropouts(ulog),
     }
+
+
+def parameters_give_a_config(summary: Mapping[str, object]) -> bool:
+    """Whether a ULog the mapping refuses still gives a sim config from its PX4 parameters
+    alone (vehicle-sim config-from-log): a multirotor by MAV_TYPE that logged MPC_THR_HOVER.
+    ``summary`` is :func:`summarise_ulog`'s."""
+    params = summary.get("px4_params") or {}
+    return summary.get("mav_type") in px4.MAV_TYPE_MULTIROTOR and "MPC_THR_HOVER" in params
 
 
 def logger_dropouts(ulog) -> list[float]:
@@ -337,7 +345,7 @@ def _vehicle(topics: Topics, params: Mapping[str, float], where: str) -> dict[st
     mav_type = int(params["MAV_TYPE"]) if "MAV_TYPE" in params else None
     if mav_type is not None and mav_type in px4.MAV_TYPE_VTOL:
         is_vtol = True
-    name = px4.MAV_TYPE_NAMES.get(mav_type, f"MAV_TYPE {mav_type}") if mav_type else None
+    name = px4.vehicle_name(mav_type)
     refuse = mav_type is not None and not is_vtol and mav_type not in px4.MAV_TYPE_MULTIROTOR
     if not is_vtol and "vehicle_type" in status:
         vt = np.asarray(status["vehicle_type"])

@@ -6,12 +6,13 @@ Regimes ([Ostafew16] section 5; the robots are vehicle_sim.rover's presets):
   rover_exp3  100 m loop, speed scheduler, 10 trials, 600 kg Ackermann (DMRV)
   example     section 3.4's illustrative example: feedback vs MPC vs LB-NMPC (Fig. 4)
 
-Writes into --out: REGIME.png (max and RMS e_L [m] / e_H [rad] per trial, the scheduled speed
-along the path per trial, travel time per trial) and REGIME.json (the per-trial numbers and
+Writes into --out: REGIME.png (max and RMS e_L [m] / e_H [rad] per trial, e_L along the path
+in the first and the last trial, the scheduled speed along the path per trial, travel time per
+trial) and REGIME.json (the per-trial numbers and
 the reductions 1 - last / first trial); `example` writes fig4_illustrative.png and takes no
 --trials or --seed. Each trial is said on stderr as it ends, then the files written; the
 summary is printed on stdout (for `example`, each controller's RMS tracking error of z).
-Ctrl-C stops a regime with exit 130 and writes nothing.
+Ctrl-C stops a regime or the example with exit 130 and writes nothing.
 A full regime takes about 25-60 s of CPU; --quick drives 2 trials (learning needs one before
 it). `study --regime rover_exp1 ...` runs this command. Exit 2 with one line on bad input.
 """
@@ -23,6 +24,7 @@ import json
 import os
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 from flightlog.atomic_output import OutputError, check_writable_dir, describe_os_error
@@ -33,8 +35,13 @@ QUICK_TRIALS = 2
 
 
 def _seed(text: str) -> int:
-    """A trial seed (argparse ``type``): NumPy's generators take integers >= 0 only."""
-    value = int(text)
+    """A trial seed (argparse ``type``): NumPy's generators take integers >= 0 only. Both
+    refusals are said here, since argparse names the function in its own ("invalid _seed
+    value")."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be an integer >= 0, got {text!r}") from None
     if value < 0:
         raise argparse.ArgumentTypeError(f"must be >= 0, got {value}")
     return value
@@ -77,28 +84,38 @@ def main(argv: list[str] | None = None) -> int:
     except OSError as exc:
         print(f"rover: --out {describe_os_error(Path(args.out), exc)}", file=sys.stderr)
         return 2
-    if args.regime == "example":
-        from experiments.rover.illustrative import write_figure
+    start = time.process_time()
 
-        written = [os.path.join(args.out, "fig4_illustrative.png")]
-        result = {"rms_tracking_error_z": write_figure(written[0])}
-    else:
-        from experiments.rover.report import run_regime
+    def progress(message: str) -> None:
+        print(f"rover [{time.process_time() - start:6.1f} s CPU] {message}", file=sys.stderr)
 
-        start = time.process_time()
-
-        def progress(message: str) -> None:
-            print(f"rover [{time.process_time() - start:6.1f} s CPU] {message}", file=sys.stderr)
-
-        try:
-            result = run_regime(args.regime, args.out, args.trials, args.seed, progress)
-        except KeyboardInterrupt:  # the figure and summary are written at the end, whole
-            print(f"rover: interrupted; nothing written to {args.out}", file=sys.stderr)
-            return 130
-        written = [os.path.join(args.out, f"{args.regime}.{ext}") for ext in ("png", "json")]
+    try:
+        written, result = _run(args.regime, args.out, args.trials, args.seed, progress)
+    except KeyboardInterrupt:  # the files are written at the end, each whole
+        print(f"rover: interrupted; nothing written to {args.out}", file=sys.stderr)
+        return 130
+    except OutputError as exc:  # the folder checked above failed later (full, removed)
+        print(f"rover: --out {exc}", file=sys.stderr)
+        return 2
     print(f"rover: wrote {' and '.join(written)}", file=sys.stderr)
     print(json.dumps(result, indent=1))
     return 0
+
+
+def _run(
+    regime: str, out: str, trials: int | None, seed: int, progress: Callable[[str], None]
+) -> tuple[list[str], dict]:
+    """Run ``regime`` into the folder ``out``: (the files written, the summary printed)."""
+    if regime == "example":
+        progress("example: feedback, MPC and LB-NMPC on section 3.4's system")
+        from experiments.rover.illustrative import write_figure
+
+        written = [os.path.join(out, "fig4_illustrative.png")]
+        return written, {"rms_tracking_error_z": write_figure(written[0])}
+    from experiments.rover.report import run_regime
+
+    result = run_regime(regime, out, trials, seed, progress)
+    return [os.path.join(out, f"{regime}.{ext}") for ext in ("png", "json")], result
 
 
 if __name__ == "__main__":

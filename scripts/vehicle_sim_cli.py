@@ -324,6 +324,7 @@ def _undo_log(log_path: str | None, kept: Path | None) -> None:
 
 def _run_rover(config: VehicleSimCliConfig, stop: threading.Event) -> int:
     """Serve a rover preset on the offboard link until ``stop``, the deadline or a dead loop."""
+    defaults = VehicleSimCliConfig()
     refused = [
         flag
         for flag, used in (
@@ -334,6 +335,9 @@ def _run_rover(config: VehicleSimCliConfig, stop: threading.Event) -> int:
             ("--world", config.world_path),
             ("--log", config.log_path),
             ("--realtime-priority", config.realtime_priority),
+            ("--gcs-port", config.gcs_port != defaults.gcs_port),
+            ("--offboard-bind-port", config.offboard_bind_port != defaults.offboard_bind_port),
+            ("--gcs-bind-port", config.gcs_bind_port != defaults.gcs_bind_port),
         )
         if used
     ]

@@ -19,10 +19,9 @@ from pathlib import Path
 
 import numpy as np
 
-from flightlog import px4
 from flightlog.reader import read_log
 from flightlog.schema import FlightLog, FlightLogError
-from flightlog.ulog import FLY_HINT, is_ulog, summarise_ulog
+from flightlog.ulog import FLY_HINT, is_ulog, parameters_give_a_config, summarise_ulog
 from vehicle_sim.config import GRAVITY_MPS2, config_from_mapping, load_sim_config
 from vehicle_sim.params import PX4_PARAMS
 
@@ -73,9 +72,9 @@ def config_from_log_file(path: str | Path, preset: str = "iris") -> ConfigFromLo
         if not is_ulog(path):
             raise
         summary = summarise_ulog(path)
-        params = summary["px4_params"]
-        if summary["mav_type"] not in px4.MAV_TYPE_MULTIROTOR or "MPC_THR_HOVER" not in params:
+        if not parameters_give_a_config(summary):
             raise refused from None
+        params = summary["px4_params"]
         why = str(refused).removeprefix(f"{path}: ").replace(f"; {FLY_HINT}", "")
         hover = float(params["MPC_THR_HOVER"])
         note = (

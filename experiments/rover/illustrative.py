@@ -122,18 +122,23 @@ def figure(c: ExampleConfig = ExampleConfig()) -> tuple[Figure, dict[str, dict]]
 
 
 def write_figure(path: str, c: ExampleConfig = ExampleConfig()) -> dict[str, float]:  # noqa: B008
-    """Fig. 4-like PNG (atomic write); returns the RMS tracking error of each controller."""
-    import os
-    import tempfile
+    """Fig. 4-like PNG, written whole or not at all; returns the RMS tracking error of each
+    controller.
+
+    Raises:
+        OutputError: ``path`` cannot be written (one line).
+    """
+    import io
 
     import matplotlib.pyplot as plt
 
+    from flightlog.atomic_output import write_bytes_atomic
+
     fig, runs = figure(c)
-    folder = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(suffix=".png", dir=folder)
-    os.close(fd)
-    os.chmod(tmp, 0o644)
-    fig.savefig(tmp, dpi=100)
-    plt.close(fig)
-    os.replace(tmp, path)
+    png = io.BytesIO()
+    try:
+        fig.savefig(png, format="png", dpi=100)
+    finally:
+        plt.close(fig)
+    write_bytes_atomic(path, png.getvalue())
     return {name: tracking_rms(r) for name, r in runs.items()}

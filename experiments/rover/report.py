@@ -10,9 +10,9 @@ again with learning disabled (:func:`learning_disabled_pass`), and the summary a
 
 from __future__ import annotations
 
+import io
 import json
 import os
-import tempfile
 from collections.abc import Callable
 from dataclasses import replace
 from typing import TYPE_CHECKING
@@ -22,6 +22,7 @@ import numpy as np
 from experiments.rover.learner import make_history_gp
 from experiments.rover.scenarios import RoverScenario, scenario
 from experiments.rover.trial import TrialRecord, run_trial, run_trials
+from flightlog.atomic_output import write_bytes_atomic, write_text_atomic
 
 if TYPE_CHECKING:
     import matplotlib.figure
@@ -120,7 +121,8 @@ def figure(records: list[TrialRecord], s_m: np.ndarray, name: str) -> matplotlib
     ax.set_ylabel("path error [m] or [rad]")
     ax.legend()
     ax = axes[1]
-    for k, style in ((0, "r"), (len(records) - 1, "k")):
+    first_and_last = {0: "r", len(records) - 1: "k"}  # one entry when one trial
+    for k, style in first_and_last.items():
         r = records[k]
         ax.plot(r.s_m, r.e_lat_m, style, lw=0.8, label=f"trial {k + 1}")
     ax.axhline(0.0, color="0.6", lw=0.5)
@@ -149,15 +151,16 @@ def figure(records: list[TrialRecord], s_m: np.ndarray, name: str) -> matplotlib
 
 
 def _plots(records: list[TrialRecord], s_m: np.ndarray, folder: str, name: str) -> None:
+    """``folder/<name>.png``: :func:`figure`, written whole or not at all."""
     import matplotlib.pyplot as plt
 
     fig = figure(records, s_m, name)
-    fd, tmp = tempfile.mkstemp(suffix=".png", dir=folder)
-    os.close(fd)
-    os.chmod(tmp, 0o644)
-    fig.savefig(tmp, dpi=90)
-    plt.close(fig)
-    os.replace(tmp, os.path.join(folder, f"{name}.png"))
+    png = io.BytesIO()
+    try:
+        fig.savefig(png, format="png", dpi=90)
+    finally:
+        plt.close(fig)
+    write_bytes_atomic(os.path.join(folder, f"{name}.png"), png.getvalue())
 
 
 def run_regime(
@@ -167,8 +170,12 @@ def run_regime(
     seed: int = 0,
     progress: Callable[[str], None] | None = None,
 ) -> dict:
-    """Run regime ``name`` (rover_exp1..3) and write ``<name>.png`` and ``<name>.json``;
-    ``progress`` is told each trial as it ends (one line)."""
+    """Run regime ``name`` (rover_exp1..3) and write ``<name>.png`` and ``<name>.json`` into
+    ``out_dir``, each whole or not at all; ``progress`` is told each trial as it ends (one line).
+
+    Raises:
+        OutputError: ``out_dir`` cannot be written (one line).
+    """
     sc = scenario(name, seed)
     if trials is not None:
         sc = replace(sc, trials=trials)
@@ -187,11 +194,6 @@ def run_regime(
         if progress is not None:
             progress(f"{name}: the last trial's speeds again with learning disabled")
         summary.update(same_schedule_figures(records[-1], learning_disabled_pass(sc, records)))
-    os.makedirs(out_dir, exist_ok=True)
     _plots(records, sc.path.s_m, out_dir, name)
-    fd, tmp = tempfile.mkstemp(suffix=".json", dir=out_dir)
-    os.chmod(tmp, 0o644)
-    with os.fdopen(fd, "w") as f:
-        json.dump(summary, f, indent=1)
-    os.replace(tmp, os.path.join(out_dir, f"{name}.json"))
+    write_text_atomic(os.path.join(out_dir, f"{name}.json"), json.dumps(summary, indent=1))
     return summary

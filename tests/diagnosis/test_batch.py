@@ -110,3 +110,23 @@ def test_batch_skips_each_log_it_cannot_diagnose_with_its_reason_and_diagnoses_t
     assert main([*logs[:3], *args[4:-1], str(tmp_path / "none")]) == 2
     assert capsys.readouterr().err.splitlines()[-1].startswith("diagnose: none of the 3 logs")
     assert not (tmp_path / "none").exists()
+
+
+def test_a_flight_too_short_to_hold_out_is_skipped_with_its_reason_not_a_traceback():
+    """4 s of a real flight: every airborne row falls in one 4 s training block, so there is no
+    held-out row to judge a cause on (the unexplained check stacked an empty list: ValueError,
+    a traceback out of diagnose and out of the whole batch)."""
+    from dataclasses import replace
+
+    from experiments.batch_diagnose import DiagnosisJob, run_diagnosis_job
+    from flightlog.reader import read_log
+    from vehicle_sim import load_sim_config
+
+    log = read_log(
+        Path(__file__).resolve().parents[1] / "fixtures" / "ulog" / "quad_offboard_v1_16.ulg"
+    )
+    mid = log.n_rows // 2
+    short = replace(log, columns={k: v[mid : mid + 40] for k, v in log.columns.items()})
+    outcome = run_diagnosis_job(DiagnosisJob("short", short, load_sim_config("iris")))
+    assert outcome.diagnosis is None
+    assert outcome.skipped.startswith("too little flight to hold any out: the 40 airborne rows")

@@ -93,9 +93,21 @@ def test_a_log_never_airborne_is_refused_saying_which_condition_failed():
     cols |= {"q_y": np.zeros(n), "q_z": np.zeros(n)}
     with pytest.raises(ForceDataError) as err:
         force_data([FlightLog(cols)], mass_kg=1.5)
-    assert "of 50 rows, 50 disarmed, 0 at or below 1 cm, 50 without thrust; use a log of a" in str(
-        err.value
-    )
+    assert "of 50 rows, 50 disarmed, 0 not above 1 cm, 50 without thrust" in str(err.value)
+    assert str(err.value).endswith("use a log of a flight")
+
+
+def test_rows_with_nan_thrust_or_altitude_are_counted_as_failing_their_condition():
+    """A NaN fails "thrust > 0" and "altitude > 1 cm" (every comparison with NaN is False): the
+    refusal must count those rows, not say that 0 rows failed each condition."""
+    n = 50
+    cols = {"t_s": np.arange(n) * 0.1, "armed": np.ones(n), "thrust_n": np.full(n, np.nan)}
+    cols |= {k: np.zeros(n) for k in ("vel_n_mps", "vel_e_mps", "vel_d_mps", "pos_n_m", "pos_e_m")}
+    cols |= {"pos_d_m": np.r_[np.full(10, np.nan), np.full(n - 10, -5.0)], "q_w": np.ones(n)}
+    cols |= {"q_x": np.zeros(n), "q_y": np.zeros(n), "q_z": np.zeros(n)}
+    with pytest.raises(ForceDataError) as err:
+        force_data([FlightLog(cols)], mass_kg=1.5)
+    assert "of 50 rows, 0 disarmed, 10 not above 1 cm, 50 without thrust" in str(err.value)
 
 
 def test_rotor_drag_residual_is_linear_in_body_air_velocity():

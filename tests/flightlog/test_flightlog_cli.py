@@ -60,6 +60,24 @@ def test_info_describes_a_ulog_no_command_can_use_and_says_why(name, lines, caps
     assert re.search(r"fit-gp, diagnose, convert: cannot use this log: .*no velocity command", out)
 
 
+@pytest.mark.parametrize(
+    ("firmware", "hardware", "line"),
+    [
+        ("v1.14.0", "PX4_FMU_V6C", "firmware: PX4 v1.14.0 on PX4_FMU_V6C"),
+        ("v1.14.0", None, "firmware: PX4 v1.14.0 on a board not logged (no ver_hw)"),
+        (None, None, "firmware: PX4, version not logged (no ver_sw_release), on a board not"),
+    ],
+)
+def test_info_names_an_unlogged_board_not_none(firmware, hardware, line):
+    """A ULog without ver_hw read 'on None' in its firmware line."""
+    from flightlog.info import describe_unusable_ulog
+
+    summary = {"vehicle": "quadrotor", "mav_type": 2, "firmware": firmware, "hardware": hardware}
+    summary |= {"duration_s": 3.0, "rates_hz": {}, "messages": {}, "modes": [], "px4_params": {}}
+    (firmware_line,) = [s for s in describe_unusable_ulog(summary, "why") if "firmware" in s]
+    assert firmware_line.startswith(line) and "None" not in firmware_line
+
+
 def test_convert_writes_csv_and_sidecar_that_read_back_the_same(tmp_path):
     out = tmp_path / "flight.csv"
     assert flightlog_cli.main(["convert", str(AUTO), "--out", str(out)]) == 0

@@ -97,6 +97,14 @@ def test_rover_log_refused_saying_rover_ulogs_are_not_read(flight):
         flight_log_from_topics(topics)
 
 
+def test_mav_type_0_is_named_not_none(flight):
+    """MAV_TYPE 0 (MAV_TYPE_GENERIC) is a type the log states, not a missing one: its refusal
+    named it 'a None log' (the name was taken only for a truthy MAV_TYPE)."""
+    with pytest.raises(FlightLogError, match=r"a generic vehicle log \(MAV_TYPE 0\), not a") as err:
+        flight_log_from_topics(topics_of(flight), params={"MAV_TYPE": 0})
+    assert "None" not in str(err.value)
+
+
 def test_fixed_wing_refused_vtol_multicopter_phase_kept_with_segments(flight):
     topics = topics_of(flight)
     with pytest.raises(FlightLogError, match="fixed wing log .MAV_TYPE 1., not a multirotor"):

@@ -51,6 +51,9 @@ def test_a_negative_seed_is_one_line_exit_2(tmp_path: Path, capsys) -> None:
     assert rover.main(["--regime", "rover_exp1", "--seed", "-3", "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--seed" in err[0] and ">= 0" in err[0], err
+    assert rover.main(["--regime", "rover_exp1", "--seed", "x", "--out", str(tmp_path)]) == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert "argument --seed: must be an integer >= 0, got 'x'" in line  # not "invalid _seed"
 
 
 def test_help_lists_the_regimes_what_is_written_and_quick(capsys) -> None:
@@ -60,6 +63,8 @@ def test_help_lists_the_regimes_what_is_written_and_quick(capsys) -> None:
     text = capsys.readouterr().out
     for word in ("rover_exp2", "Ackermann", "fig4_illustrative.png", "REGIME.json", "--quick"):
         assert word in text, word
+    # each panel of the regime's figure (experiments.rover.report.figure) is named
+    assert "e_L along the path in the first and the last trial" in " ".join(text.split())
     assert study.main(["--help"]) == 0
     assert "rover_exp1" in capsys.readouterr().out
 
@@ -87,6 +92,30 @@ def test_ctrl_c_during_a_regime_is_one_line_exit_130_and_writes_nothing(tmp_path
     try:
         for line in proc.stderr:
             if "trial 1/20" in line:
+                break
+        proc.send_signal(signal.SIGINT)
+        err = proc.stderr.read()
+        assert proc.wait(60) == 130, err
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(5)
+    assert "Traceback" not in err and err.strip().splitlines()[-1].startswith("rover: interrupted")
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.slow
+def test_ctrl_c_during_the_example_is_one_line_exit_130_and_writes_nothing(tmp_path: Path) -> None:
+    """The example runs its three controllers for a few seconds before writing its figure:
+    Ctrl-C then is the same one line and exit 130 as in a regime, not a traceback."""
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "scripts.rover", "--regime", "example", "--out", str(tmp_path)],
+        cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )  # fmt: skip
+    try:
+        for line in proc.stderr:
+            if "example: feedback, MPC and LB-NMPC" in line:
                 break
         proc.send_signal(signal.SIGINT)
         err = proc.stderr.read()

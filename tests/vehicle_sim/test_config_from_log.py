@@ -84,6 +84,31 @@ def test_truncated_log_names_its_damage_without_the_fly_hint(tmp_path, capsys):
     )
 
 
+@pytest.mark.parametrize(
+    "name",
+    [
+        "fixedwing_v1_17rc_status.ulg",
+        "octo_altctl_v1_14.ulg",
+        "quad_manual_v1_6.ulg",
+        "quad_stab_ground_v1_12.ulg",
+        "vtol_manual_v1_11.ulg",
+    ],
+)
+def test_info_offers_config_from_log_exactly_when_it_builds_one(name, tmp_path, capsys):
+    """On a ULog whose flight no command reads, `flightlog info` and config-from-log decide by
+    the same rule (flightlog.ulog.parameters_give_a_config) whether its parameters make a
+    config: info's offer is never refused, nor a config built that info did not offer."""
+    from scripts import flightlog_cli
+
+    assert flightlog_cli.main(["info", str(FIXTURES / name)]) == 0
+    info = capsys.readouterr().out
+    assert "cannot use this log" in info
+    offered = "config-from-log: from its PX4 parameters only" in info
+    out = tmp_path / "v.toml"
+    code = vehicle_sim_cli.main(["config-from-log", str(FIXTURES / name), "--out", str(out)])
+    assert (code, out.exists()) == ((0, True) if offered else (2, False)), capsys.readouterr()
+
+
 def test_px4_params_section_is_validated():
     base = {
         "vehicle": {

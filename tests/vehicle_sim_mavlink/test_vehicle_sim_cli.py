@@ -22,6 +22,9 @@ from scripts.vehicle_sim_cli import main, parse_args
 REPO = Path(__file__).resolve().parents[2]
 
 
+_BRIEF = ["--duration-s", "0.5"]  # a rover that were served would stop, not run on
+
+
 @pytest.mark.parametrize(
     ("argv", "message"),
     [
@@ -34,6 +37,10 @@ REPO = Path(__file__).resolve().parents[2]
         (["--seed", "-1"], "--seed -1: must be >= 0"),
         (["--realtime-priority", "100"], "--realtime-priority 100: must be 0 (off) or 1..99"),
         (["--vehicle", "husky_50kg", "--world", "w.toml"], "--world: not for the rover"),
+        # the rover serves the offboard link only, from a port of its own: not dropped silently
+        (["--vehicle", "husky_50kg", "--gcs-port", "1", *_BRIEF], "--gcs-port: not for the rover"),
+        (["--vehicle", "husky_50kg", "--offboard-bind-port", "0", *_BRIEF], "--offboard-bind-port"),
+        (["--vehicle", "husky_50kg", "--gcs-bind-port", "0", *_BRIEF], "--gcs-bind-port: not for"),
     ],
 )
 def test_bad_input_is_one_line_and_exit_2(capsys, argv, message):

@@ -30,6 +30,7 @@ import time
 
 from pymavlink import mavutil
 
+from vehicle_sim.mavlink.services import empty_log_list_reply
 from vehicle_sim.mavlink.telemetry import PX4_VERSION
 from vehicle_sim.rover.simulator import RoverSim
 
@@ -183,7 +184,7 @@ class RoverMavlinkEndpoint:
         elif kind == "SET_MODE":
             self._set_mode((msg.custom_mode >> 16) & 0xFF, (msg.custom_mode >> 24) & 0xFF)
         elif kind == "LOG_REQUEST_LIST":  # no logs, said at once as PX4 does (num_logs 0)
-            self._conn.mav.log_entry_send(0, 0, 0, 0, 0)
+            self._conn.mav.send(empty_log_list_reply(msg))
         elif kind == "SET_POSITION_TARGET_LOCAL_NED":
             if msg.type_mask & _IGNORE_VELOCITY == _IGNORE_VELOCITY:
                 self._refuse_setpoint(b"Offboard: rover flies velocity setpoints only")

@@ -73,3 +73,19 @@ def test_the_regime_figure_labels_every_axis_and_says_which_line_is_which_trial(
             assert ticks and all(float(t).is_integer() for t in ticks), ticks
     finally:
         plt.close(fig)
+
+
+def test_a_one_trial_figure_draws_that_trial_once() -> None:
+    """`rover --trials 1`: the first trial is the last; e_L along the path is one line with one
+    legend entry, not the same trial drawn and named twice."""
+    import matplotlib.pyplot as plt
+
+    from experiments.rover.report import figure
+
+    sc = scenario("rover_exp1").with_trials(1)
+    fig = figure(run_trials(sc), sc.path.s_m, "rover_exp1")
+    try:
+        along = fig.axes[1]
+        assert [t.get_text() for t in along.get_legend().get_texts()] == ["trial 1"]
+    finally:
+        plt.close(fig)
