@@ -2,13 +2,18 @@
 
     study [--out out/study] [--trajectories 20] [--repeats 3] [--trials 6] [--m 30]
           [--workers 2 | --scheduler tcp://HOST:8786] [--vehicle iris_study]
-          [--learned-model first_order_lag|kinematic_4dof]
-          [--features state_input|velocity|velocity_history] [--seed 0] [--compile] [--quick]
+          [--learned-model first_order_lag|kinematic_4dof|px4_velocity_pi]
+          [--features velocity|state_input|velocity_history|...] [--seed 0] [--compile]
           [--regime paper000|agile|wind_field] [--refit-rounds N] [--no-closed-loop-check]
+          [--quick]
+    study --regime rover_exp1|rover_exp2|rover_exp3|example [--out DIR] [--trials N]
+          [--seed S] [--quick]
 
 ``--regime`` picks the task (experiments.study.regimes, physics written down there):
 [Kulathunga23]'s low-speed task (default), an agile task at up to 6 m/s, or repeated paths
-through a wind field; ``--vehicle`` and ``--features`` override the regime's.
+through a wind field; ``--vehicle`` and ``--features`` override the regime's. The rover
+regimes are [Ostafew16]'s three experiments and its section 3.4 example, run as
+``python -m scripts.rover`` runs them (``study --regime rover_exp1 --help``).
 
 The nominal planner is [Kulathunga23]'s kinematic NMPC. The learned model is, by default, a
 first-order velocity lag whose time constants are identified from the nominal flights plus a
