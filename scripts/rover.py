@@ -25,9 +25,8 @@ import os
 import sys
 import time
 from collections.abc import Callable
-from pathlib import Path
 
-from flightlog.atomic_output import OutputError, check_writable_dir, describe_os_error
+from flightlog.atomic_output import OutputError, check_writable_dir
 from scripts.one_line_parser import OneLineParser, output_path
 
 REGIMES = ("rover_exp1", "rover_exp2", "rover_exp3", "example")
@@ -75,14 +74,10 @@ def main(argv: list[str] | None = None) -> int:
     if args.trials is not None and args.trials < 1:
         print(f"rover: error: --trials must be >= 1, got {args.trials}", file=sys.stderr)
         return 2
-    try:  # before any trial: a folder that cannot be made is found now
+    try:  # before any trial: a folder that cannot be made is found now (made when written)
         check_writable_dir(args.out)
-        os.makedirs(args.out, exist_ok=True)
     except OutputError as exc:
         print(f"rover: --out {exc}", file=sys.stderr)
-        return 2
-    except OSError as exc:
-        print(f"rover: --out {describe_os_error(Path(args.out), exc)}", file=sys.stderr)
         return 2
     start = time.process_time()
 

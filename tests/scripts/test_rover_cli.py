@@ -83,9 +83,11 @@ def test_quick_rover_regime_through_study_reports_each_trial(tmp_path: Path, cap
 
 @pytest.mark.slow
 def test_ctrl_c_during_a_regime_is_one_line_exit_130_and_writes_nothing(tmp_path: Path) -> None:
-    """Ctrl-C after the first trial: no traceback, exit 130, no half-written figure."""
+    """Ctrl-C after the first trial: no traceback, exit 130, no half-written figure, and no
+    empty --out folder left behind either."""
+    out = tmp_path / "out"
     proc = subprocess.Popen(
-        [sys.executable, "-m", "scripts.rover", "--regime", "rover_exp1", "--out", str(tmp_path)],
+        [sys.executable, "-m", "scripts.rover", "--regime", "rover_exp1", "--out", str(out)],
         cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )  # fmt: skip
@@ -101,7 +103,7 @@ def test_ctrl_c_during_a_regime_is_one_line_exit_130_and_writes_nothing(tmp_path
             proc.kill()
             proc.wait(5)
     assert "Traceback" not in err and err.strip().splitlines()[-1].startswith("rover: interrupted")
-    assert list(tmp_path.iterdir()) == []
+    assert list(tmp_path.iterdir()) == []  # not even the folder
 
 
 @pytest.mark.slow
