@@ -20,6 +20,7 @@ import numpy as np
 import tomli_w
 
 from companion.app import CompanionConfig, run_companion
+from flightlog.atomic_output import write_figure_atomic
 from flightlog.reader import read_log
 from flightlog.schema import FlightLog
 from vehicle_sim.config import PRESET_DIR
@@ -77,8 +78,7 @@ def plot(logs: dict[str, FlightLog], path: Path) -> None:
         ax.grid(True, alpha=0.3)
         ax.legend()
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    write_figure_atomic(fig, path, dpi=120)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -10,12 +10,14 @@ appears gets the mode the user's umask gives any new file or folder.
 
 from __future__ import annotations
 
+import io
 import os
 import shutil
 import tempfile
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from typing import Any
 
 
 class OutputError(OSError):
@@ -100,6 +102,19 @@ def _process_umask() -> int:
 def write_text_atomic(path: str | Path, text: str) -> Path:
     """Write ``text`` to ``path`` atomically (temporary sibling, then rename)."""
     return write_bytes_atomic(path, text.encode())
+
+
+def write_figure_atomic(fig: Any, path: str | Path, **savefig: Any) -> Path:
+    """Save a Matplotlib figure as PNG to ``path`` atomically, and close it (also when saving
+    fails). ``savefig``: Matplotlib's options (dpi, bbox_inches, ...)."""
+    import matplotlib.pyplot as plt
+
+    png = io.BytesIO()
+    try:
+        fig.savefig(png, format="png", **savefig)
+    finally:
+        plt.close(fig)
+    return write_bytes_atomic(path, png.getvalue())
 
 
 def write_bytes_atomic(path: str | Path, data: bytes) -> Path:

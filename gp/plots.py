@@ -11,6 +11,7 @@ from pathlib import Path
 
 from matplotlib.figure import Figure
 
+from flightlog.atomic_output import write_figure_atomic
 from gp.datasets import ResidualDataset
 from gp.model_io import ResidualModel
 
@@ -39,6 +40,5 @@ def plot_residuals(model: ResidualModel, data: ResidualDataset, prefix: Path) ->
         ax.grid(alpha=0.3)
         fig.tight_layout()
         path = prefix.with_name(f"{prefix.name}_residual_{axis}.png")
-        fig.savefig(path, dpi=100)
-        paths.append(path)
+        paths.append(write_figure_atomic(fig, path, dpi=100))
     return paths

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import io
 from pathlib import Path
 
 import matplotlib
@@ -11,7 +10,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 from experiments.clutter.table3 import Table3Result  # noqa: E402
-from flightlog.atomic_output import write_bytes_atomic  # noqa: E402
+from flightlog.atomic_output import write_figure_atomic  # noqa: E402
 from planners.obstacles import Cylinder  # noqa: E402
 
 _STYLE = {
@@ -47,7 +46,4 @@ def plot_forest(result: Table3Result, path: Path) -> Path:
     ax.set_ylabel("north [m]")
     ax.set_title("Forest (Table 3 of [Kulathunga23]); x = contact")
     ax.legend(loc="upper left", fontsize=8)
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
-    plt.close(fig)
-    return write_bytes_atomic(path, buf.getvalue())
+    return write_figure_atomic(fig, path, dpi=110, bbox_inches="tight")

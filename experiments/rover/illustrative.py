@@ -128,17 +128,9 @@ def write_figure(path: str, c: ExampleConfig = ExampleConfig()) -> dict[str, flo
     Raises:
         OutputError: ``path`` cannot be written (one line).
     """
-    import io
 
-    import matplotlib.pyplot as plt
-
-    from flightlog.atomic_output import write_bytes_atomic
+    from flightlog.atomic_output import write_figure_atomic
 
     fig, runs = figure(c)
-    png = io.BytesIO()
-    try:
-        fig.savefig(png, format="png", dpi=100)
-    finally:
-        plt.close(fig)
-    write_bytes_atomic(path, png.getvalue())
+    write_figure_atomic(fig, path, dpi=100)
     return {name: tracking_rms(r) for name, r in runs.items()}

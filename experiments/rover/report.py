@@ -10,7 +10,6 @@ again with learning disabled (:func:`learning_disabled_pass`), and the summary a
 
 from __future__ import annotations
 
-import io
 import json
 import os
 from collections.abc import Callable
@@ -22,7 +21,7 @@ import numpy as np
 from experiments.rover.learner import make_history_gp
 from experiments.rover.scenarios import RoverScenario, scenario
 from experiments.rover.trial import TrialRecord, run_trial, run_trials
-from flightlog.atomic_output import write_bytes_atomic, write_text_atomic
+from flightlog.atomic_output import write_figure_atomic, write_text_atomic
 
 if TYPE_CHECKING:
     import matplotlib.figure
@@ -152,15 +151,7 @@ def figure(records: list[TrialRecord], s_m: np.ndarray, name: str) -> matplotlib
 
 def _plots(records: list[TrialRecord], s_m: np.ndarray, folder: str, name: str) -> None:
     """``folder/<name>.png``: :func:`figure`, written whole or not at all."""
-    import matplotlib.pyplot as plt
-
-    fig = figure(records, s_m, name)
-    png = io.BytesIO()
-    try:
-        fig.savefig(png, format="png", dpi=90)
-    finally:
-        plt.close(fig)
-    write_bytes_atomic(os.path.join(folder, f"{name}.png"), png.getvalue())
+    write_figure_atomic(figure(records, s_m, name), os.path.join(folder, f"{name}.png"), dpi=90)
 
 
 def run_regime(

@@ -26,6 +26,7 @@ from experiments.sim_endpoint import SimEndpoint
 from experiments.study.config import STUDY_VEHICLE
 from experiments.study.fitting import fit_residual
 from experiments.study.metrics import residual_rmse_mps, tracking_errors_m, tracking_rmse_m
+from flightlog.atomic_output import write_figure_atomic, write_text_atomic
 from flightlog.reader import read_log
 from flightlog.schema import FlightLog
 from gp.errors import DatasetError
@@ -104,7 +105,7 @@ def run_demo(config: DemoConfig, progress: Callable[[str], None]) -> list[Flight
     loads = {"nominal": nominal_load, "augmented": augmented_load}
     figures = [_figures(name, log, loads[name]) for name, log in logs.items()]
     images = _plots(config, logs, fit, out)
-    (out / "report.md").write_text(_report(config, figures, images, model_path, fit))
+    write_text_atomic(out / "report.md", _report(config, figures, images, model_path, fit))
     progress(f"wrote {out / 'report.md'}")
     return figures
 
@@ -207,7 +208,7 @@ def _plots(config: DemoConfig, logs: dict[str, FlightLog], fit, out: Path) -> li
         ax.grid(alpha=0.3)
         ax.legend()
     fig.tight_layout()
-    fig.savefig(out / "paths.png", dpi=90)
+    write_figure_atomic(fig, out / "paths.png", dpi=90)
     residual_pngs = plot_residuals(fit.model, fit.train, out / f"gp_{SELECTION}")
     return ["paths.png", *[p.name for p in residual_pngs]]
 

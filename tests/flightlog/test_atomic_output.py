@@ -71,3 +71,27 @@ def test_outputs_get_the_permissions_of_any_new_file_or_folder(tmp_path) -> None
         os.umask(umask)
     assert stat.S_IMODE(file.stat().st_mode) == 0o644
     assert stat.S_IMODE((tmp_path / "report").stat().st_mode) == 0o755
+
+
+def test_a_figure_is_written_whole_and_closed_even_when_saving_fails(tmp_path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from flightlog.atomic_output import write_figure_atomic
+
+    fig, ax = plt.subplots()
+    ax.plot([0.0, 1.0])
+    path = write_figure_atomic(fig, tmp_path / "a.png", dpi=40)
+    assert path.read_bytes().startswith(b"\x89PNG") and not plt.fignum_exists(fig.number)
+    fig, _ = plt.subplots()
+
+    def fails(*args, **kwargs):
+        raise KeyboardInterrupt  # Ctrl-C while Matplotlib renders
+
+    fig.savefig = fails
+    with pytest.raises(KeyboardInterrupt):
+        write_figure_atomic(fig, tmp_path / "b.png", dpi=40)
+    assert not plt.fignum_exists(fig.number)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.png"]  # no temporary left
