@@ -49,7 +49,7 @@ from flightlog.atomic_output import (
     check_not_an_input,
     check_writable_dir,
     check_writable_file,
-    write_bytes_atomic,
+    write_figure_atomic,
     write_text_atomic,
 )
 from scripts.one_line_parser import OneLineParser, output_path
@@ -260,7 +260,7 @@ def _repeat_inputs(args: argparse.Namespace):  # noqa: ANN202 (a tuple of what r
 def repeat(args: argparse.Namespace) -> int:
     from experiments.rover.experience_file import save_experience
     from experiments.rover.repeat import RepeatOutcome, Trial, repeat_path
-    from experiments.rover.repeat_report import figure_png, history_row, summary, trial_line
+    from experiments.rover.repeat_report import figure, history_row, summary, trial_line
 
     path, experience, scheduler, gp, memory, schedule = _repeat_inputs(args)
     link = open_link(args)
@@ -317,7 +317,7 @@ def repeat(args: argparse.Namespace) -> int:
             text = json.dumps(summary(outcome, about, rows), indent=1)
             write_text_atomic(Path(args.out) / "repeat.json", text)
             title = f"{args.path.name}: [Ostafew16] teach and repeat, trials 1-{int(rows[-1, 0])}"
-            write_bytes_atomic(Path(args.out) / "repeat.png", figure_png(rows, title))
+            write_figure_atomic(figure(rows, title), Path(args.out) / "repeat.png", dpi=90)
             _say(f"wrote {Path(args.out) / 'repeat.json'} and {Path(args.out) / 'repeat.png'}")
         except OutputError as exc:
             _say(f"error: --out {exc}")

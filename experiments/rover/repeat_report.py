@@ -9,12 +9,15 @@ history rows, experiments.rover.experience_file.HISTORY_COLUMNS).
 
 from __future__ import annotations
 
-import io
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from experiments.rover.experience_file import HISTORY_COLUMNS
 from experiments.rover.repeat import RepeatOutcome, Trial
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 
 def _max(a: np.ndarray) -> float:
@@ -80,8 +83,8 @@ def summary(outcome: RepeatOutcome, about: dict, history: np.ndarray) -> dict:
     }
 
 
-def figure_png(history: np.ndarray, title: str) -> bytes:
-    """PNG bytes from history rows (k, 6): max and RMS e_L / e_H per trial; travel time per
+def figure(history: np.ndarray, title: str) -> Figure:
+    """The figure of history rows (k, 6): max and RMS e_L / e_H per trial; travel time per
     trial."""
     import matplotlib
 
@@ -106,7 +109,4 @@ def figure_png(history: np.ndarray, title: str) -> bytes:
         ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     fig.suptitle(title)
     fig.tight_layout()
-    buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=90)
-    plt.close(fig)
-    return buffer.getvalue()
+    return fig
