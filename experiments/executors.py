@@ -76,8 +76,13 @@ def job_executor(workers: int = 2, scheduler: str | None = None) -> Iterator[Exe
         raise SchedulerError(f"no Dask scheduler answered at {scheduler}: {exc}") from None
     try:
         # pure=False: every submitted job runs (no result reuse by argument hash).
-        with client.get_executor(pure=False) as pool:
+        pool = client.get_executor(pure=False)
+        try:
             yield pool
+        except BaseException:  # an error or a stop: cancel the cluster's jobs, do not wait
+            pool.shutdown(wait=False)  # (leaving the executor's own context would wait)
+            raise
+        pool.shutdown()
     finally:
         client.close()
 

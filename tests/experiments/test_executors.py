@@ -81,3 +81,24 @@ def test_a_stop_in_the_caller_cancels_queued_jobs_and_ends_running_ones(tmp_path
     assert sum(f.cancelled() for f in futures) >= 2  # the pool hands one more out early
     (pid,) = map(int, pids.read_text().split())
     assert not psutil.pid_exists(pid) or psutil.Process(pid).status() == psutil.STATUS_ZOMBIE
+
+
+@pytest.mark.slow
+def test_a_stop_in_the_caller_cancels_the_clusters_jobs_instead_of_waiting_for_them(tmp_path):
+    """On a Dask cluster too: leaving Dask's executor by its own context waits for every job
+    (here 4 x 60 s); a stop must cancel them, so only the job already running ever started."""
+    distributed = pytest.importorskip("distributed")
+    pids = tmp_path / "pids"
+    with distributed.LocalCluster(
+        n_workers=1, threads_per_worker=1, processes=True, dashboard_address=":0"
+    ) as cluster:
+        with (
+            pytest.raises(KeyboardInterrupt),
+            job_executor(scheduler=cluster.scheduler_address) as pool,
+        ):
+            futures = [pool.submit(_write_pid_and_wait, str(pids)) for _ in range(4)]
+            while not pids.exists():
+                time.sleep(0.05)
+            raise KeyboardInterrupt
+        assert len(pids.read_text().split()) == 1  # the queued three never ran
+    assert sum(f.cancelled() for f in futures) >= 3
