@@ -93,7 +93,7 @@ def run_demo(config: DemoConfig, progress: Callable[[str], None]) -> list[Flight
     except DatasetError as exc:  # nothing learned may fly unchecked
         raise DemoError(f"{_unlearnable(nominal)}: {exc}") from None
     model_path = save_model(out / f"gp_{SELECTION}", fit.model)
-    progress(f"wrote {model_path}; the augmented planner compiles its solver before take-off")
+    progress(f"wrote {model_path}")
     flying = model_path
     if fit.may_fly and not fit.gp_earns_its_place:
         progress("the augmented flight flies the identified lag without the GP")
