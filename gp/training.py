@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 
@@ -19,7 +20,13 @@ from gp.inducing import InducingConfig
 from gp.lag_identification import LagIdentification, identify_velocity_lag
 from gp.model_io import ResidualModel
 from gp.noise_optimum import all_noise_note, all_noise_outputs
-from gp.prediction_check import PredictionCheck, Predictor, check_prediction, split_logs
+from gp.prediction_check import (
+    PredictionCheck,
+    Predictor,
+    check_prediction,
+    split_logs,
+    structure_only,
+)
 from gp.sparse_gp import SparseGP
 from gp.velocity_integrator import VELOCITY_LOOP_GAIN_NAMES, logged_velocity_loop_gains
 from planners.nominal_models import kinematic_4dof, make_model
@@ -94,6 +101,17 @@ class TrainingResult:
         """False only if checked and the GP does not beat its own nominal model alone (the
         identified structure): then the structure should fly without it."""
         return self.structure_check is None or self.structure_check.passed
+
+    @property
+    def flown(self) -> Literal["nominal", "structure", "learned"]:
+        """What the companion's planner flies with this model: the nominal planner (the
+        learned model refused), its structure alone (the GP does not beat it, or a closed-loop
+        check recorded in the model chose it) or the learned model, structure plus GP."""
+        if not self.may_fly:
+            return "nominal"
+        if not self.gp_earns_its_place or structure_only(self.model):
+            return "structure"
+        return "learned"
 
 
 def train_residual_model(

@@ -279,7 +279,7 @@ def main(argv: list[str] | None = None) -> int:
             return 1
         lag = result.model.training.get("identified_lag")
         doubts = model_doubts(result.metrics, lag, result.gp_earns_its_place)
-        if not result.gp_earns_its_place:
+        if result.flown == "structure":
             structure = result.model.features.nominal_model
             print(
                 f"fit-gp: the GP does not beat {structure} alone (see the check above): the "

@@ -28,7 +28,6 @@ from experiments.clutter.scenario import ClutterScenario, make_scenario
 from experiments.study.fitting import fit_residual
 from experiments.study.flights import FlightSpec, fly
 from experiments.study.metrics import residual_rmse_mps
-from gp.prediction_check import structure_only
 from planners.forest import ForestSpec
 from planners.trajectory_generator import TrajectorySpec, generate_trajectories
 
@@ -76,9 +75,13 @@ def run_table3(config: Table3Config, progress: Callable[[str], None]) -> Table3R
         for check in (fit.check, fit.structure_check):
             if check is not None:
                 progress(f"clutter: {check.describe()}")
-        gp_flies = model is not None and not structure_only(model)
-        flies = "the learned model with its GP" if gp_flies else "the identified lag alone"
-        progress(f"clutter: the proposed planner flies {flies if model else 'nominal'}")
+        gp_flies = fit.flown == "learned"
+        flies = {
+            "nominal": "nominal",
+            "structure": "the identified lag alone",
+            "learned": "the learned model with its GP",
+        }[fit.flown]
+        progress(f"clutter: the proposed planner flies {flies}")
     size = config.forest.size_ne_m
     bounds = (-2.0, size[0] + 2.0, -2.0, size[1] + 2.0)
     flights: dict[str, list[ClutterFlight]] = {k: [] for k in config.planners}

@@ -95,9 +95,9 @@ def run_demo(config: DemoConfig, progress: Callable[[str], None]) -> list[Flight
     model_path = save_model(out / f"gp_{SELECTION}", fit.model)
     progress(f"wrote {model_path}")
     flying = model_path
-    if fit.may_fly and not fit.gp_earns_its_place:
+    if fit.flown == "structure":
         progress("the augmented flight flies the identified lag without the GP")
-    if not fit.may_fly:
+    if fit.flown == "nominal":
         progress(f"{refusal(fit.model)}: the second flight flies the nominal planner")
         flying = None
     augmented, augmented_load = _fly(config, "augmented", flying, config.seed + 1, progress)
@@ -250,12 +250,12 @@ def what_flew_second(fit: TrainingResult, model_file: str, structure: str) -> st
     """One sentence: the model the second flight flew and why, from the fit's two checks
     (``structure``: how the report names the learned model's nominal model)."""
     gp = f"a sparse GP on `{fit.model.features.name}` features"
-    if not fit.may_fly:
+    if fit.flown == "nominal":
         return (
             f"with the nominal planner again: the learned model (`{model_file}`: {structure} "
             f"plus {gp}) was refused, since it did not predict better than nominal."
         )
-    if not fit.gp_earns_its_place:
+    if fit.flown == "structure":
         return (
             f"augmented with {structure} alone (from `{model_file}`): {gp} was fitted on top "
             "but left out, since it did not predict better than the structure without it."

@@ -178,11 +178,12 @@ def what_flies(fit: TrainingResult) -> str:
     """One line: what a selection's held-out flights fly with ``fit`` and why: the nominal
     planner (the learned model refused), its structure alone (the GP did not beat it over
     the horizon, or the closed-loop check chose it) or the learned model."""
-    if not fit.may_fly:
+    flown = fit.flown
+    if flown == "nominal":
         return f"{refusal(fit.model)}; its flights fly the nominal planner"
-    if not fit.gp_earns_its_place:
+    if flown == "structure" and not fit.gp_earns_its_place:
         return "the GP does not beat its structure; the structure flies alone"
-    if structure_only(fit.model):
+    if flown == "structure":
         return "the structure flies alone (closed-loop check)"
     return f"the learned model flies ({fit.model.features.nominal_model} + GP)"
 

@@ -29,3 +29,34 @@ def test_every_feature_set_halves_the_held_out_nominal_error(features, nominal, 
     assert result.model.features.name == features
     assert dict(result.model.features.nominal_params).get("residual_dt_s", 0.05) == 0.05
     assert any("held out" in m for m in messages)
+
+
+@pytest.mark.parametrize(
+    ("beats_nominal", "beats_structure", "closed_loop_chose_structure", "flown"),
+    [
+        (True, True, False, "learned"),
+        (True, False, False, "structure"),  # the GP does not beat the structure alone
+        (True, True, True, "structure"),  # the closed-loop check chose the structure
+        (False, True, False, "nominal"),  # refused, whatever else
+        (False, False, True, "nominal"),
+    ],
+)
+def test_what_flies_follows_the_checks_in_their_order(
+    beats_nominal, beats_structure, closed_loop_chose_structure, flown
+):
+    from dataclasses import replace
+
+    from experiments.bench.nmpc import flying_model
+    from gp.prediction_check import PredictionCheck
+    from gp.training import TrainingResult
+
+    def check(passes: bool) -> PredictionCheck:  # candidate RMSE below the incumbent's: passes
+        return PredictionCheck("learned", "other", 0.02 if passes else 0.05, 0.03, 2.0, 66)
+
+    model = flying_model(features_name="velocity")
+    if closed_loop_chose_structure:
+        model = replace(model, training={"closed_loop_check": {"structure_flies": True}})
+    fit = TrainingResult(
+        model, None, None, {}, check=check(beats_nominal), structure_check=check(beats_structure)
+    )
+    assert fit.flown == flown
