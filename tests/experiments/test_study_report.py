@@ -2,9 +2,7 @@
 
 from __future__ import annotations
 
-import sys
 from dataclasses import replace
-from pathlib import Path
 
 import pytest
 
@@ -16,9 +14,7 @@ from experiments.study.report import render_report
 from gp.prediction_check import PredictionCheck
 from gp.training import TrainingConfig, train_residual_model
 from planners.trajectory_generator import generate_trajectories
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "gp"))
-from gp_synthetic_logs import lag_plant_log  # noqa: E402
+from tests.gp.gp_synthetic_logs import lag_plant_log
 
 
 @pytest.fixture(scope="module")

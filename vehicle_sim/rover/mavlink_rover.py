@@ -135,11 +135,10 @@ class RoverMavlinkEndpoint:
 
     def _ack(self, msg: object, result: int) -> None:
         """COMMAND_ACK for ``msg``'s command with ``result`` (MAV_RESULT), addressed to its
-        sender as PX4 does once the link speaks MAVLink 2 (pymavlink starts in MAVLink 1, whose
-        COMMAND_ACK has no target fields, and switches when a MAVLink 2 peer is heard)."""
+        sender as PX4 does (the target fields are extensions: over MAVLink 1, which pymavlink
+        speaks until it hears a MAVLink 2 peer, they are left out of the packet)."""
         ack = self._conn.mav.command_ack_encode(msg.command, result)
-        if hasattr(ack, "target_system"):
-            ack.target_system, ack.target_component = msg.get_srcSystem(), msg.get_srcComponent()
+        ack.target_system, ack.target_component = msg.get_srcSystem(), msg.get_srcComponent()
         self._conn.mav.send(ack)
 
     def _set_mode(self, main_mode: float, sub_mode: float) -> bool:
