@@ -12,7 +12,8 @@ holds one such report set per log, in DIR/<log name>/, plus DIR/batch.json (verd
 per log). A log the batch cannot diagnose (unreadable, too slow a rate, never airborne) is
 skipped with one line saying why, here and in batch.json, and the others are diagnosed.
 Progress goes to stderr. Exit codes: 0 done, 2 bad input (one line saying why; in a batch,
-when no log at all can be diagnosed).
+when no log at all can be diagnosed), 130 stopped by Ctrl-C (one line; nothing written, since
+the report set appears whole or not at all).
 """
 
 from __future__ import annotations
@@ -39,6 +40,7 @@ from vehicle_sim import SimConfig, SimConfigError, load_sim_config
 
 EXIT_OK = 0
 EXIT_BAD_INPUT = 2
+EXIT_INTERRUPTED = 130
 EXTENDED_CONFIG_NAME = "extended_config.toml"
 BATCH_SUMMARY_NAME = "batch.json"
 
@@ -62,7 +64,7 @@ def parse_args(argv: list[str] | None) -> DiagnoseArgs:
         prog="diagnose",
         description="Compare a simulation config with measured flight logs, name what it gets "
         "wrong (effect vocabulary), fit it, write report and extended config.",
-        epilog="Exit codes: 0 done, 2 bad input.",
+        epilog="Exit codes: 0 done, 2 bad input, 130 stopped by Ctrl-C (nothing written).",
     )
     parser.add_argument(
         "logs", nargs="+", type=Path, help="schema-v1 flight logs (CSV) or PX4 ULog files (.ulg)"
@@ -98,6 +100,15 @@ def parse_args(argv: list[str] | None) -> DiagnoseArgs:
 
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
+    try:
+        return _diagnose(args)
+    except KeyboardInterrupt:  # the report set is written atomically: none of it is there
+        print(f"diagnose: stopped by Ctrl-C; nothing written to {args.out_dir}", file=sys.stderr)
+        return EXIT_INTERRUPTED
+
+
+def _diagnose(args: DiagnoseArgs) -> int:
+    """Diagnose (one report set, or one per log with --batch); returns the exit code."""
     start = time.monotonic()
 
     def progress(msg: str) -> None:
