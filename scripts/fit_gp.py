@@ -31,7 +31,9 @@ point: fly or log more, or lower ``--m``.
 Writes MODEL.npz (one self-describing file) and MODEL_residual_{n,e,d}.png, prints the
 held-out nominal and augmented RMSE per axis ([Kulathunga23], Table 2) on stdout; progress goes
 to stderr. Exit code 0 on success, 1 when the prediction check refuses the model, 2 with a
-one-line reason on bad input.
+one-line reason on bad input, 3 when the model is worse than nominal on held-out rows or a
+time constant sits on its bound (not written unless ``--force``), 130 on Ctrl-C (one line
+saying what was written before it).
 """
 
 from __future__ import annotations
@@ -77,7 +79,11 @@ class FitGpConfig:
 def parse_args(argv: list[str] | None) -> FitGpConfig:
     """Parse the command line into a FitGpConfig (exits with code 2 on bad arguments)."""
     parser = OneLineParser(
-        prog="fit-gp", description="Fit a sparse-GP residual model from flight logs."
+        prog="fit-gp",
+        description="Fit a sparse-GP residual model from flight logs.",
+        epilog="Exit codes: 0 written, 1 refused by --check-horizon-s (worse than the model it "
+        "would replace), 2 bad input, 3 not written: worse than nominal or a time constant on "
+        "its bound (--force writes it), 130 stopped by Ctrl-C.",
     )
     parser.add_argument(
         "logs", nargs="+", type=Path, help="flight logs: schema-v1 CSV or PX4 ULog (.ulg)"
@@ -198,6 +204,7 @@ def too_little_data(train: ResidualDataset, m: int, modes: tuple[str, ...] | Non
 
 
 EXIT_DOUBTFUL = 3
+EXIT_INTERRUPTED = 130
 # Held-out RMSE this much above nominal counts as worse (ties are within the split's noise).
 WORSE_MARGIN = 0.02
 
@@ -230,11 +237,24 @@ def model_doubts(
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run fit-gp; returns the exit code (0 ok, 1 model refused by its check, 2 bad input)."""
+    """Run fit-gp; returns the exit code (0 ok, 1 model refused by its check, 2 bad input, 3
+    model doubtful and not written, 130 Ctrl-C)."""
     try:
         config = parse_args(argv)
     except SystemExit as exc:  # --help (0) or a bad argument (2, message already printed)
         return int(exc.code or 0)
+    written: list[Path] = []
+    try:
+        return _fit(config, written)
+    except KeyboardInterrupt:
+        kept = f"; wrote {', '.join(map(str, written))} before it" if written else ""
+        print(f"fit-gp: stopped by Ctrl-C{kept or '; no model written'}", file=sys.stderr)
+        return EXIT_INTERRUPTED
+
+
+def _fit(config: FitGpConfig, written: list[Path]) -> int:
+    """Fit, check and write the model; appends each file written to ``written``; returns the
+    exit code."""
     start = time.perf_counter()
 
     def progress(message: str) -> None:
@@ -295,9 +315,11 @@ def main(argv: list[str] | None = None) -> int:
             )
             return EXIT_DOUBTFUL
         model_file = save_model(config.out, result.model)
+        written.append(model_file)
         progress(f"wrote {model_file}")
         if config.plots:
             for png in plot_residuals(result.model, result.test, model_file.with_suffix("")):
+                written.append(png)
                 progress(f"wrote {png}")
     except (FlightLogError, DatasetError, GPInputError, ModelFileError, ValueError) as exc:
         print(f"fit-gp: error: {exc}", file=sys.stderr)

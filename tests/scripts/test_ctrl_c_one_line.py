@@ -1,4 +1,4 @@
-"""Ctrl-C in the middle of diagnose: one line and exit 130, no traceback,
+"""Ctrl-C in the middle of diagnose, fit-gp and bench: one line and exit 130, no traceback,
 and no half-written output."""
 
 from __future__ import annotations
@@ -72,3 +72,13 @@ def test_ctrl_c_during_a_diagnosis_is_one_line_exit_130_and_writes_nothing(tmp_p
     assert "Traceback" not in err
     assert err.strip().splitlines()[-1] == f"diagnose: stopped by Ctrl-C; nothing written to {out}"
     assert list(tmp_path.iterdir()) == []  # neither the report folder nor its temporary one
+
+
+def test_ctrl_c_during_a_gp_fit_is_one_line_exit_130_and_writes_no_model(tmp_path):
+    log = write_flight_log(tmp_path / "long.csv", _long_log().to_log())
+    args = [str(log), "--out", str(tmp_path / "model"), "--m", "200", "--optimize-inducing"]
+    code, out, err = _interrupt("scripts.fit_gp", [*args, "--restarts", "10"], "fitting")
+    assert code == 130, err
+    assert "Traceback" not in err
+    assert err.strip().splitlines()[-1] == "fit-gp: stopped by Ctrl-C; no model written"
+    assert out == "" and sorted(p.name for p in tmp_path.iterdir()) == ["long.csv", "long.csv.json"]
