@@ -82,3 +82,15 @@ def test_ctrl_c_during_a_gp_fit_is_one_line_exit_130_and_writes_no_model(tmp_pat
     assert "Traceback" not in err
     assert err.strip().splitlines()[-1] == "fit-gp: stopped by Ctrl-C; no model written"
     assert out == "" and sorted(p.name for p in tmp_path.iterdir()) == ["long.csv", "long.csv.json"]
+
+
+@pytest.mark.slow
+def test_ctrl_c_during_bench_is_one_line_exit_130_with_the_parts_done():
+    args = ["--only", "sim", "--only", "diagnose", "--quick", "--json"]
+    code, out, err = _interrupt("scripts.bench", args, "[bench] diagnose ...")
+    assert code == 130, err
+    assert "Traceback" not in err
+    assert err.strip().splitlines()[-1] == (
+        "bench: stopped by Ctrl-C; the figures of the parts done are printed"
+    )
+    assert set(json.loads(out)) == {"sim_realtime_factor"}
