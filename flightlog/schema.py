@@ -214,8 +214,8 @@ def read_flight_log(path: str | Path, max_gap_s: float | None = None) -> FlightL
     with path.open("rb") as fh:
         if b"\0" in fh.read(BINARY_SNIFF_BYTES):
             raise FlightLogError(_not_text(path, "it holds NUL bytes"))
-    try:
-        with path.open(newline="") as fh:
+    try:  # utf-8-sig: a spreadsheet's "CSV UTF-8" starts with a byte-order mark
+        with path.open(newline="", encoding="utf-8-sig") as fh:
             reader = csv.reader(fh)
             header = next(reader, None)
             if not header:

@@ -167,3 +167,12 @@ def test_a_csv_of_other_columns_is_named_once_not_listed_twice(tmp_path):
         f"{path}: not a schema-v1 flight log: its first line ('time,lat,lon') names none of "
         f"the columns schema v1 needs ({', '.join(REQUIRED_COLUMNS)})"
     )
+
+
+def test_a_log_saved_by_a_spreadsheet_with_a_byte_order_mark_is_read(tmp_path):
+    """A spreadsheet's "CSV UTF-8" starts with a BOM, which made the first column '\\ufefft_s'
+    and the log 'missing required column(s) t_s'."""
+    path = _write(tmp_path, [_row(0.0), _row(0.1)])
+    path.write_bytes(b"\xef\xbb\xbf" + path.read_bytes())
+    log = read_log(path)
+    assert log.n_rows == 2 and list(log["t_s"]) == [0.0, 0.1]
