@@ -32,7 +32,7 @@ from companion.app import (
     run_companion,
 )
 from companion.planner_registry import PLANNER_NAMES
-from companion.runner import COMPANION_RT_PRIORITY, RunnerConfig, Terminated
+from companion.runner import COMPANION_RT_PRIORITY, FlightOutcome, RunnerConfig, Terminated
 from scripts.one_line_parser import OneLineParser, output_path
 
 EXIT_COMPLETED = 0
@@ -108,8 +108,19 @@ def _progress(message: str) -> None:
     print(f"companion: {message}", file=sys.stderr, flush=True)
 
 
-def _metres(value: float | None) -> str:
-    return "n/a" if value is None else f"{value:.2f} m"
+def _summary(outcome: FlightOutcome) -> str:
+    """The flight's last line: how it ended, where it landed (when it came down from a
+    followed reference) and its deadline misses (when it flew a control step)."""
+    parts = [
+        outcome.detail
+        if outcome.detail.startswith(outcome.status)  # "interrupted by Ctrl-C"
+        else f"{outcome.status}: {outcome.detail}"
+    ]
+    if outcome.landed_error_m is not None:
+        parts.append(f"landed {outcome.landed_error_m:.2f} m from the goal")
+    if outcome.ticks:
+        parts.append(f"{outcome.deadline_misses} deadline misses in {outcome.ticks} steps")
+    return "; ".join(parts)
 
 
 def _sigterm_as_interrupt(_signum: int, _frame: FrameType | None) -> None:
@@ -149,10 +160,7 @@ def main(argv: list[str] | None = None) -> int:
     if outcome.status == "refused":
         print(f"companion: error: {outcome.detail}", file=sys.stderr, flush=True)
         return EXIT_BAD_INPUT
-    _progress(
-        f"{outcome.status}: {outcome.detail}; landed {_metres(outcome.landed_error_m)} from the "
-        f"goal; {outcome.deadline_misses} deadline misses in {outcome.ticks} steps"
-    )
+    _progress(_summary(outcome))
     if outcome.status == "completed":
         return EXIT_COMPLETED
     if outcome.status == "interrupted":
