@@ -160,8 +160,8 @@ def _run_batch(args: DiagnoseArgs, sim_config: SimConfig, progress: Progress) ->
         try:
             jobs.append(DiagnosisJob(name, _read_for_diagnosis(path), sim_config))
         except FlightLogError as exc:
-            skipped[name] = str(exc)
-            print(f"diagnose: skipping {path}: {exc}", file=sys.stderr)
+            skipped[name] = _reason(path, exc)
+            print(f"diagnose: skipping {path}: {skipped[name]}", file=sys.stderr)
     where = args.scheduler or f"{args.workers} local processes"
     progress(f"batch: {len(jobs)} diagnoses on {where}")
     outcomes = []
@@ -171,8 +171,9 @@ def _run_batch(args: DiagnoseArgs, sim_config: SimConfig, progress: Progress) ->
     results = {o.name: o.diagnosis for o in outcomes if o.diagnosis is not None}
     for outcome in outcomes:
         if outcome.diagnosis is None:
-            skipped[outcome.name] = str(outcome.skipped)
-            print(f"diagnose: skipping {path_of[outcome.name]}: {outcome.skipped}", file=sys.stderr)
+            path = path_of[outcome.name]
+            skipped[outcome.name] = _reason(path, outcome.skipped)
+            print(f"diagnose: skipping {path}: {skipped[outcome.name]}", file=sys.stderr)
     if not results:
         print(
             f"diagnose: none of the {len(names)} logs can be diagnosed (each skipped above "
@@ -210,6 +211,11 @@ def _run_batch(args: DiagnoseArgs, sim_config: SimConfig, progress: Progress) ->
     left_out = f"; {len(skipped)} log(s) skipped ({BATCH_SUMMARY_NAME} says why)" if skipped else ""
     progress(f"batch: {len(results)} report sets in {args.out_dir}{left_out}")
     return EXIT_OK
+
+
+def _reason(path: Path, error: object) -> str:
+    """Why a log is skipped, without the path the error starts with (the line names it)."""
+    return str(error).removeprefix(f"{path}: ")
 
 
 def _unique_names(paths: tuple[Path, ...]) -> list[str]:
