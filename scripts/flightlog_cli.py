@@ -50,6 +50,11 @@ def convert(log_path: Path, out: Path) -> Path:
     or a file in the way leaves nothing behind, not even the sidecar."""
     log = read_log(log_path)
     check_not_an_input(out, [log_path])
+    if out.suffix.lower() == ".ulg":  # every reader would take it for a damaged ULog
+        raise OutputError(
+            f"{out}: a .ulg name for the CSV it would write, which every command would then "
+            "refuse as a damaged ULog; name it .csv"
+        )
     check_writable_file(out)
     check_writable_file(sidecar_path(out))
     return write_flight_log(out, log)

@@ -161,3 +161,17 @@ def test_fit_gp_and_info_say_a_ulog_with_a_damaged_header_is_corrupt(tmp_path, c
     err = capsys.readouterr().err
     assert f"fit-gp: warning: damaged.ulg is corrupt at byte {offset}" in err, err
     assert "truncated" not in err
+
+
+def test_convert_to_a_ulg_name_is_refused_since_no_command_would_read_the_csv(tmp_path, capsys):
+    """`convert flight.ulg --out flight_copy.ulg` wrote a CSV named .ulg, which every command
+    then refused as 'named .ulg but does not start with the ULog magic bytes; copy the log
+    again from the vehicle'."""
+    out = tmp_path / "flight_copy.ULG"
+    assert flightlog_cli.main(["convert", str(AUTO), "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [
+        f"flightlog: --out {out}: a .ulg name for the CSV it would write, which every command "
+        "would then refuse as a damaged ULog; name it .csv"
+    ]
+    assert list(tmp_path.iterdir()) == []
