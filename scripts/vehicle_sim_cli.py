@@ -37,7 +37,7 @@ from typing import Any
 
 from companion.realtime import MAX_RT_PRIORITY, raise_to_realtime
 from flightlog.atomic_output import OutputError, check_not_an_input, check_writable_file
-from flightlog.flight_log_files import keep_earlier_log, restore_earlier_log
+from flightlog.flight_log_files import check_csv_log_name, keep_earlier_log, restore_earlier_log
 from flightlog.schema import sidecar_path
 from scripts.one_line_parser import output_path
 from vehicle_sim import EFFECT_NAMES, SimConfigError, Simulator, load_sim_config
@@ -372,6 +372,7 @@ def _run(config: VehicleSimCliConfig, stop: threading.Event) -> int:
         return _run_rover(config, stop)
     if config.log_path is not None:
         try:  # found out now, not after a flight whose log would be lost
+            check_csv_log_name(Path(config.log_path))
             check_writable_file(config.log_path)
             check_writable_file(sidecar_path(config.log_path))
             inputs = (config.vehicle, config.world_path, config.signing_key_path)

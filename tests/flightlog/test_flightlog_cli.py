@@ -171,7 +171,7 @@ def test_convert_to_a_ulg_name_is_refused_since_no_command_would_read_the_csv(tm
     assert flightlog_cli.main(["convert", str(AUTO), "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [
-        f"flightlog: --out {out}: a .ulg name for the CSV it would write, which every command "
+        f"flightlog: --out {out}: a .ulg name for a schema-v1 CSV log, which every command "
         "would then refuse as a damaged ULog; name it .csv"
     ]
     assert list(tmp_path.iterdir()) == []
