@@ -45,6 +45,7 @@ from pathlib import Path
 
 import numpy as np
 
+from companion.nmpc_planner import check_residual_model
 from flightlog.atomic_output import OutputError, check_writable_file
 from flightlog.reader import read_log, require_distinct, require_modes, require_rates
 from flightlog.schema import FlightLogError
@@ -55,10 +56,10 @@ from gp.errors import DatasetError, GPInputError, ModelFileError
 from gp.features import FEATURE_SETS
 from gp.inducing import STRATEGIES
 from gp.lag_identification import TAU_BOUNDS_S
-from gp.model_io import model_path, save_model
+from gp.model_io import ResidualModel, model_path, save_model
 from gp.plots import plot_residuals
 from gp.prediction_check import refusal
-from gp.residual_interval import residual_steps
+from gp.residual_interval import log_step_s, residual_steps
 from gp.training import TrainingConfig, train_residual_model
 from planners.nominal_models import MODELS
 from scripts.one_line_parser import OneLineParser, output_path
@@ -236,6 +237,18 @@ def model_doubts(
     return doubts
 
 
+def _companion_refusal(model: ResidualModel, period_s: float) -> str | None:
+    """Why the companion's NMPC would refuse ``model`` at take-off, flown at a control period
+    of ``period_s`` [s] (a velocity history over other than its 0.1 s interval, lagged
+    features it cannot carry, a residual over another step), else None: fit-gp also fits
+    models for analysis only, so this is said, not enforced."""
+    try:
+        check_residual_model(model, period_s)
+    except ModelFileError as exc:
+        return str(exc)
+    return None
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run fit-gp; returns the exit code (0 ok, 1 model refused by its check, 2 bad input, 3
     model doubtful and not written, 130 Ctrl-C)."""
@@ -317,6 +330,13 @@ def _fit(config: FitGpConfig, written: list[Path]) -> int:
         model_file = save_model(config.out, result.model)
         written.append(model_file)
         progress(f"wrote {model_file}")
+        unflyable = _companion_refusal(result.model, log_step_s(logs))
+        if unflyable:
+            print(
+                f"fit-gp: warning: the companion's NMPC will refuse this model (flown at the "
+                f"logs' rate): {unflyable}",
+                file=sys.stderr,
+            )
         if config.plots:
             for png in plot_residuals(result.model, result.test, model_file.with_suffix("")):
                 written.append(png)
