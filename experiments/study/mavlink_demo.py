@@ -201,7 +201,9 @@ def _plots(config: DemoConfig, logs: dict[str, FlightLog], fit, out: Path) -> li
         ax_err.plot(t - t[0], tracking_errors_m(log), label=name)
     ax_path.set(xlabel="east [m]", ylabel="north [m]", title="reference vs flown", aspect="equal")
     ax_err.set(
-        xlabel="time in OFFBOARD [s]", ylabel="distance to reference [m]", title="tracking error"
+        xlabel="time in OFFBOARD [s]",
+        ylabel="distance to the reference's point at that time [m]",
+        title="tracking error (lagging along the path counts)",
     )
     for ax in (ax_path, ax_err):
         ax.grid(alpha=0.3)
