@@ -249,11 +249,13 @@ def _announce(config: VehicleSimCliConfig, endpoint: MavlinkEndpoint) -> None:
     ports = endpoint.local_ports
     host = config.host
     signing = "on (unsigned commands refused)" if config.signing_key_path else "off"
+    world = f", world {config.world_path} (OBSTACLE_DISTANCE)" if config.world_path else ""
     print(
         f"{PROG}: {config.vehicle} on {endpoint.sim.backend_name} at {config.speed:g}x "
-        f"real time, seed {config.seed}, signing {signing}"
+        f"real time, seed {config.seed}, signing {signing}{world}"
     )
     print(f"MAVSDK: udpin://{host}:{config.offboard_port}")
+    print(f"companion: --url udpin://{host}:{config.offboard_port} (--link mavsdk or pymavlink)")
     print(f"pymavlink: udpin:{host}:{config.gcs_port} (or udpout:{host}:{ports['gcs']})")
     print(f"MAVProxy: mavproxy.py --master udpin:{host}:{config.gcs_port}")
     print("Ctrl-C to stop", flush=True)
