@@ -59,7 +59,7 @@ from gp.lag_identification import TAU_BOUNDS_S
 from gp.model_io import ResidualModel, model_path, save_model
 from gp.plots import plot_residuals
 from gp.prediction_check import refusal
-from gp.residual_interval import log_step_s, residual_steps
+from gp.residual_interval import log_step_s, mixed_steps, residual_steps
 from gp.training import TrainingConfig, train_residual_model
 from planners.nominal_models import MODELS
 from scripts.one_line_parser import OneLineParser, output_path
@@ -291,6 +291,9 @@ def _fit(config: FitGpConfig, written: list[Path]) -> int:
                 "less well: fit each vehicle's logs on their own unless they fly alike",
                 file=sys.stderr,
             )
+        mixed_rates = mixed_steps(logs)
+        if mixed_rates:
+            print(f"fit-gp: warning: {mixed_rates}", file=sys.stderr)
         require_modes(logs, config.training.modes)
         check_writable_file(model_path(config.out))  # found now, not after the fit
         training = config.training
