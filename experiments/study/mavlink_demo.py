@@ -136,6 +136,8 @@ def _fly(
             ),
         )
         result: CompanionResult = run_companion(companion, progress)
+    if result.outcome.status == "interrupted":  # landed after the user's Ctrl-C: stop here
+        raise KeyboardInterrupt
     if result.outcome.status != "completed" or result.log_path is None:
         raise DemoError(f"the {name} flight did not complete: {result.outcome.detail}")
     return read_log(result.log_path), os.getloadavg()[0]
