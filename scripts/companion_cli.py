@@ -54,11 +54,19 @@ def parse_args(argv: list[str] | None) -> CompanionConfig:
         "sent HOLD and LAND).",
     )
     parser.add_argument("mission", type=Path, help="mission file (TOML)")
-    parser.add_argument("--link", choices=LINK_KINDS, default="mavsdk", help="how to reach it")
+    parser.add_argument(
+        "--link", choices=LINK_KINDS, default="mavsdk", help="how to reach it (default mavsdk)"
+    )
     parser.add_argument(
         "--url", help=f"MAVLink URL, mavsdk and pymavlink links (default {DEFAULT_URL})"
     )
-    parser.add_argument("--planner", choices=PLANNER_NAMES, default="pd")
+    parser.add_argument(
+        "--planner",
+        choices=PLANNER_NAMES,
+        default="pd",
+        help="pd (default): [Kulathunga23]'s PD regulator; nmpc: the NMPC (--gp-model to "
+        "augment it); nmpc_clutter: the NMPC round sensed obstacles",
+    )
     parser.add_argument(
         "--gp-model",
         type=Path,
