@@ -90,9 +90,18 @@ def parse_args(argv: list[str] | None) -> FitGpConfig:
         "logs", nargs="+", type=Path, help="flight logs: schema-v1 CSV or PX4 ULog (.ulg)"
     )
     parser.add_argument("--out", required=True, type=output_path, help="model file (MODEL.npz)")
-    parser.add_argument("--features", default="velocity", choices=list(FEATURE_SETS))
+    parser.add_argument(
+        "--features",
+        default="velocity",
+        choices=list(FEATURE_SETS),
+        help="the GP's inputs (default velocity, [Kulathunga23]'s)",
+    )
     parser.add_argument(  # the unicycle is the ground robots' model, learned by experiments.rover
-        "--nominal", default="kinematic_4dof", choices=[m for m in MODELS if m != "unicycle"]
+        "--nominal",
+        default="kinematic_4dof",
+        choices=[m for m in MODELS if m != "unicycle"],
+        help="the model the GP corrects (default kinematic_4dof, [Kulathunga23]'s; "
+        "first_order_lag: the velocity loop's lag, identified from the logs)",
     )
     parser.add_argument(
         "--nominal-param",
@@ -101,19 +110,36 @@ def parse_args(argv: list[str] | None) -> FitGpConfig:
         metavar="NAME=VALUE",
         help="nominal model parameter (repeatable), e.g. residual_dt_s=0.05",
     )
-    parser.add_argument("--inducing", default="low_speed", choices=list(STRATEGIES))
-    parser.add_argument("--m", type=int, default=30, help="number of inducing points")
+    parser.add_argument(
+        "--inducing",
+        default="low_speed",
+        choices=list(STRATEGIES),
+        help="where the inducing points go (default low_speed)",
+    )
+    parser.add_argument("--m", type=int, default=30, help="number of inducing points (default 30)")
     parser.add_argument("--optimize-inducing", action="store_true", help="refine positions")
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--holdout-fraction", type=float, default=0.2)
-    parser.add_argument("--restarts", type=int, default=3)
+    parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    parser.add_argument(
+        "--holdout-fraction",
+        type=float,
+        default=0.2,
+        help="share of the rows held out to evaluate the fit (default 0.2)",
+    )
+    parser.add_argument(
+        "--restarts",
+        type=int,
+        default=3,
+        help="starting points of the hyperparameter optimisation (default 3)",
+    )
     parser.add_argument(
         "--mode",
         action="append",
         default=None,
         help="keep only rows in this flight mode (e.g. offboard; repeatable)",
     )
-    parser.add_argument("--no-plots", action="store_true")
+    parser.add_argument(
+        "--no-plots", action="store_true", help="do not write MODEL_residual_{n,e,d}.png"
+    )
     parser.add_argument(
         "--check-horizon-s",
         type=float,
