@@ -122,6 +122,15 @@ def _diagnose(args: DiagnoseArgs) -> int:
         require_distinct(args.logs)  # one diagnosis of all logs: a flight twice counts twice
         logs = [_read_for_diagnosis(p) for p in args.logs]
         progress(f"read {len(logs)} log(s), {sum(log.n_rows for log in logs)} rows")
+        for log in logs:
+            if log.metadata.get("source") == "companion" and not log.has("thrust_n"):
+                print(
+                    f"diagnose: warning: {log.where} is the companion's log: MAVLink carries no "
+                    "thrust or acceleration, so no force-residual cause (drags, wind, payload) "
+                    "can be examined; diagnose the vehicle's onboard log: its PX4 .ulg, or "
+                    "vehicle-sim --log",
+                    file=sys.stderr,
+                )
         result = diagnose(logs, sim_config, progress=progress)
     except (SimConfigError, FlightLogError, ForceDataError, SchedulerError) as exc:
         print(f"diagnose: {exc}", file=sys.stderr)
