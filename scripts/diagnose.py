@@ -112,7 +112,7 @@ def _diagnose(args: DiagnoseArgs) -> int:
     start = time.monotonic()
 
     def progress(msg: str) -> None:
-        print(f"[{time.monotonic() - start:6.1f} s] {msg}", file=sys.stderr, flush=True)
+        print(f"diagnose [{time.monotonic() - start:6.1f} s] {msg}", file=sys.stderr, flush=True)
 
     try:
         check_writable_dir(args.out_dir)  # before minutes of work, not after
