@@ -46,6 +46,7 @@ from pathlib import Path
 import numpy as np
 
 from companion.nmpc_planner import check_residual_model
+from companion.runner import RunnerConfig
 from flightlog.atomic_output import OutputError, check_writable_file
 from flightlog.reader import read_log, require_distinct, require_modes, require_rates
 from flightlog.schema import FlightLogError
@@ -359,11 +360,20 @@ def _fit(config: FitGpConfig, written: list[Path]) -> int:
         model_file = save_model(config.out, result.model)
         written.append(model_file)
         progress(f"wrote {model_file}")
-        unflyable = _companion_refusal(result.model, log_step_s(logs))
+        step_s = log_step_s(logs)
+        unflyable = _companion_refusal(result.model, step_s)
         if unflyable:
             print(
                 f"fit-gp: warning: the companion's NMPC will refuse this model (flown at the "
                 f"logs' rate): {unflyable}",
+                file=sys.stderr,
+            )
+        elif _companion_refusal(result.model, 1.0 / RunnerConfig.rate_hz):
+            print(
+                f"fit-gp: warning: the companion's NMPC will refuse this model at its default "
+                f"{RunnerConfig.rate_hz:g} Hz (the residual is measured over the logs' "
+                f"{step_s:.3g} s steps): fly it with companion --rate-hz {1.0 / step_s:.3g}, or "
+                f"fit logs flown at {RunnerConfig.rate_hz:g} Hz",
                 file=sys.stderr,
             )
         if config.plots:
