@@ -18,7 +18,12 @@ from companion.mission_reference import reference_of
 from companion.planner_registry import OBSTACLE_PLANNERS, honours_obstacles, make_planner
 from companion.runner import FlightOutcome, RunnerConfig, fly_mission
 from flightlog.atomic_output import OutputError, check_not_an_input
-from flightlog.flight_log_files import claim_new_log_path, keep_earlier_log, restore_earlier_log
+from flightlog.flight_log_files import (
+    check_csv_log_name,
+    claim_new_log_path,
+    keep_earlier_log,
+    restore_earlier_log,
+)
 from flightlog.live_log import LiveFlightLog
 from flightlog.schema import sidecar_path
 
@@ -160,6 +165,7 @@ def _open_log(
         progress(f"flight log: {path} (a new file; --log PATH chooses another)")
         return live, None
     check_not_an_input(config.log_path, _inputs(config, mission))
+    check_csv_log_name(config.log_path)
     kept = None if config.replace_log else keep_earlier_log(config.log_path)
     try:
         live = LiveFlightLog(config.log_path, metadata)

@@ -382,7 +382,7 @@ def check_residual_model(model: ResidualModel, period_s: float, planner_dt_s: fl
     lag_s = features.history_lag * period_s
     if features.history_lag and abs(lag_s - planner_dt_s) > _DT_TOLERANCE * planner_dt_s:
         raise ModelFileError(
-            f"residual model's velocity history lags {lag_s:g} s but the NMPC's interval is "
+            f"residual model's velocity history lags {lag_s:.3g} s but the NMPC's interval is "
             f"{planner_dt_s:g} s; refit with the residual over one planner interval"
         )
     dt_s = dict(features.nominal_params).get("residual_dt_s")

@@ -426,13 +426,18 @@ def _follow(
     t0_s = link.clock.now_s()
     policy = PlannerPolicy(planner, reference, t0_s, limits)
     monitor = _FollowMonitor(t0_s, goal, reference.duration_s, mission, config, progress)
+
+    def on_follow_tick(tick: Tick) -> None:
+        monitor.sent(tick.decision.reason if not tick.decision.ok else "")
+        on_tick(tick)
+
     result = run_fixed_rate(
         link,
         policy,
         rate_hz=config.rate_hz,
         until=monitor.finished,
         timeout_s=reference.duration_s + config.settle_timeout_s,
-        on_tick=on_tick,
+        on_tick=on_follow_tick,
         counters=counters,
     )
     if monitor.taken_over is not None:
@@ -452,7 +457,9 @@ def _follow(
 
 class _FollowMonitor:
     """Decides when following is over (arrived, or someone took the vehicle out of OFFBOARD,
-    or it never reported OFFBOARD); reports progress."""
+    or it never reported OFFBOARD); reports progress, with how many steps since the last
+    report sent the safe command (brake and hover) and the last reason why, so that a vehicle
+    hovering in place says why (no range scan, infeasible solves, stale telemetry)."""
 
     def __init__(
         self,
@@ -471,7 +478,18 @@ class _FollowMonitor:
         self._progress = progress
         self._next_report_s = t0_s
         self._seen_offboard = False
+        self._steps = 0
+        self._braked = 0
+        self._brake_reason = ""
         self.taken_over: tuple[str, float, bool] | None = None
+
+    def sent(self, brake_reason: str) -> None:
+        """Count a control step: ``brake_reason`` is why the safe command was sent, "" when
+        the planner's command was."""
+        self._steps += 1
+        if brake_reason:
+            self._braked += 1
+            self._brake_reason = brake_reason
 
     def finished(self, state: LinkState, t_s: float) -> bool:
         elapsed_s = t_s - self._t0_s
@@ -482,8 +500,14 @@ class _FollowMonitor:
             return True
         distance_m = float(np.linalg.norm(state.pos_ned_m - self._goal_ned_m))
         if t_s >= self._next_report_s:
-            self._progress(f"t={elapsed_s:5.1f} s  {distance_m:6.2f} m to goal")
+            braked = (
+                f"; braked in {self._braked} of {self._steps} steps ({self._brake_reason})"
+                if self._braked
+                else ""
+            )
+            self._progress(f"t={elapsed_s:5.1f} s  {distance_m:6.2f} m to goal{braked}")
             self._next_report_s += 2.0
+            self._steps = self._braked = 0
         return (
             elapsed_s >= self._duration_s
             and distance_m <= self._mission.goal_tolerance_m

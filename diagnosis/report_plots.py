@@ -121,7 +121,10 @@ def plot_closed_loop(d: Diagnosis, path: Path) -> Path:
 
 
 def plot_residuals(d: Diagnosis, out_dir: Path) -> list[Path]:
-    """One plot per named airframe cause (and ``unexplained``): residual before and after."""
+    """One plot per named airframe cause (and ``unexplained``): the force residual against
+    the variable that cause acts on, under the config and under the whole extended config
+    (every added effect at once, not the plot's cause alone, which the report's table
+    apportions)."""
     if d.force is None:
         return []
     data = d.force
@@ -135,12 +138,13 @@ def plot_residuals(d: Diagnosis, out_dir: Path) -> list[Path]:
         fig, ax = plt.subplots(figsize=(7, 4.5))
         x = x_of(data)
         ax.plot(x, y_of(data, before), ".", ms=2, color="C3", label="config")
-        ax.plot(x, y_of(data, after), ".", ms=2, color="C0", label="extended config")
+        added = ", ".join(d.added_effects) or "nothing added"
+        ax.plot(x, y_of(data, after), ".", ms=2, color="C0", label=f"extended config ({added})")
         if name in LOG_X:
             ax.set_xscale("log")
         ax.set_xlabel(xlabel)
         ax.set_ylabel(ylabel)
-        ax.set_title(f"{name}: force residual before and after")
+        ax.set_title(f"{name}: force residual, config and extended config (all added causes)")
         ax.legend(loc="best", fontsize=8)
         fig.tight_layout()
         path = out_dir / f"residual_{name}.png"

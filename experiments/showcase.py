@@ -73,7 +73,11 @@ def plot(logs: dict[str, FlightLog], path: Path) -> None:
         ax_err.plot(log["t_s"][following], tracking_errors_m(log), label=name)
     ax_path.set(xlabel="east [m]", ylabel="north [m]", title="flown path (top view)")
     ax_path.set_aspect("equal")
-    ax_err.set(xlabel="time [s]", ylabel="distance from reference [m]", title="tracking error")
+    ax_err.set(
+        xlabel="time [s]",
+        ylabel="distance to the reference's point at that time [m]",
+        title="tracking error (lagging along the path counts)",
+    )
     for ax in (ax_path, ax_err):
         ax.grid(True, alpha=0.3)
         ax.legend()

@@ -7,7 +7,8 @@ is written there, as every command's output option is, but a log already there i
 it is kept as ``PATH-stem.1.csv`` (``.2``, ... the first free number), with its sidecar, and put
 back when the flight records no row (refused before take-off). Names are claimed by creating
 the file exclusively, so two companions started at once cannot pick the same one.
-``vehicle-sim --log`` keeps an earlier onboard log the same way.
+``vehicle-sim --log`` keeps an earlier onboard log the same way. A CSV log is never written
+under a ``.ulg`` name, which every reader would take for a damaged PX4 ULog.
 """
 
 from __future__ import annotations
@@ -22,6 +23,16 @@ from flightlog.schema import sidecar_path
 
 DEFAULT_LOG_DIR = Path("out/flights")
 MAX_NAMES = 1000  # numbered names tried before giving up
+
+
+def check_csv_log_name(path: Path) -> None:
+    """Raise OutputError when a schema-v1 CSV log would be written under a ``.ulg`` name: every
+    reader would take it for a damaged PX4 ULog and refuse it."""
+    if Path(path).suffix.lower() == ".ulg":
+        raise OutputError(
+            f"{path}: a .ulg name for a schema-v1 CSV log, which every command would then "
+            "refuse as a damaged ULog; name it .csv"
+        )
 
 
 def claim_new_log_path(folder: Path = DEFAULT_LOG_DIR, now: datetime | None = None) -> Path:

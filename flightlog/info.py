@@ -87,7 +87,17 @@ def describe_log(log: FlightLog) -> list[str]:
         lines.append(f"{command}: {verdict}")
     has_thrust = log.has("thrust_n") or log.has("thrust_norm") or log.has("rotor_speed_rms_radps")
     if not has_thrust:
-        lines.append("diagnose: thrust-related causes (mass, payload, thrust) cannot be examined")
+        lines.append(
+            "diagnose: no thrust: the causes read from the force residual (drags, wind, "
+            "payload, battery sag, ground effect) cannot be examined, only those read from the "
+            "replay (command delay, motor lag, thrust curve, flight control)"
+        )
+        if meta.get("source") == "companion":
+            lines.append(
+                "diagnose: this is the companion's log (MAVLink carries no thrust or "
+                "acceleration); diagnose the vehicle's onboard log instead: its PX4 .ulg, or "
+                "vehicle-sim --log"
+            )
     return lines
 
 

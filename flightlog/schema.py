@@ -46,6 +46,8 @@ OPTIONAL_NUMERIC_COLUMNS: tuple[str, ...] = (
 TEXT_COLUMNS: tuple[str, ...] = ("mode",)
 
 SIDECAR_SUFFIX = ".json"
+BINARY_SNIFF_BYTES = 4096  # a NUL byte among a file's first bytes: binary, not CSV
+FIRST_LINE_SHOWN = 60  # characters of a foreign file's first line quoted in the refusal
 
 
 class FlightLogError(ValueError):
@@ -179,6 +181,15 @@ def write_sidecar(log_path: str | Path, metadata: Mapping[str, object]) -> Path:
     )
 
 
+def _not_text(path: Path, why: str) -> str:
+    """The one-line refusal of a binary file given as a flight log."""
+    return (
+        f"{path}: a binary file, not a schema-v1 CSV ({why}); the commands read schema-v1 CSV "
+        "and PX4 ULog (.ulg, from the vehicle's SD card), not MAVLink telemetry logs (.tlog) "
+        "or ArduPilot logs (.bin)"
+    )
+
+
 def read_flight_log(path: str | Path, max_gap_s: float | None = None) -> FlightLog:
     """Read and validate a schema-v1 CSV log (and its sidecar, if present).
 
@@ -200,8 +211,11 @@ def read_flight_log(path: str | Path, max_gap_s: float | None = None) -> FlightL
         raise FlightLogError(
             f"{path}: no such flight log; pass the path of a schema-v1 CSV file or a PX4 .ulg"
         )
-    try:
-        with path.open(newline="") as fh:
+    with path.open("rb") as fh:
+        if b"\0" in fh.read(BINARY_SNIFF_BYTES):
+            raise FlightLogError(_not_text(path, "it holds NUL bytes"))
+    try:  # utf-8-sig: a spreadsheet's "CSV UTF-8" starts with a byte-order mark
+        with path.open(newline="", encoding="utf-8-sig") as fh:
             reader = csv.reader(fh)
             header = next(reader, None)
             if not header:
@@ -211,10 +225,15 @@ def read_flight_log(path: str | Path, max_gap_s: float | None = None) -> FlightL
             header = [h.strip() for h in header]
             rows = list(reader)
     except UnicodeDecodeError as exc:
-        raise FlightLogError(
-            f"{path}: not a text CSV file ({exc.reason}); is it a ULog? use the ULog reader"
-        ) from None
+        raise FlightLogError(_not_text(path, exc.reason)) from None
     missing = [c for c in REQUIRED_COLUMNS if c not in header]
+    if len(missing) == len(REQUIRED_COLUMNS):
+        first = ",".join(header)
+        first = first if len(first) <= FIRST_LINE_SHOWN else f"{first[:FIRST_LINE_SHOWN]}..."
+        raise FlightLogError(
+            f"{path}: not a schema-v1 flight log: its first line ({first!r}) names none of the "
+            f"columns schema v1 needs ({', '.join(REQUIRED_COLUMNS)})"
+        )
     if missing:
         raise FlightLogError(
             f"{path}: missing required column(s) {', '.join(missing)}; schema v1 needs "

@@ -20,6 +20,27 @@ from gp.errors import GPInputError
 WHOLE_TOLERANCE_STEPS = 0.2
 
 
+# Logs whose median steps differ by more than this ratio are of different rates.
+MIXED_RATE_RATIO = 1.2
+
+
+def mixed_steps(logs: Sequence[FlightLog]) -> str | None:
+    """One line when the logs are of different rates (their median steps differ by more than
+    MIXED_RATE_RATIO), naming each log's step, else None: each residual is measured over its
+    own log's steps (gp.datasets), a different quantity at another rate, while the model keeps
+    one time base, the logs' median step (log_step_s)."""
+    steps = [(log.where, float(np.median(np.diff(log["t_s"])))) for log in logs if log.n_rows > 1]
+    values = [step for _, step in steps]
+    if len(values) < 2 or max(values) <= MIXED_RATE_RATIO * min(values):
+        return None
+    listed = ", ".join(f"{step:.3g} s in {where}" for where, step in steps)
+    return (
+        f"the logs are of different rates (steps {listed}): each residual is measured over its "
+        "own log's steps, a different quantity at each rate, while the model keeps one time "
+        f"base (their median step, {log_step_s(logs):.3g} s); fit logs of one rate together"
+    )
+
+
 def log_step_s(logs: Sequence[FlightLog]) -> float:
     """The logs' median time step [s], over the consecutive rows of every log."""
     return float(np.median(np.concatenate([np.diff(log["t_s"]) for log in logs])))

@@ -8,6 +8,8 @@ Usage:
     bench                      # every part, Markdown table on stdout
     bench --only gp --json     # one part, one JSON object
     bench --quick              # small sizes, for a smoke run
+
+Ctrl-C stops it with exit 130 and prints the figures of the parts that ended before it.
 """
 
 from __future__ import annotations
@@ -21,6 +23,8 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from scripts.one_line_parser import OneLineParser
+
+EXIT_INTERRUPTED = 130
 
 PARTS: dict[str, str] = {
     "sim": "experiments.bench.sim",
@@ -45,7 +49,12 @@ class BenchConfig:
 
 
 def parse_args(argv: Sequence[str] | None) -> BenchConfig:
-    parser = OneLineParser(prog="bench", description=__doc__.splitlines()[0])
+    parser = OneLineParser(
+        prog="bench",
+        description=__doc__.splitlines()[0],
+        epilog="Exit codes: 0 done, 2 bad input, 130 stopped by Ctrl-C (the figures of the "
+        "parts done are printed).",
+    )
     parser.add_argument(
         "--only",
         action="append",
@@ -62,16 +71,17 @@ def parse_args(argv: Sequence[str] | None) -> BenchConfig:
     return BenchConfig(parts=parts, quick=args.quick, as_json=args.json)
 
 
-def run_parts(config: BenchConfig, progress: Callable[[str], None]) -> dict[str, float]:
-    """Run the configured parts in order and merge their figures."""
-    figures: dict[str, float] = {}
+def run_parts(
+    config: BenchConfig, progress: Callable[[str], None], figures: dict[str, float]
+) -> None:
+    """Run the configured parts in order, merging their figures into ``figures`` as each part
+    ends (so that the parts done are kept when a later one is stopped)."""
     for part in config.parts:
         module = importlib.import_module(PARTS[part])
         progress(f"[bench] {part} ...")
         start = time.perf_counter()
         figures.update(module.run(progress=progress, quick=config.quick))
         progress(f"[bench] {part} done in {time.perf_counter() - start:.1f} s")
-    return figures
 
 
 def format_table(figures: dict[str, float]) -> str:
@@ -94,7 +104,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     def progress(message: str) -> None:
         print(message, file=sys.stderr, flush=True)
 
-    figures = run_parts(config, progress)
+    figures: dict[str, float] = {}
+    try:
+        run_parts(config, progress, figures)
+    except KeyboardInterrupt:
+        done = "; the figures of the parts done are printed" if figures else ""
+        print(f"bench: stopped by Ctrl-C{done}", file=sys.stderr)
+        if figures:
+            print(format_json(figures) if config.as_json else format_table(figures))
+        return EXIT_INTERRUPTED
     print(format_json(figures) if config.as_json else format_table(figures))
     return 0
 

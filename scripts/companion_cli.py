@@ -2,7 +2,8 @@
 
     companion MISSION --link {mavsdk,pymavlink,inprocess} [--url udpin://127.0.0.1:14540]
               [--planner pd|nmpc|nmpc_clutter] [--gp-model MODEL.npz] [--rate-hz 50]
-              [--log FLIGHT.csv] [--seed 0] [--vehicle iris]
+              [--log FLIGHT.csv] [--seed 0] [--vehicle iris]   (--seed, --vehicle: inprocess;
+                                                                 --url: the MAVLink links)
 
 Without ``--log`` each flight's log is a new file, out/flights/flight_<UTC date_time>.csv, as
 PX4 never writes a log over an earlier one; ``--log PATH`` writes there, as every command's
@@ -32,7 +33,7 @@ from companion.app import (
     run_companion,
 )
 from companion.planner_registry import PLANNER_NAMES
-from companion.runner import COMPANION_RT_PRIORITY, RunnerConfig, Terminated
+from companion.runner import COMPANION_RT_PRIORITY, FlightOutcome, RunnerConfig, Terminated
 from scripts.one_line_parser import OneLineParser, output_path
 
 EXIT_COMPLETED = 0
@@ -53,9 +54,19 @@ def parse_args(argv: list[str] | None) -> CompanionConfig:
         "sent HOLD and LAND).",
     )
     parser.add_argument("mission", type=Path, help="mission file (TOML)")
-    parser.add_argument("--link", choices=LINK_KINDS, default="mavsdk", help="how to reach it")
-    parser.add_argument("--url", default=DEFAULT_URL, help=f"MAVLink URL (default {DEFAULT_URL})")
-    parser.add_argument("--planner", choices=PLANNER_NAMES, default="pd")
+    parser.add_argument(
+        "--link", choices=LINK_KINDS, default="mavsdk", help="how to reach it (default mavsdk)"
+    )
+    parser.add_argument(
+        "--url", help=f"MAVLink URL, mavsdk and pymavlink links (default {DEFAULT_URL})"
+    )
+    parser.add_argument(
+        "--planner",
+        choices=PLANNER_NAMES,
+        default="pd",
+        help="pd (default): [Kulathunga23]'s PD regulator; nmpc: the NMPC (--gp-model to "
+        "augment it); nmpc_clutter: the NMPC round sensed obstacles",
+    )
     parser.add_argument(
         "--gp-model",
         type=Path,
@@ -71,8 +82,8 @@ def parse_args(argv: list[str] | None) -> CompanionConfig:
         help="flight log (schema-v1 CSV) to write; a log already there is kept as "
         "PATH-stem.1.csv (default: a new file out/flights/flight_<UTC date_time>.csv)",
     )
-    parser.add_argument("--seed", type=int, default=0, help="simulator seed (inprocess)")
-    parser.add_argument("--vehicle", default="iris", help="simulator preset or config (inprocess)")
+    parser.add_argument("--seed", type=int, help="simulator seed (inprocess; default 0)")
+    parser.add_argument("--vehicle", help="simulator preset or config (inprocess; default iris)")
     parser.add_argument(
         "--verbose", action="store_true", help="show MAVSDK's own log lines (hidden by default)"
     )
@@ -86,6 +97,24 @@ def parse_args(argv: list[str] | None) -> CompanionConfig:
         "permit it, the flight says so and runs at normal priority)",
     )
     args = parser.parse_args(argv)
+    in_process = args.link == "inprocess"
+    ignored = [
+        option
+        for option, value, used in (
+            ("--vehicle", args.vehicle, in_process),
+            ("--seed", args.seed, in_process),
+            ("--url", args.url, not in_process),
+        )
+        if value is not None and not used
+    ]
+    if ignored and in_process:
+        parser.error(f"{ignored[0]} is for the mavsdk and pymavlink links, not --link inprocess")
+    if ignored:
+        parser.error(
+            f"{' and '.join(ignored)} {'choose' if len(ignored) > 1 else 'chooses'} the "
+            f"in-process simulator; over --link {args.link} "
+            "the vehicle is the one answering at --url (start it with vehicle-sim --vehicle ...)"
+        )
     try:
         runner = RunnerConfig(rate_hz=args.rate_hz, realtime_priority=args.realtime_priority)
     except ValueError as exc:
@@ -93,12 +122,12 @@ def parse_args(argv: list[str] | None) -> CompanionConfig:
     return CompanionConfig(
         mission_path=args.mission,
         link=args.link,
-        url=args.url,
+        url=args.url or DEFAULT_URL,
         planner=args.planner,
         gp_model=args.gp_model,
         log_path=args.log,
-        seed=args.seed,
-        vehicle=args.vehicle,
+        seed=0 if args.seed is None else args.seed,
+        vehicle=args.vehicle or "iris",
         runner=runner,
         verbose=args.verbose,
     )
@@ -108,8 +137,19 @@ def _progress(message: str) -> None:
     print(f"companion: {message}", file=sys.stderr, flush=True)
 
 
-def _metres(value: float | None) -> str:
-    return "n/a" if value is None else f"{value:.2f} m"
+def _summary(outcome: FlightOutcome) -> str:
+    """The flight's last line: how it ended, where it landed (when it came down from a
+    followed reference) and its deadline misses (when it flew a control step)."""
+    parts = [
+        outcome.detail
+        if outcome.detail.startswith(outcome.status)  # "interrupted by Ctrl-C"
+        else f"{outcome.status}: {outcome.detail}"
+    ]
+    if outcome.landed_error_m is not None:
+        parts.append(f"landed {outcome.landed_error_m:.2f} m from the goal")
+    if outcome.ticks:
+        parts.append(f"{outcome.deadline_misses} deadline misses in {outcome.ticks} steps")
+    return "; ".join(parts)
 
 
 def _sigterm_as_interrupt(_signum: int, _frame: FrameType | None) -> None:
@@ -149,10 +189,7 @@ def main(argv: list[str] | None = None) -> int:
     if outcome.status == "refused":
         print(f"companion: error: {outcome.detail}", file=sys.stderr, flush=True)
         return EXIT_BAD_INPUT
-    _progress(
-        f"{outcome.status}: {outcome.detail}; landed {_metres(outcome.landed_error_m)} from the "
-        f"goal; {outcome.deadline_misses} deadline misses in {outcome.ticks} steps"
-    )
+    _progress(_summary(outcome))
     if outcome.status == "completed":
         return EXIT_COMPLETED
     if outcome.status == "interrupted":

@@ -12,7 +12,8 @@ holds one such report set per log, in DIR/<log name>/, plus DIR/batch.json (verd
 per log). A log the batch cannot diagnose (unreadable, too slow a rate, never airborne) is
 skipped with one line saying why, here and in batch.json, and the others are diagnosed.
 Progress goes to stderr. Exit codes: 0 done, 2 bad input (one line saying why; in a batch,
-when no log at all can be diagnosed).
+when no log at all can be diagnosed), 130 stopped by Ctrl-C (one line; nothing written, since
+the report set appears whole or not at all).
 """
 
 from __future__ import annotations
@@ -39,6 +40,7 @@ from vehicle_sim import SimConfig, SimConfigError, load_sim_config
 
 EXIT_OK = 0
 EXIT_BAD_INPUT = 2
+EXIT_INTERRUPTED = 130
 EXTENDED_CONFIG_NAME = "extended_config.toml"
 BATCH_SUMMARY_NAME = "batch.json"
 
@@ -62,7 +64,7 @@ def parse_args(argv: list[str] | None) -> DiagnoseArgs:
         prog="diagnose",
         description="Compare a simulation config with measured flight logs, name what it gets "
         "wrong (effect vocabulary), fit it, write report and extended config.",
-        epilog="Exit codes: 0 done, 2 bad input.",
+        epilog="Exit codes: 0 done, 2 bad input, 130 stopped by Ctrl-C (nothing written).",
     )
     parser.add_argument(
         "logs", nargs="+", type=Path, help="schema-v1 flight logs (CSV) or PX4 ULog files (.ulg)"
@@ -98,10 +100,19 @@ def parse_args(argv: list[str] | None) -> DiagnoseArgs:
 
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
+    try:
+        return _diagnose(args)
+    except KeyboardInterrupt:  # the report set is written atomically: none of it is there
+        print(f"diagnose: stopped by Ctrl-C; nothing written to {args.out_dir}", file=sys.stderr)
+        return EXIT_INTERRUPTED
+
+
+def _diagnose(args: DiagnoseArgs) -> int:
+    """Diagnose (one report set, or one per log with --batch); returns the exit code."""
     start = time.monotonic()
 
     def progress(msg: str) -> None:
-        print(f"[{time.monotonic() - start:6.1f} s] {msg}", file=sys.stderr, flush=True)
+        print(f"diagnose [{time.monotonic() - start:6.1f} s] {msg}", file=sys.stderr, flush=True)
 
     try:
         check_writable_dir(args.out_dir)  # before minutes of work, not after
@@ -111,6 +122,15 @@ def main(argv: list[str] | None = None) -> int:
         require_distinct(args.logs)  # one diagnosis of all logs: a flight twice counts twice
         logs = [_read_for_diagnosis(p) for p in args.logs]
         progress(f"read {len(logs)} log(s), {sum(log.n_rows for log in logs)} rows")
+        for log in logs:
+            if log.metadata.get("source") == "companion" and not log.has("thrust_n"):
+                print(
+                    f"diagnose: warning: {log.where} is the companion's log: MAVLink carries no "
+                    "thrust or acceleration, so no force-residual cause (drags, wind, payload) "
+                    "can be examined; diagnose the vehicle's onboard log: its PX4 .ulg, or "
+                    "vehicle-sim --log",
+                    file=sys.stderr,
+                )
         result = diagnose(logs, sim_config, progress=progress)
     except (SimConfigError, FlightLogError, ForceDataError, SchedulerError) as exc:
         print(f"diagnose: {exc}", file=sys.stderr)
@@ -138,15 +158,6 @@ def _read_for_diagnosis(path: Path) -> FlightLog:
     return log
 
 
-def _skip_line(path: Path, why: str) -> str:
-    """'diagnose: skipping PATH: WHY', the path said once (a log's errors start with it)."""
-    return (
-        f"diagnose: skipping {why}"
-        if why.startswith(f"{path}:")
-        else (f"diagnose: skipping {path}: {why}")
-    )
-
-
 def _run_batch(args: DiagnoseArgs, sim_config: SimConfig, progress: Progress) -> int:
     """Diagnose each log on its own on the chosen executor, skipping (one line each) the logs
     that cannot be diagnosed; write the report sets and batch.json atomically."""
@@ -158,8 +169,8 @@ def _run_batch(args: DiagnoseArgs, sim_config: SimConfig, progress: Progress) ->
         try:
             jobs.append(DiagnosisJob(name, _read_for_diagnosis(path), sim_config))
         except FlightLogError as exc:
-            skipped[name] = str(exc)
-            print(_skip_line(path, str(exc)), file=sys.stderr)
+            skipped[name] = _reason(path, exc)
+            print(f"diagnose: skipping {path}: {skipped[name]}", file=sys.stderr)
     where = args.scheduler or f"{args.workers} local processes"
     progress(f"batch: {len(jobs)} diagnoses on {where}")
     outcomes = []
@@ -169,8 +180,9 @@ def _run_batch(args: DiagnoseArgs, sim_config: SimConfig, progress: Progress) ->
     results = {o.name: o.diagnosis for o in outcomes if o.diagnosis is not None}
     for outcome in outcomes:
         if outcome.diagnosis is None:
-            skipped[outcome.name] = str(outcome.skipped)
-            print(_skip_line(path_of[outcome.name], str(outcome.skipped)), file=sys.stderr)
+            path = path_of[outcome.name]
+            skipped[outcome.name] = _reason(path, outcome.skipped)
+            print(f"diagnose: skipping {path}: {skipped[outcome.name]}", file=sys.stderr)
     if not results:
         print(
             f"diagnose: none of the {len(names)} logs can be diagnosed (each skipped above "
@@ -208,6 +220,11 @@ def _run_batch(args: DiagnoseArgs, sim_config: SimConfig, progress: Progress) ->
     left_out = f"; {len(skipped)} log(s) skipped ({BATCH_SUMMARY_NAME} says why)" if skipped else ""
     progress(f"batch: {len(results)} report sets in {args.out_dir}{left_out}")
     return EXIT_OK
+
+
+def _reason(path: Path, error: object) -> str:
+    """Why a log is skipped, without the path the error starts with (the line names it)."""
+    return str(error).removeprefix(f"{path}: ")
 
 
 def _unique_names(paths: tuple[Path, ...]) -> list[str]:

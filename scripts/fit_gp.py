@@ -31,7 +31,9 @@ point: fly or log more, or lower ``--m``.
 Writes MODEL.npz (one self-describing file) and MODEL_residual_{n,e,d}.png, prints the
 held-out nominal and augmented RMSE per axis ([Kulathunga23], Table 2) on stdout; progress goes
 to stderr. Exit code 0 on success, 1 when the prediction check refuses the model, 2 with a
-one-line reason on bad input.
+one-line reason on bad input, 3 when the model is worse than nominal on held-out rows or a
+time constant sits on its bound (not written unless ``--force``), 130 on Ctrl-C (one line
+saying what was written before it).
 """
 
 from __future__ import annotations
@@ -43,6 +45,8 @@ from pathlib import Path
 
 import numpy as np
 
+from companion.nmpc_planner import check_residual_model
+from companion.runner import RunnerConfig
 from flightlog.atomic_output import OutputError, check_writable_file
 from flightlog.reader import read_log, require_distinct, require_modes, require_rates
 from flightlog.schema import FlightLogError
@@ -53,10 +57,10 @@ from gp.errors import DatasetError, GPInputError, ModelFileError
 from gp.features import FEATURE_SETS
 from gp.inducing import STRATEGIES
 from gp.lag_identification import TAU_BOUNDS_S
-from gp.model_io import model_path, save_model
+from gp.model_io import ResidualModel, model_path, save_model
 from gp.plots import plot_residuals
 from gp.prediction_check import refusal
-from gp.residual_interval import residual_steps
+from gp.residual_interval import log_step_s, mixed_steps, residual_steps
 from gp.training import TrainingConfig, train_residual_model
 from planners.nominal_models import MODELS
 from scripts.one_line_parser import OneLineParser, output_path
@@ -77,15 +81,28 @@ class FitGpConfig:
 def parse_args(argv: list[str] | None) -> FitGpConfig:
     """Parse the command line into a FitGpConfig (exits with code 2 on bad arguments)."""
     parser = OneLineParser(
-        prog="fit-gp", description="Fit a sparse-GP residual model from flight logs."
+        prog="fit-gp",
+        description="Fit a sparse-GP residual model from flight logs.",
+        epilog="Exit codes: 0 written, 1 refused by --check-horizon-s (worse than the model it "
+        "would replace), 2 bad input, 3 not written: worse than nominal or a time constant on "
+        "its bound (--force writes it), 130 stopped by Ctrl-C.",
     )
     parser.add_argument(
         "logs", nargs="+", type=Path, help="flight logs: schema-v1 CSV or PX4 ULog (.ulg)"
     )
     parser.add_argument("--out", required=True, type=output_path, help="model file (MODEL.npz)")
-    parser.add_argument("--features", default="velocity", choices=list(FEATURE_SETS))
+    parser.add_argument(
+        "--features",
+        default="velocity",
+        choices=list(FEATURE_SETS),
+        help="the GP's inputs (default velocity, [Kulathunga23]'s)",
+    )
     parser.add_argument(  # the unicycle is the ground robots' model, learned by experiments.rover
-        "--nominal", default="kinematic_4dof", choices=[m for m in MODELS if m != "unicycle"]
+        "--nominal",
+        default="kinematic_4dof",
+        choices=[m for m in MODELS if m != "unicycle"],
+        help="the model the GP corrects (default kinematic_4dof, [Kulathunga23]'s; "
+        "first_order_lag: the velocity loop's lag, identified from the logs)",
     )
     parser.add_argument(
         "--nominal-param",
@@ -94,19 +111,36 @@ def parse_args(argv: list[str] | None) -> FitGpConfig:
         metavar="NAME=VALUE",
         help="nominal model parameter (repeatable), e.g. residual_dt_s=0.05",
     )
-    parser.add_argument("--inducing", default="low_speed", choices=list(STRATEGIES))
-    parser.add_argument("--m", type=int, default=30, help="number of inducing points")
+    parser.add_argument(
+        "--inducing",
+        default="low_speed",
+        choices=list(STRATEGIES),
+        help="where the inducing points go (default low_speed)",
+    )
+    parser.add_argument("--m", type=int, default=30, help="number of inducing points (default 30)")
     parser.add_argument("--optimize-inducing", action="store_true", help="refine positions")
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--holdout-fraction", type=float, default=0.2)
-    parser.add_argument("--restarts", type=int, default=3)
+    parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    parser.add_argument(
+        "--holdout-fraction",
+        type=float,
+        default=0.2,
+        help="share of the rows held out to evaluate the fit (default 0.2)",
+    )
+    parser.add_argument(
+        "--restarts",
+        type=int,
+        default=3,
+        help="starting points of the hyperparameter optimisation (default 3)",
+    )
     parser.add_argument(
         "--mode",
         action="append",
         default=None,
         help="keep only rows in this flight mode (e.g. offboard; repeatable)",
     )
-    parser.add_argument("--no-plots", action="store_true")
+    parser.add_argument(
+        "--no-plots", action="store_true", help="do not write MODEL_residual_{n,e,d}.png"
+    )
     parser.add_argument(
         "--check-horizon-s",
         type=float,
@@ -198,6 +232,7 @@ def too_little_data(train: ResidualDataset, m: int, modes: tuple[str, ...] | Non
 
 
 EXIT_DOUBTFUL = 3
+EXIT_INTERRUPTED = 130
 # Held-out RMSE this much above nominal counts as worse (ties are within the split's noise).
 WORSE_MARGIN = 0.02
 
@@ -229,12 +264,37 @@ def model_doubts(
     return doubts
 
 
+def _companion_refusal(model: ResidualModel, period_s: float) -> str | None:
+    """Why the companion's NMPC would refuse ``model`` at take-off, flown at a control period
+    of ``period_s`` [s] (a velocity history over other than its 0.1 s interval, lagged
+    features it cannot carry, a residual over another step), else None: fit-gp also fits
+    models for analysis only, so this is said, not enforced."""
+    try:
+        check_residual_model(model, period_s)
+    except ModelFileError as exc:
+        return str(exc)
+    return None
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Run fit-gp; returns the exit code (0 ok, 1 model refused by its check, 2 bad input)."""
+    """Run fit-gp; returns the exit code (0 ok, 1 model refused by its check, 2 bad input, 3
+    model doubtful and not written, 130 Ctrl-C)."""
     try:
         config = parse_args(argv)
     except SystemExit as exc:  # --help (0) or a bad argument (2, message already printed)
         return int(exc.code or 0)
+    written: list[Path] = []
+    try:
+        return _fit(config, written)
+    except KeyboardInterrupt:
+        kept = f"; wrote {', '.join(map(str, written))} before it" if written else ""
+        print(f"fit-gp: stopped by Ctrl-C{kept or '; no model written'}", file=sys.stderr)
+        return EXIT_INTERRUPTED
+
+
+def _fit(config: FitGpConfig, written: list[Path]) -> int:
+    """Fit, check and write the model; appends each file written to ``written``; returns the
+    exit code."""
     start = time.perf_counter()
 
     def progress(message: str) -> None:
@@ -258,6 +318,9 @@ def main(argv: list[str] | None = None) -> int:
                 "less well: fit each vehicle's logs on their own unless they fly alike",
                 file=sys.stderr,
             )
+        mixed_rates = mixed_steps(logs)
+        if mixed_rates:
+            print(f"fit-gp: warning: {mixed_rates}", file=sys.stderr)
         require_modes(logs, config.training.modes)
         check_writable_file(model_path(config.out))  # found now, not after the fit
         training = config.training
@@ -295,9 +358,27 @@ def main(argv: list[str] | None = None) -> int:
             )
             return EXIT_DOUBTFUL
         model_file = save_model(config.out, result.model)
+        written.append(model_file)
         progress(f"wrote {model_file}")
+        step_s = log_step_s(logs)
+        unflyable = _companion_refusal(result.model, step_s)
+        if unflyable:
+            print(
+                f"fit-gp: warning: the companion's NMPC will refuse this model (flown at the "
+                f"logs' rate): {unflyable}",
+                file=sys.stderr,
+            )
+        elif _companion_refusal(result.model, 1.0 / RunnerConfig.rate_hz):
+            print(
+                f"fit-gp: warning: the companion's NMPC will refuse this model at its default "
+                f"{RunnerConfig.rate_hz:g} Hz (the residual is measured over the logs' "
+                f"{step_s:.3g} s steps): fly it with companion --rate-hz {1.0 / step_s:.3g}, or "
+                f"fit logs flown at {RunnerConfig.rate_hz:g} Hz",
+                file=sys.stderr,
+            )
         if config.plots:
             for png in plot_residuals(result.model, result.test, model_file.with_suffix("")):
+                written.append(png)
                 progress(f"wrote {png}")
     except (FlightLogError, DatasetError, GPInputError, ModelFileError, ValueError) as exc:
         print(f"fit-gp: error: {exc}", file=sys.stderr)

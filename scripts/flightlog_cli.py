@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from flightlog.atomic_output import OutputError, check_not_an_input, check_writable_file
+from flightlog.flight_log_files import check_csv_log_name
 from flightlog.info import describe_log, describe_unusable_ulog
 from flightlog.reader import read_log
 from flightlog.schema import FlightLogError, sidecar_path, write_flight_log
@@ -50,6 +51,7 @@ def convert(log_path: Path, out: Path) -> Path:
     or a file in the way leaves nothing behind, not even the sidecar."""
     log = read_log(log_path)
     check_not_an_input(out, [log_path])
+    check_csv_log_name(out)
     check_writable_file(out)
     check_writable_file(sidecar_path(out))
     return write_flight_log(out, log)

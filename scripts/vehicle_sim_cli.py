@@ -37,7 +37,7 @@ from typing import Any
 
 from companion.realtime import MAX_RT_PRIORITY, raise_to_realtime
 from flightlog.atomic_output import OutputError, check_not_an_input, check_writable_file
-from flightlog.flight_log_files import keep_earlier_log, restore_earlier_log
+from flightlog.flight_log_files import check_csv_log_name, keep_earlier_log, restore_earlier_log
 from flightlog.schema import sidecar_path
 from scripts.one_line_parser import output_path
 from vehicle_sim import EFFECT_NAMES, SimConfigError, Simulator, load_sim_config
@@ -249,11 +249,13 @@ def _announce(config: VehicleSimCliConfig, endpoint: MavlinkEndpoint) -> None:
     ports = endpoint.local_ports
     host = config.host
     signing = "on (unsigned commands refused)" if config.signing_key_path else "off"
+    world = f", world {config.world_path} (OBSTACLE_DISTANCE)" if config.world_path else ""
     print(
         f"{PROG}: {config.vehicle} on {endpoint.sim.backend_name} at {config.speed:g}x "
-        f"real time, seed {config.seed}, signing {signing}"
+        f"real time, seed {config.seed}, signing {signing}{world}"
     )
     print(f"MAVSDK: udpin://{host}:{config.offboard_port}")
+    print(f"companion: --url udpin://{host}:{config.offboard_port} (--link mavsdk or pymavlink)")
     print(f"pymavlink: udpin:{host}:{config.gcs_port} (or udpout:{host}:{ports['gcs']})")
     print(f"MAVProxy: mavproxy.py --master udpin:{host}:{config.gcs_port}")
     print("Ctrl-C to stop", flush=True)
@@ -376,6 +378,7 @@ def _run(config: VehicleSimCliConfig, stop: threading.Event) -> int:
         return _run_rover(config, stop)
     if config.log_path is not None:
         try:  # found out now, not after a flight whose log would be lost
+            check_csv_log_name(Path(config.log_path))
             check_writable_file(config.log_path)
             check_writable_file(sidecar_path(config.log_path))
             inputs = (config.vehicle, config.world_path, config.signing_key_path)

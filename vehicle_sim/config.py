@@ -49,6 +49,14 @@ _SCHEMA: dict[str, dict[str, tuple[str, float, float, str, bool]]] = {
 }
 # section -> key -> the names it may take (optional keys)
 _CHOICES: dict[str, dict[str, tuple[str, ...]]] = {"sim": {"backend": BACKEND_NAMES}}
+# Top-level keys of the project's other TOML files, given where a config belongs by mistake.
+_OTHER_FILE_KINDS: dict[str, str] = {
+    "reference": "a companion mission",
+    "segment": "an excitation schedule",
+    "cylinder": "an obstacle world",
+    "sphere": "an obstacle world",
+    "box": "an obstacle world",
+}
 
 
 @dataclass(frozen=True)
@@ -194,7 +202,10 @@ def load_sim_config(
         doc = tomllib.loads(path.read_text())
     except tomllib.TOMLDecodeError as exc:
         raise SimConfigError(f"{path}: not valid TOML ({exc}); fix the syntax") from None
-    config = config_from_mapping(doc, preset_name=path.stem)
+    try:
+        config = config_from_mapping(doc, preset_name=path.stem)
+    except SimConfigError as exc:  # say which file: a user may pass several
+        raise SimConfigError(f"{src}: {exc}") from None
     if effects is not None:
         config = config.with_effects(effects)
     return config
@@ -202,11 +213,16 @@ def load_sim_config(
 
 def config_from_mapping(doc: Mapping[str, Any], preset_name: str) -> SimConfig:
     """Validate a parsed config document (see module docstring) and build the config."""
+    sections = ", ".join([*_SCHEMA, "px4_params", "effects"])
+    for key, kind in _OTHER_FILE_KINDS.items():
+        if key in doc:
+            raise SimConfigError(
+                f"{kind} ([{key}]), not a simulation config; pass a preset "
+                f"({', '.join(PRESET_NAMES)}) or a config TOML with the sections {sections}"
+            )
     for section in doc:
         if section not in _SCHEMA and section not in ("effects", "px4_params"):
-            raise SimConfigError(
-                f"{section}: unknown section; use {', '.join([*_SCHEMA, 'px4_params', 'effects'])}"
-            )
+            raise SimConfigError(f"{section}: unknown section; use {sections}")
     values = {s: _section(doc, s) for s in _SCHEMA}
     veh, rot, bat = values["vehicle"], values["rotors"], values["battery"]
     vehicle = VehicleSpec(

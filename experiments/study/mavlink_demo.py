@@ -137,6 +137,8 @@ def _fly(
             ),
         )
         result: CompanionResult = run_companion(companion, progress)
+    if result.outcome.status == "interrupted":  # landed after the user's Ctrl-C: stop here
+        raise KeyboardInterrupt
     if result.outcome.status != "completed" or result.log_path is None:
         raise DemoError(f"the {name} flight did not complete: {result.outcome.detail}")
     return read_log(result.log_path), os.getloadavg()[0]
@@ -202,7 +204,9 @@ def _plots(config: DemoConfig, logs: dict[str, FlightLog], fit, out: Path) -> li
         ax_err.plot(t - t[0], tracking_errors_m(log), label=name)
     ax_path.set(xlabel="east [m]", ylabel="north [m]", title="reference vs flown", aspect="equal")
     ax_err.set(
-        xlabel="time in OFFBOARD [s]", ylabel="distance to reference [m]", title="tracking error"
+        xlabel="time in OFFBOARD [s]",
+        ylabel="distance to the reference's point at that time [m]",
+        title="tracking error (lagging along the path counts)",
     )
     for ax in (ax_path, ax_err):
         ax.grid(alpha=0.3)

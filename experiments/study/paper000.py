@@ -222,7 +222,7 @@ def _refit_on_augmented(
             config,
             [*nominal_logs, *augmented_logs[sel], *(s.log for s in flown[sel])],
             sel,
-            incumbent=Predictor.as_flown(fits[sel].model),
+            incumbent=Predictor.as_flown(fits[sel].model, f"the {sel} fit it would replace"),
             structure_params=structure,
         )
         for sel in flown

@@ -187,6 +187,34 @@ def test_cli_bad_vehicle_or_url_is_one_line_and_exit_2(
     assert err.count("\n") == 1 and match in err
 
 
+@pytest.mark.parametrize(
+    ("args", "match"),
+    [
+        (
+            ["--link", "mavsdk", "--vehicle", "iris_study"],
+            "--vehicle chooses the in-process simulator; over --link mavsdk the vehicle is the "
+            "one answering at --url",
+        ),
+        (["--link", "pymavlink", "--seed", "3", "--vehicle", "f450"], "--vehicle and --seed"),
+        (
+            ["--link", "inprocess", "--url", "udpin://0.0.0.0:14540"],
+            "--url is for the mavsdk and pymavlink links, not --link inprocess",
+        ),
+    ],
+)
+def test_cli_an_option_the_link_would_ignore_is_one_line_and_exit_2(
+    args: list[str], match: str, tmp_path: Path, capsys
+) -> None:
+    """--vehicle iris_study over MAVSDK was silently ignored: the flight flew whatever vehicle
+    answered at --url, its log saying nothing of the option."""
+    with pytest.raises(SystemExit) as exc:
+        main([str(LINE), *args, "--log", str(tmp_path / "f.csv")])
+    err = capsys.readouterr().err
+    assert exc.value.code == 2
+    assert err.count("\n") == 1 and match in err
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_cli_bad_mission_is_one_line_and_exit_2(tmp_path: Path, capsys) -> None:
     bad = tmp_path / "bad.toml"
     bad.write_text('altitude_m = 2.0\nspeed_limit_mps = 1.0\n[reference]\nkind = "spiral"\n')

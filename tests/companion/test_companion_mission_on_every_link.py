@@ -8,6 +8,7 @@ Ctrl-C case runs the `companion` CLI as a subprocess and interrupts it in the ai
 from __future__ import annotations
 
 import math
+import re
 import signal
 import socket
 import subprocess
@@ -197,6 +198,8 @@ def test_ctrl_c_or_sigterm_in_the_air_holds_then_lands_and_exits_128_plus_signal
     hold_at = text.index("safe stop: hold accepted")
     assert hold_at < text.index("safe stop: land accepted") < text.index("safe stop: landed and")
     assert "safe stop: landed and disarmed" in text
+    last = text.strip().splitlines()[-1]  # not "interrupted: interrupted ...; landed n/a ..."
+    assert re.fullmatch(rf"companion: {said}; \d+ deadline misses in \d+ steps", last), last
     final = vehicle.state
     assert not final.armed and final.landed_state == LandedState.ON_GROUND
     # No stale setpoint: the vehicle braked near where it was, instead of flying on north.

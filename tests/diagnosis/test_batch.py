@@ -102,10 +102,13 @@ def test_batch_skips_each_log_it_cannot_diagnose_with_its_reason_and_diagnoses_t
     assert all(line.count(log) == 1 for line, log in zip(skips, logs, strict=False))
     assert "no velocity command" in skips[0] and "needs faster signals" in skips[1]
     assert "no airborne rows" in skips[2]
+    # the path once: not "skipping LOG: LOG: ULog lacks ..."
+    assert all(line.count(log) == 1 for line, log in zip(skips, logs, strict=False))
     assert "1 report sets in" in err and "3 log(s) skipped (batch.json says why)" in err
     summary = json.loads((out / "batch.json").read_text())["logs"]
     assert [e["log"] for e in summary] == logs
     assert [("skipped" in e) for e in summary] == [True, True, True, False]
+    assert not any(e["skipped"].startswith(e["log"]) for e in summary[:3])
     assert (out / summary[3]["report"]).is_file()
     assert main([*logs[:3], *args[4:-1], str(tmp_path / "none")]) == 2
     assert capsys.readouterr().err.splitlines()[-1].startswith("diagnose: none of the 3 logs")

@@ -105,3 +105,11 @@ def test_logs_of_two_airframes_diagnosed_together_are_named_in_the_headline():
     mixed = [w for w in d.warnings if w.startswith("the logs are from different vehicles")]
     assert len(mixed) == 1
     assert f"4001 in {POSCTL}" in mixed[0] and f"4003 in {offboard}" in mixed[0]
+
+
+def test_every_progress_line_names_diagnose(tmp_path, capsys):
+    """Its progress lines were '[   0.1 s] read 1 log(s)', unlike fit-gp's and the demo's
+    'fit-gp [   0.1 s] ...': beside other commands' output, nothing said whose they were."""
+    assert diagnose_cli.main([str(AUTO), "--sim-config", "iris", "--out", str(tmp_path)]) == 0
+    lines = capsys.readouterr().err.splitlines()
+    assert lines and all(line.startswith("diagnose") for line in lines), lines[:3]

@@ -68,6 +68,8 @@ def test_quick_study_runs_end_to_end_and_writes_report_and_plots(tmp_path, capsy
     # [Ostafew16]'s refit on augmented flights of the training seeds ran for both selections
     assert "refit round 1 flight 4/4" in captured.err
     assert "refit low_speed round 1" in captured.err and "refit cluster round 1" in captured.err
+    # a refit's check names the model it would replace (it said "beats previous over ...")
+    assert " previous over " not in captured.err
     for name in (
         "residual_rmse_nominal",
         "residual_rmse_low_speed",

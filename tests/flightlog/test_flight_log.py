@@ -103,7 +103,7 @@ def test_missing_file_binary_file_and_bad_sidecar(tmp_path):
         read_flight_log(tmp_path / "absent.csv")
     binary = tmp_path / "b.csv"
     binary.write_bytes(b"\xff\xfe\x00\x81ULog")
-    with pytest.raises(FlightLogError, match="not a text CSV file"):
+    with pytest.raises(FlightLogError, match="a binary file, not a schema-v1 CSV"):
         read_flight_log(binary)
     path = _write(tmp_path, [_row(0.0), _row(0.1)])
     sidecar_path(path).write_text("{not json")
@@ -147,3 +147,44 @@ def test_a_csv_logs_rate_is_its_row_spacing_across_a_gap():
     log = rec.to_log()
     assert log_rates_hz(log) == {"local_position": 10.0, "velocity_command": 10.0}
     assert rate_shortfalls(log, "fit-gp") == rate_shortfalls(log, "diagnose") == []
+
+
+@pytest.mark.parametrize(
+    "content",
+    [
+        bytes([0xFD, 0x1C, 0x00, 0x00, 0x05, 0x01, 0x01, 0x21]) * 40,  # MAVLink 2 frames
+        bytes([0xA3, 0x95, 0x80, 0x80, 0x59]) + bytes(range(128, 256)),  # no NUL, not UTF-8
+    ],
+)
+def test_a_telemetry_log_is_refused_as_binary_not_as_a_ulog_or_a_csv_missing_columns(
+    tmp_path, content
+):
+    """QGC's .tlog given where a ULog belongs said 'missing required column(s) t_s, ...' (or
+    'is it a ULog? use the ULog reader', a reader the user cannot choose): say what it is."""
+    path = tmp_path / "2026-11-27 09-50-00.tlog"
+    path.write_bytes(content)
+    with pytest.raises(FlightLogError) as info:
+        read_log(path)
+    message = str(info.value)
+    assert message.startswith(f"{path}: a binary file, not a schema-v1 CSV")
+    assert "PX4 ULog (.ulg" in message and ".tlog" in message and "ULog reader" not in message
+
+
+def test_a_csv_of_other_columns_is_named_once_not_listed_twice(tmp_path):
+    path = tmp_path / "export.csv"
+    path.write_text("time,lat,lon\n0,47.3,8.5\n")
+    with pytest.raises(FlightLogError) as info:
+        read_log(path)
+    assert str(info.value) == (
+        f"{path}: not a schema-v1 flight log: its first line ('time,lat,lon') names none of "
+        f"the columns schema v1 needs ({', '.join(REQUIRED_COLUMNS)})"
+    )
+
+
+def test_a_log_saved_by_a_spreadsheet_with_a_byte_order_mark_is_read(tmp_path):
+    """A spreadsheet's "CSV UTF-8" starts with a BOM, which made the first column '\\ufefft_s'
+    and the log 'missing required column(s) t_s'."""
+    path = _write(tmp_path, [_row(0.0), _row(0.1)])
+    path.write_bytes(b"\xef\xbb\xbf" + path.read_bytes())
+    log = read_log(path)
+    assert log.n_rows == 2 and list(log["t_s"]) == [0.0, 0.1]

@@ -11,6 +11,7 @@ from pathlib import Path
 import pytest
 
 from flightlog.reader import read_log
+from flightlog.schema import REQUIRED_COLUMNS, FlightLogRecorder, write_flight_log
 from scripts import diagnose as diagnose_cli
 from scripts import fit_gp as fit_gp_cli
 from scripts import flightlog_cli
@@ -179,3 +180,38 @@ def test_fit_gp_and_info_say_a_ulog_with_a_damaged_header_is_corrupt(tmp_path, c
     err = capsys.readouterr().err
     assert f"fit-gp: warning: damaged.ulg is corrupt at byte {offset}" in err, err
     assert "truncated" not in err
+
+
+def test_convert_to_a_ulg_name_is_refused_since_no_command_would_read_the_csv(tmp_path, capsys):
+    """`convert flight.ulg --out flight_copy.ulg` wrote a CSV named .ulg, which every command
+    then refused as 'named .ulg but does not start with the ULog magic bytes; copy the log
+    again from the vehicle'."""
+    out = tmp_path / "flight_copy.ULG"
+    assert flightlog_cli.main(["convert", str(AUTO), "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [
+        f"flightlog: --out {out}: a .ulg name for a schema-v1 CSV log, which every command "
+        "would then refuse as a damaged ULog; name it .csv"
+    ]
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_info_on_a_companion_log_says_diagnose_needs_the_onboard_log(tmp_path, capsys):
+    """A companion log has no thrust: 'thrust-related causes (mass, payload, thrust) cannot be
+    examined' read as if drag and wind could be; none of the force-residual causes can."""
+    rec = FlightLogRecorder({"source": "companion"})
+    for k in range(200):
+        row = dict.fromkeys(REQUIRED_COLUMNS, 0.0)
+        rec.append({**row, "t_s": 0.02 * k, "q_w": 1.0, "vel_n_mps": 0.01 * k})
+    log = write_flight_log(tmp_path / "nominal.csv", rec.to_log())
+    assert flightlog_cli.main(["info", str(log)]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert "thrust: none" in out
+    assert (
+        "diagnose: no thrust: the causes read from the force residual (drags, wind, payload, "
+        "battery sag, ground effect) cannot be examined, only those read from the replay "
+        "(command delay, motor lag, thrust curve, flight control)"
+    ) in out
+    assert out[-1].startswith("diagnose: this is the companion's log (MAVLink carries no thrust")
+    assert diagnose_cli.main([str(log), "--sim-config", "iris", "--out", str(tmp_path / "d")]) == 0
+    assert f"diagnose: warning: {log} is the companion's log" in capsys.readouterr().err

@@ -134,8 +134,14 @@ def test_a_history_model_from_fit_gp_flies_with_the_nmpcs_interval(tmp_path, cap
     assert main([*base, "--out", str(tmp_path / "one_step")]) == 0
     with pytest.raises(ModelFileError, match="interval"):
         CompanionNmpc(settings, load_model(tmp_path / "one_step"))
+    # said when it is written, not first found at take-off
+    assert (
+        "fit-gp: warning: the companion's NMPC will refuse this model (flown at the logs' rate): "
+        "residual model's velocity history lags 0.02 s but the NMPC's interval is 0.1 s"
+    ) in capsys.readouterr().err
     assert main([*base, "--out", str(tmp_path / "interval"), "--residual-interval-s", "0.1"]) == 0
-    assert "residual over 5 log steps (0.1 s)" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "residual over 5 log steps (0.1 s)" in err and "will refuse" not in err
     model = load_model(tmp_path / "interval")
     assert model.features.residual_steps == 5
     CompanionNmpc(settings, model)

@@ -91,3 +91,15 @@ def test_px4_velocity_pi_takes_its_gains_from_the_ulog_parameters(tmp_path, caps
     nominal = header["feature_definition"]["nominal_model"]["params"]
     assert nominal["vel_p_xy"] == pytest.approx(params["MPC_XY_VEL_P_ACC"])
     assert nominal["vel_i_z"] == pytest.approx(params["MPC_Z_VEL_I_ACC"])
+
+
+def test_a_model_from_a_10_hz_ulog_says_the_companion_rate_it_flies_at(tmp_path, capsys):
+    """PX4 logs at 10 Hz: a kinematic-model residual fitted there was written without a word
+    and then refused by the companion at its default 50 Hz, found only at take-off."""
+    assert fit_gp_cli.main([str(POSCTL), "--out", str(tmp_path / "m"), *FAST]) == 0
+    err = capsys.readouterr().err
+    assert (
+        "fit-gp: warning: the companion's NMPC will refuse this model at its default 50 Hz "
+        "(the residual is measured over the logs' 0.0992 s steps): fly it with companion "
+        "--rate-hz 10.1, or fit logs flown at 50 Hz"
+    ) in err

@@ -65,6 +65,14 @@ def test_vehicle_sim_refuses_an_unknown_backend_in_one_line(capsys):
     assert err.count("\n") == 1 and err.startswith("vehicle-sim: error:")
 
 
+def test_vehicle_sim_backend_jsbsim_on_the_default_vehicle_names_the_preset_to_fly(capsys):
+    """README's `--backend jsbsim` alone flies the default iris, which JSBSim's F450 is not."""
+    assert main(["--backend", "jsbsim", *FREE_PORTS]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "does not describe JSBSim's F450" in err
+    assert "preset f450 (or f450_jsbsim, whose [sim] backend is jsbsim)" in err
+
+
 def test_a_config_file_flies_the_companion_in_process_link_on_jsbsim(tmp_path):
     with pytest.raises(SimConfigError, match="effects belong to the built-in physics"):
         InProcessLink.from_vehicle(

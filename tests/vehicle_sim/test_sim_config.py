@@ -88,9 +88,29 @@ def test_effects_from_toml_from_mappings_and_from_objects(tmp_path):
     ],
 )
 def test_bad_vehicle_files(tmp_path, old, new, match):
+    path = variant(tmp_path, old, new)
     with pytest.raises(SimConfigError, match=match) as info:
-        load_sim_config(variant(tmp_path, old, new))
+        load_sim_config(path)
     assert "\n" not in str(info.value)
+    assert str(info.value).startswith(f"{path}: ")  # which file, when several are in play
+
+
+@pytest.mark.parametrize(
+    ("mission", "kind"),
+    [
+        ("demo_bspline.toml", "a companion mission ([reference])"),
+        ("excite_demo.toml", "an excitation schedule ([segment])"),
+        ("forest_short_world.toml", "an obstacle world ([cylinder])"),
+    ],
+)
+def test_another_kind_of_toml_is_named_not_taken_for_a_config_with_an_unknown_section(
+    mission, kind
+):
+    """`diagnose --sim-config missions/demo_bspline.toml` said only 'name: unknown section'."""
+    path = PRESET_DIR.parents[1] / "missions" / mission
+    with pytest.raises(SimConfigError) as info:
+        load_sim_config(path)
+    assert str(info.value).startswith(f"{path}: {kind}, not a simulation config; pass a preset")
 
 
 @pytest.mark.parametrize(

@@ -45,7 +45,8 @@ class JsbsimBackend:
         if abs(config.mass_kg - plant_mass_kg) > MASS_TOLERANCE * plant_mass_kg:
             raise SimConfigError(
                 f"vehicle.mass_kg = {config.mass_kg} does not describe JSBSim's F450 "
-                f"({plant_mass_kg:.2f} kg); fly the jsbsim backend with preset f450"
+                f"({plant_mass_kg:.2f} kg); fly the jsbsim backend with preset f450 (or "
+                "f450_jsbsim, whose [sim] backend is jsbsim)"
             )
         self.x = np.zeros(ph.N_STATE)
         self.aux = np.zeros(ph.N_AUX)
