@@ -166,6 +166,7 @@ def link_state_of(s: VehicleState) -> LinkState:
         acc_ned_mps2=np.array(s.acc_ned_mps2, dtype=float),
         thrust_n=float(s.thrust_n),
         battery_v=float(s.battery_v),
+        vehicle_kind="multirotor",
     )
 
 

@@ -73,6 +73,7 @@ class InProcessRoverLink:
             armed=bool(self._sim.armed),
             mode="OFFBOARD" if self._offboard else "HOLD",
             landed=LandedPhase.ON_GROUND,
+            vehicle_kind="rover",
         )
 
     def arm(self) -> CommandOutcome:

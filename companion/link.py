@@ -16,6 +16,22 @@ from typing import Literal, Protocol, get_args
 
 import numpy as np
 
+VehicleKind = Literal["multirotor", "VTOL", "fixed wing", "rover", "boat", "other"]
+# MAV_TYPE values (MAVLink common.xml) of each kind; "other" is every type not listed
+_KINDS_OF_MAV_TYPE: dict[int, VehicleKind] = {
+    **dict.fromkeys((2, 3, 4, 13, 14, 15, 29, 35), "multirotor"),  # quad .. decarotor, heli
+    **dict.fromkeys((19, 20, 21, 22, 23, 24, 25), "VTOL"),
+    1: "fixed wing",
+    10: "rover",
+    11: "boat",
+}
+
+
+def vehicle_kind(mav_type: int) -> VehicleKind:
+    """The kind of vehicle a HEARTBEAT's MAV_TYPE names (PX4 sends its airframe's)."""
+    return _KINDS_OF_MAV_TYPE.get(int(mav_type), "other")
+
+
 FlightModeName = Literal[
     "MANUAL", "POSCTL", "ALTCTL", "HOLD", "TAKEOFF", "LAND", "RTL", "MISSION", "OFFBOARD", "UNKNOWN"
 ]
@@ -79,6 +95,8 @@ class LinkState:
         thrust_n: total rotor thrust [N], or None when the link has none.
         battery_v: battery voltage [V], or None when unknown.
         obstacle_distances: the newest range scan, or None when the link has no range sensor.
+        vehicle_kind: what the vehicle is, from its HEARTBEAT's MAV_TYPE (:func:`vehicle_kind`),
+            or None when the link does not say (MAVSDK's API does not give it).
     """
 
     t_s: float
@@ -93,6 +111,7 @@ class LinkState:
     thrust_n: float | None = None
     battery_v: float | None = None
     obstacle_distances: ObstacleDistances | None = None
+    vehicle_kind: VehicleKind | None = None
 
     @property
     def yaw_rad(self) -> float:

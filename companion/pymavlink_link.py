@@ -23,7 +23,9 @@ from companion.link import (
     LinkError,
     LinkState,
     ObstacleDistances,
+    VehicleKind,
     VelocityCommand,
+    vehicle_kind,
 )
 from companion.obstacle_distance_wire import obstacle_distances_of
 from companion.px4_modes import PX4_MAIN_SUB, mode_name_of
@@ -122,6 +124,7 @@ class PymavlinkLink:
         self._landed = LandedPhase.UNKNOWN
         self._battery_v: float | None = None
         self._obstacle_distances: ObstacleDistances | None = None
+        self._vehicle_kind: VehicleKind | None = None
 
     @property
     def name(self) -> str:
@@ -166,6 +169,7 @@ class PymavlinkLink:
             landed=self._landed,
             battery_v=self._battery_v,
             obstacle_distances=self._obstacle_distances,
+            vehicle_kind=self._vehicle_kind,
         )
 
     def arm(self) -> CommandOutcome:
@@ -295,6 +299,7 @@ class PymavlinkLink:
         self._heartbeat_seen_s = self._clock.now_s()
         self._armed = bool(msg.base_mode & _MAV.MAV_MODE_FLAG_SAFETY_ARMED)
         self._mode = mode_name_of(msg.custom_mode)
+        self._vehicle_kind = vehicle_kind(msg.type)
 
     def _on_local_position(self, msg: MAVLink_message) -> None:
         self._pos = np.array([msg.x, msg.y, msg.z], dtype=float)

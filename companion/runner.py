@@ -189,6 +189,19 @@ def fly_mission(
         )
 
 
+def not_a_multicopter(link: Link) -> str:
+    """'' if the vehicle may be a multicopter (its link says so, or says nothing), else why
+    the companion will not arm it: it takes off and flies velocity setpoints in the air."""
+    kind = link.read_state().vehicle_kind
+    if kind in (None, "multirotor", "VTOL", "other"):  # a VTOL takes off as a multicopter
+        return ""
+    hint = "; repeat a rover's path with rover-path" if kind in ("rover", "boat") else ""
+    return (
+        f"the vehicle on the {link.name} link is a {kind} (its HEARTBEAT's MAV_TYPE), not a "
+        f"multicopter: the companion arms and takes off only multicopters{hint}"
+    )
+
+
 def _fly(
     link: Link,
     planner: Planner,
@@ -210,7 +223,9 @@ def _fly(
         link.connect(config.connect_timeout_s)
         progress(f"connected over {link.name}; {describe(link.read_state())}")
         wait_for(link, lambda s: s.is_finite(), config.connect_timeout_s, "finite telemetry")
-        problem = mission_beyond_vehicle_limits(link, mission, config, reference.duration_s)
+        problem = not_a_multicopter(link) or mission_beyond_vehicle_limits(
+            link, mission, config, reference.duration_s
+        )
         if problem:
             progress(f"refused: {problem}")
             return FlightOutcome("refused", problem, None, None, False, 0, 0)

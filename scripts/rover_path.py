@@ -173,6 +173,7 @@ def open_link(args: argparse.Namespace) -> Link:
 
 
 def teach(args: argparse.Namespace) -> int:
+    from experiments.rover.link_drive import NotARover
     from experiments.rover.repeat import end_gap_m, is_loop
     from experiments.rover.teach import HandedOver, TeachError, record_teach
     from planners.rover.path_file import path_csv_text
@@ -193,6 +194,9 @@ def teach(args: argparse.Namespace) -> int:
     except HandedOver as exc:
         _say(str(exc))
         return EXIT_HANDED_OVER
+    except NotARover as exc:
+        _say(f"error: {exc}")
+        return EXIT_BAD_INPUT
     except (TeachError, LinkError) as exc:
         _say(f"error: {exc}")
         return EXIT_FAILED
@@ -259,6 +263,7 @@ def _repeat_inputs(args: argparse.Namespace):  # noqa: ANN202 (a tuple of what r
 
 def repeat(args: argparse.Namespace) -> int:
     from experiments.rover.experience_file import save_experience
+    from experiments.rover.link_drive import NotARover, require_a_rover
     from experiments.rover.repeat import RepeatOutcome, Trial, repeat_path
     from experiments.rover.repeat_report import figure, history_row, summary, trial_line
 
@@ -285,6 +290,7 @@ def repeat(args: argparse.Namespace) -> int:
     code = EXIT_INTERRUPTED
     try:
         link.connect(timeout_s=30.0)
+        require_a_rover(link)
         outcome = repeat_path(
             link, path, args.trials, gp, schedule, scheduler, memory.trials_done + 1, back,
             trial_done, _say,
@@ -292,6 +298,9 @@ def repeat(args: argparse.Namespace) -> int:
         code = {"completed": EXIT_OK, "handed_over": EXIT_HANDED_OVER}.get(
             outcome.status, EXIT_FAILED
         )
+    except NotARover as exc:
+        outcome = RepeatOutcome("refused", str(exc))
+        code = EXIT_BAD_INPUT
     except LinkError as exc:
         outcome = RepeatOutcome("stopped", str(exc))
         code = EXIT_FAILED

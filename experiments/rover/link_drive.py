@@ -64,6 +64,22 @@ class LinkDrive:
         return float(self.t_s[-1] - self.t_s[0]) if len(self.t_s) else 0.0
 
 
+class NotARover(LinkError):
+    """The vehicle on the link says it is not a ground rover (nothing was sent to it)."""
+
+
+def require_a_rover(link: Link) -> None:
+    """Raise :class:`NotARover` unless the connected vehicle may be a rover (its link says
+    so, or says nothing): a multicopter must not be driven as one."""
+    kind = link.read_state().vehicle_kind
+    if kind not in (None, "rover", "boat", "other"):
+        hint = "; fly a multicopter with companion" if kind in ("multirotor", "VTOL") else ""
+        raise NotARover(
+            f"the vehicle on the {link.name} link is a {kind} (its HEARTBEAT's MAV_TYPE), not "
+            f"a ground rover: rover-path drives only rovers{hint}"
+        )
+
+
 def pose_of(link: Link) -> np.ndarray:
     """(x_m, y_m, heading_rad) in the path frame from the Link's NED state."""
     return _pose(link.read_state())

@@ -71,7 +71,8 @@ class RepeatOutcome:
             the rover out of OFFBOARD; nothing more sent), "stopped" (lost link, non-finite
             pose, failed solve, drive back failed: zero velocity and Hold), "incomplete" (a
             trial did not reach the end in time), "not_at_start" (the rover is not at the
-            path's start and is not to be driven back).
+            path's start and is not to be driven back), "refused" (the vehicle is no rover;
+            nothing sent to it).
         detail: one line for the user.
         trials: the trials driven in this run.
         schedule_mps: the speeds the next trial would drive (N,) [m/s].

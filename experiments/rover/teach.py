@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from companion.link import ZERO_VELOCITY, Link, LinkError, VelocityCommand
-from experiments.rover.link_drive import stop_rover
+from experiments.rover.link_drive import require_a_rover, stop_rover
 from planners.rover.path import TaughtPath
 
 MIN_TEACH_M = 1.0
@@ -77,11 +77,13 @@ def record_teach(
     turns left), driven at ``drive_speed_mps``.
 
     Raises:
-        LinkError: no vehicle or no position on connecting, or it refuses arming or OFFBOARD.
+        LinkError: no vehicle or no position on connecting, or it refuses arming or OFFBOARD;
+            NotARover when the vehicle says it is no rover (nothing sent to it).
         TeachError: the pass gave no usable path (see the module docstring); HandedOver
             when someone took the rover out of OFFBOARD during the scripted drive.
     """
     link.connect(timeout_s=30.0)
+    require_a_rover(link)
     clock = link.clock
     t_end = clock.now_s() + timeout_s
     if drive is not None:

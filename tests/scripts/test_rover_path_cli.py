@@ -289,3 +289,29 @@ def test_ctrl_c_ends_a_pilot_driven_teach_and_writes_the_path(tmp_path: Path) ->
         endpoint.close()
     assert "recording ended: Ctrl-C" in err
     assert out.read_text().startswith("x_m,y_m\n")
+
+
+@pytest.mark.parametrize("command", ["teach", "repeat"])
+def test_a_multicopter_on_the_link_is_refused_and_sent_nothing(tmp_path, capsys, command):
+    """Another vehicle answering on the port is a quadrotor (PX4 SITL, a wrong --url): neither
+    the teach pass nor the repeat arms it or switches its mode."""
+    from tests.companion.test_companion_mission_on_every_link import Vehicle, free_udp_port
+
+    path = tmp_path / "loop.csv"
+    assert main(["teach", "--link", "inprocess", "--drive", LOOP, "--out", str(path)]) == 0
+    port = free_udp_port()
+    quad = Vehicle(port)
+    try:
+        url = ["--link", "pymavlink", "--url", f"udpin://127.0.0.1:{port}"]
+        if command == "teach":
+            argv = ["teach", *url, "--drive", "3:0", "--out", str(tmp_path / "p.csv")]
+        else:
+            argv = ["repeat", *url, "--path", str(path), "--out", str(tmp_path / "out")]
+        capsys.readouterr()
+        assert main(argv) == 2
+        state = quad.state
+    finally:
+        quad.endpoint.stop()
+    last = capsys.readouterr().err.strip().splitlines()[-1]
+    assert "is a multirotor" in last and "rover-path drives only rovers" in last
+    assert not state.armed and state.mode.name != "OFFBOARD"
