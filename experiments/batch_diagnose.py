@@ -58,7 +58,7 @@ def diagnose_each(
         zip(jobs, pool.map(run_diagnosis_job, jobs), strict=True), start=1
     ):
         if outcome.diagnosis is None:
-            progress(f"skipped {n}/{len(jobs)} {job.name}: {outcome.skipped}")
+            progress(f"skipped {n}/{len(jobs)} {job.name}: it cannot be diagnosed (why: below)")
         else:
             progress(f"diagnosed {n}/{len(jobs)} {job.name}: {headline(outcome.diagnosis)}")
         outcomes.append(outcome)

@@ -161,6 +161,12 @@ def _read_for_diagnosis(path: Path) -> FlightLog:
 def _run_batch(args: DiagnoseArgs, sim_config: SimConfig, progress: Progress) -> int:
     """Diagnose each log on its own on the chosen executor, skipping (one line each) the logs
     that cannot be diagnosed; write the report sets and batch.json atomically."""
+    missing = [str(p) for p in args.logs if not p.exists()]
+    if missing:  # a typo, not a log to skip: nothing is diagnosed until the list is right
+        print(
+            f"diagnose: error: no such log: {', '.join(missing)}; check the path", file=sys.stderr
+        )
+        return EXIT_BAD_INPUT
     names = _unique_names(args.logs)
     path_of = dict(zip(names, args.logs, strict=True))
     skipped: dict[str, str] = {}  # name -> why

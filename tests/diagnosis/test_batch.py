@@ -101,7 +101,7 @@ def test_batch_skips_each_log_it_cannot_diagnose_with_its_reason_and_diagnoses_t
     assert [line.split(": ")[1].removeprefix("skipping ") for line in skips] == logs[:3]
     assert all(line.count(log) == 1 for line, log in zip(skips, logs, strict=False))
     assert "no velocity command" in skips[0] and "needs faster signals" in skips[1]
-    assert "no airborne rows" in skips[2]
+    assert "no airborne rows" in skips[2] and err.count("no airborne rows") == 1  # said once
     # the path once: not "skipping LOG: LOG: ULog lacks ..."
     assert all(line.count(log) == 1 for line, log in zip(skips, logs, strict=False))
     assert "1 report sets in" in err and "3 log(s) skipped (batch.json says why)" in err
@@ -133,3 +133,14 @@ def test_a_flight_too_short_to_hold_out_is_skipped_with_its_reason_not_a_traceba
     outcome = run_diagnosis_job(DiagnosisJob("short", short, load_sim_config("iris")))
     assert outcome.diagnosis is None
     assert outcome.skipped.startswith("too little flight to hold any out: the 40 airborne rows")
+
+
+def test_a_log_path_that_does_not_exist_is_a_typo_refused_before_any_work(tmp_path, capsys):
+    fixtures = Path(__file__).resolve().parents[1] / "fixtures" / "ulog"
+    logs = [str(fixtures / "quad_offboard_v1_16.ulg"), str(fixtures / "quad_offboard_v1_61.ulg")]
+    out = tmp_path / "out"
+    args = [*logs, "--sim-config", "iris", "--batch", "--workers", "1", "--out", str(out)]
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"diagnose: error: no such log: {logs[1]}; check the path"]
+    assert not out.exists()
