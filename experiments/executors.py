@@ -38,7 +38,7 @@ def check_scheduler_address(address: str) -> str:
     if not (sep and scheme in ("tcp", "tls", "inproc", "ws", "wss") and host and colon):
         raise SchedulerError(
             f"scheduler address {address!r} is not of the form tcp://HOST:PORT "
-            "(e.g. tcp://10.0.0.5:8786, printed by dask-scheduler)"
+            "(e.g. tcp://10.0.0.5:8786, printed by `dask scheduler`)"
         )
     if scheme != "inproc" and not port.isdigit():
         raise SchedulerError(f"scheduler address {address!r}: port {port!r} is not a number")
