@@ -82,18 +82,24 @@ def test_quick_rover_regime_through_study_reports_each_trial(tmp_path: Path, cap
 
 
 @pytest.mark.slow
-def test_ctrl_c_during_a_regime_is_one_line_exit_130_and_writes_nothing(tmp_path: Path) -> None:
-    """Ctrl-C after the first trial: no traceback, exit 130, no half-written figure, and no
-    empty --out folder left behind either."""
+@pytest.mark.parametrize(
+    ("regime", "once_running"),
+    [("rover_exp1", "trial 1/20"), ("example", "example: feedback, MPC and LB-NMPC")],
+)
+def test_ctrl_c_is_one_line_exit_130_and_writes_nothing(
+    tmp_path: Path, regime: str, once_running: str
+) -> None:
+    """Ctrl-C after the first trial (or while the example runs its three controllers): no
+    traceback, exit 130, no half-written figure, and no empty --out folder left behind."""
     out = tmp_path / "out"
     proc = subprocess.Popen(
-        [sys.executable, "-m", "scripts.rover", "--regime", "rover_exp1", "--out", str(out)],
+        [sys.executable, "-m", "scripts.rover", "--regime", regime, "--out", str(out)],
         cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )  # fmt: skip
     try:
         for line in proc.stderr:
-            if "trial 1/20" in line:
+            if once_running in line:
                 break
         proc.send_signal(signal.SIGINT)
         err = proc.stderr.read()
@@ -104,27 +110,3 @@ def test_ctrl_c_during_a_regime_is_one_line_exit_130_and_writes_nothing(tmp_path
             proc.wait(5)
     assert "Traceback" not in err and err.strip().splitlines()[-1].startswith("rover: interrupted")
     assert list(tmp_path.iterdir()) == []  # not even the folder
-
-
-@pytest.mark.slow
-def test_ctrl_c_during_the_example_is_one_line_exit_130_and_writes_nothing(tmp_path: Path) -> None:
-    """The example runs its three controllers for a few seconds before writing its figure:
-    Ctrl-C then is the same one line and exit 130 as in a regime, not a traceback."""
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "scripts.rover", "--regime", "example", "--out", str(tmp_path)],
-        cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
-        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
-    )  # fmt: skip
-    try:
-        for line in proc.stderr:
-            if "example: feedback, MPC and LB-NMPC" in line:
-                break
-        proc.send_signal(signal.SIGINT)
-        err = proc.stderr.read()
-        assert proc.wait(60) == 130, err
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait(5)
-    assert "Traceback" not in err and err.strip().splitlines()[-1].startswith("rover: interrupted")
-    assert list(tmp_path.iterdir()) == []
