@@ -271,7 +271,7 @@ def repeat(args: argparse.Namespace) -> int:
     link = open_link(args)
     _say(
         f"{args.path}: {len(path)} vertices, {path.length_m:.1f} m; {experience}: "
-        + (f"{len(gp)} experiences from {memory.trials_done} trials" if memory.trials_done
+        + (f"{len(gp)} experiences from {_trials(memory.trials_done)}" if memory.trials_done
            else "no experience yet")
     )  # fmt: skip
     driven: list[Trial] = []
@@ -333,6 +333,10 @@ def repeat(args: argparse.Namespace) -> int:
             code = code or EXIT_FAILED
     _say(f"{outcome.status}: {outcome.detail}" if outcome.detail else outcome.status)
     return code
+
+
+def _trials(n: int) -> str:
+    return f"{n} trial" if n == 1 else f"{n} trials"
 
 
 def _sigterm_as_interrupt(_signum: int, _frame: FrameType | None) -> None:
