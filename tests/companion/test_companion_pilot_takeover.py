@@ -152,10 +152,7 @@ def _pilot_switches(port: int, mode: str, endpoint: MavlinkEndpoint, marks: dict
 @pytest.mark.parametrize(("kind", "mode"), [("pymavlink", "POSCTL"), ("mavsdk", "LAND")])
 def test_pilot_takeover_over_mavlink_no_command_after_the_mode_change(kind: str, mode: str) -> None:
     companion_port = free_udp_port()
-    links = (LinkConfig("offboard", remote=("127.0.0.1", companion_port)), LinkConfig("gcs"))
-    endpoint = MavlinkEndpoint(
-        Simulator(load_sim_config("iris"), seed=7), EndpointConfig(links=links)
-    ).start()
+    endpoint = _iris_with_a_ground_station(companion_port)
     gcs_port = endpoint.local_ports["gcs"]
     url = f"udpin://127.0.0.1:{companion_port}"
     link = MavsdkLink(url) if kind == "mavsdk" else PymavlinkLink(url)
@@ -165,15 +162,7 @@ def test_pilot_takeover_over_mavlink_no_command_after_the_mode_change(kind: str,
     pilot.start()
     outcome: FlightOutcome | None = None
     try:
-        outcome = fly_mission(
-            link,
-            make_planner("pd", 3.0),
-            reference_of(mission),
-            mission,
-            RunnerConfig(),
-            lambda _tick: None,
-            lambda _m: None,
-        )
+        outcome = fly_quietly(link, mission)
         returned_at = time.monotonic()
         pilot.join(10.0)
         at_return = endpoint.stats
@@ -202,7 +191,9 @@ def test_pilot_takeover_over_mavlink_no_command_after_the_mode_change(kind: str,
         assert float(np.linalg.norm(final.pos_ned_m[:2] - pos_at_return[:2])) < 1.0
 
 
-def fly_quietly(link, mission) -> FlightOutcome:
+def fly_quietly(link, mission, progress=lambda _m: None) -> FlightOutcome:  # noqa: ANN001
+    """The mission flown with the PD planner and the default runner settings; the progress
+    lines go to ``progress`` (dropped by default)."""
     return fly_mission(
         link,
         make_planner("pd", 3.0),
@@ -210,7 +201,7 @@ def fly_quietly(link, mission) -> FlightOutcome:
         mission,
         RunnerConfig(),
         lambda _tick: None,
-        lambda _m: None,
+        progress,
     )
 
 
@@ -341,10 +332,7 @@ def test_pilot_sticks_in_offboard_take_over_and_the_companion_yields() -> None:
     over pymavlink against a real endpoint, hands over: it stops its setpoints, never asks for
     OFFBOARD again, sends no command, and says so in one line."""
     companion_port = free_udp_port()
-    links = (LinkConfig("offboard", remote=("127.0.0.1", companion_port)), LinkConfig("gcs"))
-    endpoint = MavlinkEndpoint(
-        Simulator(load_sim_config("iris"), seed=7), EndpointConfig(links=links)
-    ).start()
+    endpoint = _iris_with_a_ground_station(companion_port)
     link = PymavlinkLink(f"udpin://127.0.0.1:{companion_port}")
     mission = load_mission(LINE)
     marks: dict = {}
@@ -357,15 +345,7 @@ def test_pilot_sticks_in_offboard_take_over_and_the_companion_yields() -> None:
     lines: list[str] = []
     outcome: FlightOutcome | None = None
     try:
-        outcome = fly_mission(
-            link,
-            make_planner("pd", 3.0),
-            reference_of(mission),
-            mission,
-            RunnerConfig(),
-            lambda _tick: None,
-            lines.append,
-        )
+        outcome = fly_quietly(link, mission, lines.append)
         at_return = endpoint.stats
         time.sleep(STICKS_FORWARD_S + 1.0)  # anything still streaming or commanding shows now
         later = endpoint.stats
@@ -387,3 +367,11 @@ def test_pilot_sticks_in_offboard_take_over_and_the_companion_yields() -> None:
         at_return.setpoints_accepted + at_return.setpoints_rejected
     )
     assert later.manual_control_accepted > switch.manual_control_accepted  # the pilot flies
+
+
+def _iris_with_a_ground_station(companion_port: int) -> MavlinkEndpoint:
+    """An iris endpoint sending to the companion's port, with a ground-station link of its own
+    (``local_ports["gcs"]``) for the pilot."""
+    links = (LinkConfig("offboard", remote=("127.0.0.1", companion_port)), LinkConfig("gcs"))
+    sim = Simulator(load_sim_config("iris"), seed=7)
+    return MavlinkEndpoint(sim, EndpointConfig(links=links)).start()
