@@ -3,7 +3,8 @@
     rover-path teach --out PATH.csv [--url udpin://0.0.0.0:14540] [--max-distance M]
                      [--drive 3:0,4.7:0.67 --drive-speed 0.5] [--spacing 0.25]
     rover-path repeat --path PATH.csv [--experience EXP.npz] [--trials 3]
-                      [--speed 0.5 | --scheduler experiment_2] [--drive-back] [--out DIR]
+                      [--speed 0.5 | --scheduler experiment_2] [--drive-back [turn|reverse]]
+                      [--out DIR]
 
 [Ostafew16]'s teach and repeat with learning, for a PX4 rover (or `vehicle-sim --vehicle
 husky_50kg`) over MAVLink, as the companion reaches it (--link pymavlink or mavsdk, --url as
@@ -19,9 +20,11 @@ repeat: drives the path --trials times in OFFBOARD with the LB-NMPC, learning fr
 trial in experience bins kept in --experience (npz, written after each trial, read at the
 start: the next run goes on learning where this one stopped). One line per trial on stdout;
 repeat.json and repeat.png (errors and travel time per trial) in --out at the end. Each trial
-starts at the path's start: a loop ends there; after an open path --drive-back drives the
-straight line back (turn in place, drive, turn: a skid-steer rover, a clear line), and without
-it an open path is repeated once. A rover not at the start is refused in one line.
+starts at the path's start: a loop ends there; after an open path --drive-back drives back to
+it: `turn` (the default: turn in place, the straight line, turn; a skid-steer rover, a clear
+line) or `reverse` (backwards along the path itself, on ground already driven; any rover,
+Ackermann too). Without it an open path is repeated once. A rover not at the start is refused
+in one line.
 
 Exit codes: 0 done; 1 failed (no vehicle or position, link lost, refused, a teach pass too
 short or not finite, a trial stopped or not at its end in time: the rover was sent a zero
@@ -56,6 +59,7 @@ from scripts.one_line_parser import OneLineParser, output_path
 
 PROG = "rover-path"
 LINKS = ("pymavlink", "mavsdk", "inprocess")
+DRIVE_BACK_WAYS = ("turn", "reverse")  # experiments.rover.drive_back.DriveBack.WAYS
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_HANDED_OVER = 0, 1, 2, 3
 EXIT_INTERRUPTED, EXIT_TERMINATED = 130, 143
 DEFAULT_SPEED_MPS = 0.5
@@ -130,8 +134,9 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         "([Ostafew16] Table I); the schedule is kept in the experience file",
     )  # fmt: skip
     repeat.add_argument(
-        "--drive-back", action="store_true",
-        help="after an open path, drive the straight line back to its start (skid steer)",
+        "--drive-back", nargs="?", const="turn", choices=DRIVE_BACK_WAYS, default=None,
+        help="after an open path, drive back to its start: turn (the default: turn in place, "
+        "the straight line, turn; skid steer) or reverse (backwards along the path; any rover)",
     )  # fmt: skip
     repeat.add_argument("--out", type=output_path, default=Path("out/rover_path"),
                         help="folder for repeat.json and repeat.png")  # fmt: skip
@@ -244,8 +249,8 @@ def _repeat_inputs(args: argparse.Namespace):  # noqa: ANN202 (a tuple of what r
     if args.trials > 1 and not is_loop(path) and not args.drive_back:
         raise BadInput(
             f"--path {args.path} is open (its end is {end_gap_m(path):.1f} m from its start): "
-            "after trial 1 the rover is not at its start; pass --drive-back to drive the "
-            "straight line back between trials, teach a loop, or run --trials 1"
+            "after trial 1 the rover is not at its start; pass --drive-back (turn or "
+            "reverse) to drive back between trials, teach a loop, or run --trials 1"
         )
     gp = learner.make_history_gp()
     try:
@@ -262,6 +267,7 @@ def _repeat_inputs(args: argparse.Namespace):  # noqa: ANN202 (a tuple of what r
 
 
 def repeat(args: argparse.Namespace) -> int:
+    from experiments.rover.drive_back import DriveBack
     from experiments.rover.experience_file import save_experience
     from experiments.rover.link_drive import NotARover, require_a_rover
     from experiments.rover.repeat import RepeatOutcome, Trial, repeat_path
@@ -285,7 +291,7 @@ def repeat(args: argparse.Namespace) -> int:
 
     back = None
     if args.drive_back:
-        back = min(args.speed or DEFAULT_SPEED_MPS, DEFAULT_SPEED_MPS)
+        back = DriveBack(args.drive_back, min(args.speed or DEFAULT_SPEED_MPS, DEFAULT_SPEED_MPS))
     outcome = RepeatOutcome("interrupted", "interrupted by Ctrl-C; the rover was sent Hold")
     code = EXIT_INTERRUPTED
     try:

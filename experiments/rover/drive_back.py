@@ -1,31 +1,79 @@
-"""Drive the rover back to a pose over a Link: turn in place, drive straight, turn in place.
+"""Drive the rover back to an open path's start between trials, over a Link, in OFFBOARD.
 
-Between two repeats of an open path the rover has to get back to the path's start. This is
-the simplest way a skid-steer or differential rover does it in OFFBOARD: turn towards the
-target, drive the straight line to it (the line must be clear: nothing here sees obstacles),
-turn to the target heading, Hold. A rover that cannot turn in place (Ackermann) does not get
-there and the drive says so at its deadline. Poses are in the path frame (x north, y west,
-heading counter-clockwise; experiments.rover.link_drive).
+Two ways, both ending in Hold:
+
+- ``turn`` (:func:`drive_back`): turn towards the target, drive the straight line to it (the
+  line must be clear: nothing here sees obstacles), turn to the target heading. For a rover that
+  turns in place (skid steer, differential); an Ackermann rover does not get there and the
+  drive says so at its deadline.
+- ``reverse`` (:func:`reverse_along`): drive backwards along the taught path itself, on ground
+  the rover has already driven, steering by pure pursuit [Coulter92] on the path behind it (the
+  rover's rear is the pursuer's front). Any rover, Ackermann too: the path was driven forwards,
+  so its curvature is within the steering's reach backwards as well.
+
+Poses are in the path frame (x north, y west, heading counter-clockwise;
+experiments.rover.link_drive).
+
+[Coulter92] R. C. Coulter, "Implementation of the Pure Pursuit Path Tracking Algorithm",
+Carnegie Mellon University, CMU-RI-TR-92-01, 1992.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
 from companion.link import ZERO_VELOCITY, Link, LinkError, VelocityCommand
 from experiments.rover.link_drive import pose_of, stop_rover
+from planners.rover.path import TaughtPath
 
 ARRIVED_M = 0.05
 ALIGNED_RAD = 0.05
 _FACING_RAD = 0.15
 _HEADING_GAIN = 1.5  # turn rate per heading error [1/s]
 _SPEED_GAIN = 0.8  # speed per remaining distance [1/s]
+_CREEP_MPS = 0.05  # the slowest a drive closes the last centimetres at
+_LOOKAHEAD_MIN_M = 0.6  # pure pursuit's lookahead: at least this,
+_LOOKAHEAD_S = 1.5  # or this many seconds of travel [s]
+_SEARCH_VERTICES = 20  # how far back along the path the nearest vertex is looked for
+
+Control = Callable[[np.ndarray], "tuple[float, float] | None"]
+"""From the pose (x_m, y_m, heading_rad): the forward speed [m/s] (< 0 backwards) and turn
+rate [rad/s, counter-clockwise] to command, or None once there."""
 
 
 def _wrap(a: float) -> float:
     return math.atan2(math.sin(a), math.cos(a))
+
+
+@dataclass(frozen=True)
+class DriveBack:
+    """How a repeat gets back to an open path's start between trials.
+
+    Attributes:
+        how: one of ``WAYS``: "turn" (:func:`drive_back`) or "reverse" (:func:`reverse_along`).
+        speed_mps: the drive's speed [m/s], > 0.
+    """
+
+    how: str
+    speed_mps: float
+
+    WAYS = ("turn", "reverse")
+
+    def __post_init__(self) -> None:
+        if self.how not in self.WAYS:
+            raise ValueError(f"drive back by {self.how!r}? one of {', '.join(self.WAYS)}")
+        if not self.speed_mps > 0:
+            raise ValueError(f"drive back at {self.speed_mps} m/s? must be > 0")
+
+    def __call__(self, link: Link, path: TaughtPath) -> tuple[str, str]:
+        """Drive the connected rover to ``path``'s start; returns as :func:`drive_back`."""
+        if self.how == "reverse":
+            return reverse_along(link, path, self.speed_mps)
+        return drive_back(link, path.pose(0), self.speed_mps)
 
 
 def drive_back(
@@ -36,7 +84,8 @@ def drive_back(
     timeout_s: float = 120.0,
     dt_s: float = 0.1,
 ) -> tuple[str, str]:
-    """Drive the connected rover to ``target`` (x_m, y_m, heading_rad) and Hold.
+    """Turn in place, drive the straight line to ``target`` (x_m, y_m, heading_rad), turn to
+    its heading and Hold.
 
     Returns (left_offboard_for, stopped_for), both "" when it got there: the mode someone
     switched the rover to (nothing more is sent then, as experiments.rover.link_drive), or why
@@ -46,6 +95,100 @@ def drive_back(
     Raises:
         LinkError: arming or OFFBOARD refused (its reason in the message).
     """
+    control = _TurnDriveTurn(target, speed_mps, max_turn_radps)
+    late = " (a rover that cannot turn in place, an Ackermann one, gets back in reverse)"
+    return _drive(link, control, timeout_s, dt_s, late)
+
+
+def reverse_along(
+    link: Link,
+    path: TaughtPath,
+    speed_mps: float,
+    max_turn_radps: float = 0.8,
+    timeout_s: float | None = None,
+    dt_s: float = 0.1,
+) -> tuple[str, str]:
+    """Drive backwards along ``path`` from where the rover is (near its end) to its start,
+    facing the path's direction, and Hold; within ``ARRIVED_M`` of the start along the path.
+
+    ``timeout_s`` defaults to three times the path's length at ``speed_mps`` [m/s] plus 30 s.
+    Returns and raises as :func:`drive_back`.
+    """
+    if timeout_s is None:
+        timeout_s = 3.0 * path.length_m / speed_mps + 30.0
+    return _drive(link, _ReverseAlong(path, speed_mps, max_turn_radps), timeout_s, dt_s)
+
+
+class _TurnDriveTurn:
+    """:func:`drive_back`'s three phases: face the target, drive to it, align with it."""
+
+    def __init__(
+        self, target: tuple[float, float, float], speed_mps: float, max_turn_radps: float
+    ) -> None:
+        self.target, self.speed_mps, self.max_turn_radps = target, speed_mps, max_turn_radps
+        self.phase = "face"
+
+    def __call__(self, pose: np.ndarray) -> tuple[float, float] | None:
+        x, y, th = pose
+        dx, dy = self.target[0] - x, self.target[1] - y
+        dist = math.hypot(dx, dy)
+        bearing_err = _wrap(math.atan2(dy, dx) - th)
+        passed = dist < 5 * ARRIVED_M and abs(bearing_err) > math.pi / 2
+        if self.phase != "align" and (dist < ARRIVED_M or passed):  # there, or just past it
+            self.phase = "align"
+        if self.phase == "face" and abs(bearing_err) < _FACING_RAD:
+            self.phase = "drive"
+        if self.phase == "align":
+            err = _wrap(self.target[2] - th)
+            if abs(err) < ALIGNED_RAD:
+                return None
+            v, w = 0.0, err * _HEADING_GAIN
+        elif self.phase == "face":
+            v, w = 0.0, bearing_err * _HEADING_GAIN
+        else:
+            v = min(self.speed_mps, _SPEED_GAIN * dist) * max(0.0, math.cos(bearing_err))
+            w = bearing_err * _HEADING_GAIN
+        return v, float(np.clip(w, -self.max_turn_radps, self.max_turn_radps))
+
+
+class _ReverseAlong:
+    """:func:`reverse_along`'s pure pursuit, backwards: the nearest vertex only moves towards
+    the start; the goal point is the lookahead behind the rover's projection on the path (past
+    the start, on the line of the start's heading, so the rover arrives aligned with it)."""
+
+    def __init__(self, path: TaughtPath, speed_mps: float, max_turn_radps: float) -> None:
+        self.path, self.speed_mps, self.max_turn_radps = path, speed_mps, max_turn_radps
+        self.vertex = len(path) - 1
+        self.lookahead_m = max(_LOOKAHEAD_MIN_M, _LOOKAHEAD_S * speed_mps)
+
+    def __call__(self, pose: np.ndarray) -> tuple[float, float] | None:
+        x, y, th = pose
+        lo = max(0, self.vertex - _SEARCH_VERTICES)
+        d2 = np.sum((self.path.xy_m[lo : self.vertex + 1] - (x, y)) ** 2, axis=1)
+        self.vertex = lo + int(np.argmin(d2))
+        xv, yv, thv = self.path.pose(self.vertex)
+        s_m = self.path.s_m[self.vertex] + (x - xv) * math.cos(thv) + (y - yv) * math.sin(thv)
+        if s_m <= ARRIVED_M:
+            return None
+        goal_s = s_m - self.lookahead_m
+        if goal_s >= 0.0:
+            gx, gy, _ = self.path.ref_at(np.array([goal_s]))[0]
+        else:
+            x0, y0, th0 = self.path.pose(0)
+            gx, gy = x0 + goal_s * math.cos(th0), y0 + goal_s * math.sin(th0)
+        alpha = _wrap(math.atan2(gy - y, gx - x) - (th + math.pi))
+        speed = max(min(self.speed_mps, _SPEED_GAIN * s_m), _CREEP_MPS)
+        curvature = 2.0 * math.sin(alpha) / max(math.hypot(gx - x, gy - y), 1e-6)
+        w = float(np.clip(speed * curvature, -self.max_turn_radps, self.max_turn_radps))
+        return -speed, w
+
+
+def _drive(
+    link: Link, control: Control, timeout_s: float, dt_s: float, late: str = ""
+) -> tuple[str, str]:
+    """Arm, OFFBOARD, and stream ``control``'s commands every ``dt_s`` until it returns None:
+    see :func:`drive_back` for what is returned and raised; ``late`` ends the deadline's
+    reason."""
     link.send_velocity(ZERO_VELOCITY)
     for what, outcome in (("arm", link.arm), ("offboard", link.start_offboard)):
         result = outcome()
@@ -53,7 +196,7 @@ def drive_back(
             raise LinkError(f"rover refused {what}: {result.detail or 'no reason given'}")
     clock = link.clock
     t_end = clock.now_s() + timeout_s
-    t_next, seen_offboard, phase = clock.now_s(), False, "face"
+    t_next, seen_offboard = clock.now_s(), False
     try:
         while True:
             st = link.read_state()
@@ -66,28 +209,13 @@ def drive_back(
                 return "", f"the rover's pose is not finite at t={st.t_s:.1f} s"
             if clock.now_s() > t_end:
                 stop_rover(link)
-                return "", f"it did not get back to the start within {timeout_s:.0f} s"
-            x, y, th = pose_of(link)
-            dx, dy = target[0] - x, target[1] - y
-            dist = math.hypot(dx, dy)
-            bearing_err = _wrap(math.atan2(dy, dx) - th)
-            passed = dist < 5 * ARRIVED_M and abs(bearing_err) > math.pi / 2
-            if phase != "align" and (dist < ARRIVED_M or passed):  # there, or just past it
-                phase = "align"
-            if phase == "face" and abs(bearing_err) < _FACING_RAD:
-                phase = "drive"
-            if phase == "align":
-                err = _wrap(target[2] - th)
-                if abs(err) < ALIGNED_RAD:
-                    break
-                v, w = 0.0, err * _HEADING_GAIN
-            elif phase == "face":
-                v, w = 0.0, bearing_err * _HEADING_GAIN
-            else:
-                v = min(speed_mps, _SPEED_GAIN * dist) * max(0.0, math.cos(bearing_err))
-                w = bearing_err * _HEADING_GAIN
-            w = float(np.clip(w, -max_turn_radps, max_turn_radps))
-            yaw = -th
+                return "", f"it did not get back to the start within {timeout_s:.0f} s{late}"
+            pose = pose_of(link)
+            command = control(pose)
+            if command is None:
+                break
+            v, w = command
+            yaw = -pose[2]
             link.send_velocity(VelocityCommand((v * math.cos(yaw), v * math.sin(yaw), 0.0), -w))
             t_next += dt_s
             clock.sleep_until(t_next)

@@ -6,7 +6,7 @@ the experience bins of a LocalGP: trial j drives on the experience of the trials
 (those of earlier runs too, loaded by the caller) and adds its own after it. A trial starts
 where the path starts: the rover must be within ``START_TOLERANCE_M`` and
 ``START_TOLERANCE_RAD`` of the first vertex's pose. A loop ends there; after an open path the
-rover is driven back (experiments.rover.drive_back) when ``drive_back_mps`` is given, and
+rover is driven back (experiments.rover.drive_back) when ``drive_back`` says how, and
 otherwise the run stops with a line saying where the rover is. Whatever ends a trial early
 ends the run: a pilot taking the rover out of OFFBOARD (nothing more is sent), a lost link, a
 non-finite pose, a failed solve (zero velocity and Hold), or not reaching the end in time.
@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from companion.link import Link
-from experiments.rover.drive_back import drive_back
+from experiments.rover.drive_back import DriveBack
 from experiments.rover.link_drive import LinkDrive, drive_path, pose_of
 from gp.local_gp import LocalGP
 from planners.rover.path import TaughtPath, wrap_angle
@@ -92,7 +92,7 @@ def repeat_path(
     schedule_mps: np.ndarray,
     scheduler: SpeedSchedulerConfig | None = None,
     first_number: int = 1,
-    drive_back_mps: float | None = None,
+    drive_back: DriveBack | None = None,
     on_trial: Callable[[Trial, np.ndarray], None] = lambda _t, _s: None,
     progress: Callable[[str], None] = lambda _m: None,
 ) -> RepeatOutcome:
@@ -110,15 +110,16 @@ def repeat_path(
         dist, dhead = start_offset(link, path)
         if dist > START_TOLERANCE_M or abs(dhead) > START_TOLERANCE_RAD:
             where = f"{dist:.1f} m from the path's start and {dhead:+.2f} rad off its heading"
-            if drive_back_mps is None:
+            if drive_back is None:
                 out.status = "not_at_start"
                 out.detail = (
                     f"before trial {number} the rover is {where}; drive it there and run again "
-                    "(or pass --drive-back to drive the straight line back between trials)"
+                    "(or pass --drive-back to drive back between trials: turn, or reverse along "
+                    "the path)"
                 )
                 return out
             progress(f"trial {number}: driving back to the start, {where}")
-            left_for, stopped_for = drive_back(link, path.pose(0), drive_back_mps)
+            left_for, stopped_for = drive_back(link, path)
             if left_for or stopped_for:
                 out.status = "handed_over" if left_for else "stopped"
                 out.detail = (

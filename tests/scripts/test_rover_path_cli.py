@@ -66,6 +66,7 @@ def files(tmp_path: Path) -> dict[str, Path]:
         (["repeat", "--path", "{loop}", "--scheduler", "fast"], "--scheduler 'fast' is unknown"),
         (["repeat", "--path", "{loop}", "--speed=-1"], "--speed: must be a finite number"),
         (["repeat", "--path", "{loop}", "--trials", "0"], "--trials: must be >= 1"),
+        (["repeat", "--path", "{open}", "--drive-back", "sideways"], "invalid choice: 'sideways'"),
         (["repeat", "--path", "{loop}", "--url", "tcp:1.2.3.4:5"], "unsupported MAVLink URL"),
         (["repeat", "--path", "{loop}", "--link", "inprocess", "--vehicle", "x"], "unknown rover"),
         (["teach", "--out", "{tmp}/p.csv", "--link", "inprocess"], "pass --drive"),

@@ -141,8 +141,12 @@ class RoverSim:
             self._wheel_yaw += float(np.clip(dw, -lim, lim))
             yaw_rate = self._wheel_yaw * terrain.yaw_scale
         else:
-            # [Ostafew16] eq. 32: delta = atan(L omega / v), on the commanded speed
+            # [Ostafew16] eq. 32: delta = atan(L omega / v), on the commanded speed, signed as
+            # PX4's Ackermann setpoint (forward speed < 0 backwards): reversing, the wheels
+            # turn the other way for the same yaw rate
             v_ref = max(abs(self._sp[0]), abs(self._wheel_speed), 0.2)
+            if (self._sp[0] or self._wheel_speed) < 0.0:
+                v_ref = -v_ref
             steer_cmd = math.atan(p.wheelbase_m * yaw_cmd / v_ref)
             steer_cmd = float(np.clip(steer_cmd, -p.max_steer_rad, p.max_steer_rad))
             ds = (steer_cmd - self._steer) * dt / p.yaw_tau_s

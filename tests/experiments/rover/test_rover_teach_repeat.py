@@ -15,13 +15,14 @@ import pytest
 from companion.inprocess_rover_link import InProcessRoverLink
 from companion.pymavlink_link import PymavlinkLink
 from experiments.rover import learner
+from experiments.rover.drive_back import DriveBack, drive_back, reverse_along
 from experiments.rover.experience_file import (
     ExperienceFileError,
     load_experience,
     save_experience,
 )
 from experiments.rover.link_drive import drive_path
-from experiments.rover.repeat import is_loop, repeat_path
+from experiments.rover.repeat import is_loop, repeat_path, start_offset
 from experiments.rover.teach import TeachError, record_teach
 from planners.rover.path import TaughtPath
 from planners.rover.path_file import PathFileError, path_csv_text, read_path_file
@@ -216,3 +217,55 @@ def test_a_failed_solve_stops_the_rover_in_hold_instead_of_crashing() -> None:
     assert drive.stopped_for.startswith("the NMPC solve failed at t=0.0 s")
     assert not drive.reached_end
     assert link.read_state().mode == "HOLD"
+
+
+def _open_ackermann_path() -> TaughtPath:
+    """12 m, open, turning left then right at up to 0.25 1/m: within the 600 kg Ackermann
+    rover's tightest turn (tan(0.6) / 2.0 m = 0.34 1/m), its end 11 m from its start."""
+    return TaughtPath.from_segments([(3.0, 0.0), (4.0, 0.25), (2.0, 0.0), (3.0, -0.2)])
+
+
+def _at_the_end(path: TaughtPath, preset: str) -> InProcessRoverLink:
+    return InProcessRoverLink(RoverSim(rover_preset(preset), seed=2, pose=path.pose(len(path) - 1)))
+
+
+@pytest.mark.parametrize("preset", ["dmrv_600kg", "roc6_150kg"])
+def test_reversing_along_the_path_brings_any_rover_to_its_start_facing_along_it(
+    preset: str,
+) -> None:
+    path = _open_ackermann_path()
+    link = _at_the_end(path, preset)
+    assert start_offset(link, path)[0] > 10.0
+    assert reverse_along(link, path, 0.5) == ("", "")
+    dist, dhead = start_offset(link, path)
+    assert dist < 0.08 and abs(dhead) < 0.05  # the start's heading line was the last goal
+    assert link.read_state().mode == "HOLD"
+
+
+def test_the_turn_way_cannot_bring_an_ackermann_rover_back_and_says_to_reverse() -> None:
+    path = _open_ackermann_path()
+    link = _at_the_end(path, "dmrv_600kg")
+    left_for, stopped_for = drive_back(link, path.pose(0), 0.5, timeout_s=20.0)
+    assert left_for == "" and "within 20 s" in stopped_for and "in reverse" in stopped_for
+    assert link.read_state().mode == "HOLD"
+
+
+def test_an_ackermann_rover_repeats_an_open_path_reversing_back_between_trials() -> None:
+    path = _open_ackermann_path()
+    sim = RoverSim(rover_preset("dmrv_600kg"), seed=3, pose=path.pose(0))
+    link = InProcessRoverLink(sim)
+    link.connect(1.0)
+    lines: list[str] = []
+    out = repeat_path(link, path, 2, learner.make_history_gp(), np.full(len(path), 0.5),
+                      drive_back=DriveBack("reverse", 0.5), progress=lines.append)  # fmt: skip
+    assert out.status == "completed", out.detail
+    assert [t.drive.reached_end for t in out.trials] == [True, True]
+    assert any(line.startswith("trial 2: driving back to the start") for line in lines)
+    assert max(np.max(np.abs(t.drive.e_lat_m)) for t in out.trials) < 0.1
+
+
+def test_a_drive_back_says_what_it_cannot_be() -> None:
+    with pytest.raises(ValueError, match="by 'sideways'.*one of turn, reverse"):
+        DriveBack("sideways", 0.5)
+    with pytest.raises(ValueError, match="must be > 0"):
+        DriveBack("reverse", 0.0)

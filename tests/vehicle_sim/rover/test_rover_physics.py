@@ -41,6 +41,20 @@ def test_ackermann_turn_rate_follows_the_bicycle_model() -> None:
     )
 
 
+def test_an_ackermann_rover_reversing_turns_the_way_its_yaw_rate_setpoint_says() -> None:
+    """Backwards (PX4's forward speed < 0) the same yaw rate needs the wheels the other way:
+    delta = atan(L omega / v) with v < 0, so at -0.5 m/s and +0.1 rad/s the steering angle is
+    atan(2.0 * 0.1 / -0.5) = -0.381 rad and the heading turns counter-clockwise."""
+    preset = rover_preset("dmrv_600kg")
+    sim = RoverSim(preset)
+    sim.arm()
+    sim.set_setpoint(-0.5, 0.1)
+    st = sim.step(30.0)
+    assert st.speed_mps == pytest.approx(-0.5, abs=0.01)
+    assert st.yaw_rate_radps == pytest.approx(0.1, abs=0.005)
+    assert st.steer_rad == pytest.approx(math.atan(2.0 * 0.1 / -0.5), abs=0.02)
+
+
 @pytest.mark.parametrize("speed_mps", [0.3, 0.6])
 def test_sideways_slip_on_a_patch_matches_the_hand_calculation(speed_mps: float) -> None:
     # Straight through a 2 m wide patch with full traction: ruts that slip the robot 0.2 m per
