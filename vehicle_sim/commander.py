@@ -37,6 +37,7 @@ from vehicle_sim.navigator import MissionNavigator
 from vehicle_sim.orbit import (
     DEFAULT_VELOCITY_MPS,
     RADIUS_MIN_M,
+    YAW_UNCHANGED,
     Orbit,
     OrbitSetpoint,
     limit_orbit,
@@ -285,14 +286,19 @@ class Commander:
         down_m: float | None,
     ) -> CommandResult:
         """Orbit (MAV_CMD_DO_ORBIT as PX4's FlightTaskOrbit takes it): NaN radius, velocity or
-        yaw behaviour keep those of the orbit flown now (else 1 m, 1 m/s, MC_ORBIT_YAW_MOD); a
+        yaw behaviour (or ORBIT_YAW_BEHAVIOUR_UNCHANGED, 5) keep those of the orbit flown now
+        (else 1 m, 1 m/s, MC_ORBIT_YAW_MOD); a
         negative radius orbits counter-clockwise, a negative velocity reverses; None centre
         keeps the current orbit's, else the vehicle's position (the MAVLink definition; PX4
         puts it 1 m north of the vehicle); None altitude: the current orbit's, else here."""
         if not self.armed or self._landed:
             return self._deny("Orbit denied: not flying")
+        if yaw_behaviour == YAW_UNCHANGED:
+            yaw_behaviour = math.nan
         if not (math.isnan(yaw_behaviour) or yaw_behaviour in (0, 1, 2, 3, 4)):
-            return self._deny(f"Orbit denied: yaw behaviour {yaw_behaviour:g} is not 0-4")
+            return self._deny(
+                f"Orbit denied: yaw behaviour {yaw_behaviour:g} is not 0-4, 5 (unchanged) or NaN"
+            )
         now = self.orbit if self.mode is FlightMode.ORBIT else None
         clockwise = now is None or now.velocity_mps >= 0.0
         radius = RADIUS_MIN_M if now is None else now.radius_m
