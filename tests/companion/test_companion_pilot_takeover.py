@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from companion.inprocess_link import InProcessLink
-from companion.link import VelocityCommand
+from companion.link import CommandOutcome, VelocityCommand
 from companion.mavsdk_link import MavsdkLink
 from companion.mission import load_mission
 from companion.mission_reference import reference_of
@@ -375,3 +375,35 @@ def _iris_with_a_ground_station(companion_port: int) -> MavlinkEndpoint:
     links = (LinkConfig("offboard", remote=("127.0.0.1", companion_port)), LinkConfig("gcs"))
     sim = Simulator(load_sim_config("iris"), seed=7)
     return MavlinkEndpoint(sim, EndpointConfig(links=links)).start()
+
+
+class RefusedOnceLink(CountingInProcessLink):
+    """The real in-process link whose first OFFBOARD request the autopilot refuses (as PX4
+    may, e.g. a setpoint stream it has not yet taken as fresh); the pilot then takes POSCTL
+    while the companion streams before asking again."""
+
+    def __init__(self, sim: Simulator) -> None:
+        super().__init__(sim)
+        self.offboard_requests = 0
+
+    def start_offboard(self):
+        self.offboard_requests += 1
+        if self.counting:
+            self.sent_after.append("offboard")
+        if self.offboard_requests > 1:
+            return super().start_offboard()
+        assert self._sim.set_mode(FlightMode.POSCTL).accepted  # the pilot, meanwhile
+        self.counting = True
+        return CommandOutcome(False, "Offboard denied: no setpoint stream")
+
+
+def test_a_pilot_who_takes_over_while_offboard_is_retried_is_not_fought() -> None:
+    """OFFBOARD refused, then the pilot switches to POSCTL: the companion must not ask for
+    OFFBOARD again (that would take the vehicle back from the pilot); it hands over."""
+    sim = Simulator(load_sim_config("iris"), seed=5)
+    link = RefusedOnceLink(sim)
+    outcome = fly_quietly(link, load_mission(LINE))
+    assert outcome.status == "handed_over", outcome.detail
+    assert outcome.detail.startswith("pilot took control in POSCTL at t=")
+    assert link.sent_after == []
+    assert sim.state.mode is FlightMode.POSCTL
