@@ -289,10 +289,11 @@ class Commander:
     ) -> CommandResult:
         """Orbit (MAV_CMD_DO_ORBIT as PX4's FlightTaskOrbit takes it): NaN radius, velocity or
         yaw behaviour (or ORBIT_YAW_BEHAVIOUR_UNCHANGED, 5) keep those of the orbit flown now
-        (else 1 m, 1 m/s, MC_ORBIT_YAW_MOD); a
-        negative radius orbits counter-clockwise, a negative velocity reverses; None centre
-        keeps the current orbit's, else the vehicle's position (the MAVLink definition; PX4
-        puts it 1 m north of the vehicle); None altitude: the current orbit's, else here."""
+        (else 1 m, 1 m/s, MC_ORBIT_YAW_MOD); a negative radius orbits counter-clockwise, a
+        negative velocity reverses; None centre keeps the current orbit's, else the vehicle's
+        position (the MAVLink definition and FlightTaskOrbit::activate's; PX4 releases before
+        the position smoothing put it 1 m south, the vehicle on the circle); None altitude:
+        the current orbit's, else here."""
         if not self.armed or self._landed:
             return self._deny("Orbit denied: not flying")
         if yaw_behaviour == YAW_UNCHANGED:
