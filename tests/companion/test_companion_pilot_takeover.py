@@ -110,19 +110,27 @@ def _take_over_in_process(mode: str, after_s: float) -> None:
     assert sim.state.mode is FlightMode[mode]
 
 
+def _await_offboard(
+    gcs: mavutil.mavfile, endpoint: MavlinkEndpoint, deadline: float, rate_s: float = 0.1
+) -> None:
+    """As a GCS (``gcs``, a pymavlink connection), send heartbeats every ``rate_s`` [s] until
+    the vehicle has been in OFFBOARD for TAKEOVER_AFTER_S, or until ``deadline``
+    (time.monotonic() [s])."""
+    offboard_since = None
+    while time.monotonic() < deadline:
+        gcs.mav.heartbeat_send(6, 8, 0, 0, 0)
+        if endpoint.state.mode is FlightMode.OFFBOARD:
+            offboard_since = offboard_since or time.monotonic()
+            if time.monotonic() - offboard_since >= TAKEOVER_AFTER_S:
+                return
+        time.sleep(rate_s)
+
+
 def _pilot_switches(port: int, mode: str, endpoint: MavlinkEndpoint, marks: dict) -> None:
     """A GCS on its own link: waits for OFFBOARD plus a while, then commands ``mode``."""
     gcs = mavutil.mavlink_connection(f"udpout:127.0.0.1:{port}", source_system=245)
     try:
-        deadline = time.monotonic() + 90.0
-        offboard_since = None
-        while time.monotonic() < deadline:
-            gcs.mav.heartbeat_send(6, 8, 0, 0, 0)
-            if endpoint.state.mode is FlightMode.OFFBOARD:
-                offboard_since = offboard_since or time.monotonic()
-                if time.monotonic() - offboard_since >= TAKEOVER_AFTER_S:
-                    break
-            time.sleep(0.1)
+        _await_offboard(gcs, endpoint, time.monotonic() + 90.0)
         custom = FlightMode[mode].value
         main_mode, sub_mode = (custom >> 16) & 0xFF, (custom >> 24) & 0xFF
         for _ in range(20):  # until the endpoint reports the pilot's mode
@@ -299,14 +307,7 @@ def _pilot_takes_over_with_sticks(
         gcs.mav.heartbeat_send(6, 8, 0, 0, 0)
         gcs.mav.param_set_send(1, 1, b"COM_RC_OVERRIDE", int32_as_float(3), 6)
         deadline = time.monotonic() + 90.0
-        offboard_since = None
-        while time.monotonic() < deadline:
-            gcs.mav.heartbeat_send(6, 8, 0, 0, 0)
-            if endpoint.state.mode is FlightMode.OFFBOARD:
-                offboard_since = offboard_since or time.monotonic()
-                if time.monotonic() - offboard_since >= TAKEOVER_AFTER_S:
-                    break
-            time.sleep(rate_s)
+        _await_offboard(gcs, endpoint, deadline, rate_s)
         marks["before_sticks"] = endpoint.stats
         pushed_at = time.monotonic()
         modes_after: set[FlightMode] = set()
