@@ -153,6 +153,9 @@ def test_an_experience_file_refuses_another_path_and_damage(tmp_path: Path) -> N
     other = TaughtPath.from_segments([(5.0, 0.0)])
     with pytest.raises(ExperienceFileError, match="learned on another path"):
         load_experience(f, learner.make_history_gp(), other)
+    coarser = TaughtPath(path.xy_m, spacing_m=0.5)  # the same file read with --spacing 0.5
+    with pytest.raises(ExperienceFileError, match=r"at a vertex spacing of 0\.2\d m.*--spacing 0"):
+        load_experience(f, learner.make_history_gp(), coarser)
     damaged = tmp_path / "damaged.npz"
     damaged.write_bytes(f.read_bytes()[:200])
     not_npz = tmp_path / "notes.npz"
