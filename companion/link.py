@@ -16,13 +16,15 @@ from typing import Literal, Protocol, get_args
 
 import numpy as np
 
+from flightlog import px4
+
 VehicleKind = Literal["multirotor", "VTOL", "fixed wing", "rover", "boat", "other"]
 # MAV_TYPE values (MAVLink common.xml) of each kind; "other" is every type not listed
 _KINDS_OF_MAV_TYPE: dict[int, VehicleKind] = {
-    **dict.fromkeys((2, 3, 4, 13, 14, 15, 29, 35), "multirotor"),  # quad .. decarotor, heli
-    **dict.fromkeys((19, 20, 21, 22, 23, 24, 25), "VTOL"),
+    **dict.fromkeys(px4.MAV_TYPE_MULTIROTOR, "multirotor"),  # quad .. decarotor, heli
+    **dict.fromkeys(px4.MAV_TYPE_VTOL, "VTOL"),
     1: "fixed wing",
-    10: "rover",
+    px4.MAV_TYPE_GROUND_ROVER: "rover",
     11: "boat",
 }
 

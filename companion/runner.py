@@ -363,7 +363,8 @@ def _start_offboard(
 ) -> None:
     """Stream zero-velocity setpoints for ``config.stream_s`` and on while PX4 holds the
     vehicle over ``start_ned_m`` (3,) [m], until it has settled there (the start hold, see
-    RunnerConfig), then switch to OFFBOARD (stream more and retry)."""
+    RunnerConfig), then switch to OFFBOARD (stream more and retry, unless a pilot has chosen
+    another mode meanwhile: _HandedOver)."""
     clock = link.clock
     policy = HoverPolicy(start_ned_m)
 
@@ -401,13 +402,19 @@ def _start_offboard(
     elif clock.now_s() > t_hold_s:
         progress(f"settled at the start after {clock.now_s() - t_hold_s:.1f} s more of holding")
     deadline_s = clock.now_s() + config.offboard_timeout_s
+
+    def not_handed_over(state: LinkState, t_s: float) -> bool:
+        if state.mode not in (*_MODES_OF_THE_CLIMB, "OFFBOARD"):  # a pilot took over: no retry
+            raise _HandedOver(state.mode, t_s - t_hold_s)
+        return False
+
     while True:
         outcome = link.start_offboard()
         if outcome.accepted:
             return
         if clock.now_s() >= deadline_s:
             raise LinkError(f"OFFBOARD refused: {outcome.detail or 'no reason given'}")
-        stream(config.stream_s, _never)
+        stream(config.stream_s, not_handed_over)
 
 
 def _never(_state: LinkState, _t_s: float) -> bool:

@@ -118,7 +118,9 @@ def write_figure_atomic(fig: Any, path: str | Path, **savefig: Any) -> Path:
 
 
 def write_bytes_atomic(path: str | Path, data: bytes) -> Path:
-    """Write ``data`` to ``path`` atomically (temporary sibling, then rename)."""
+    """Write ``data`` to ``path`` atomically (temporary sibling, synced to disk, then rename:
+    without the sync a power cut soon after, as a vehicle's companion computer sees, can leave
+    ``path`` renamed but empty)."""
     path = Path(path)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -127,6 +129,8 @@ def write_bytes_atomic(path: str | Path, data: bytes) -> Path:
             os.fchmod(fd, _umask_mode(0o666))
             with os.fdopen(fd, "wb") as fh:
                 fh.write(data)
+                fh.flush()
+                os.fsync(fh.fileno())
             os.replace(tmp, path)
         except BaseException:
             Path(tmp).unlink(missing_ok=True)

@@ -74,7 +74,7 @@ MAV_TYPE_GROUND_ROVER = 10
 # [MAVLink] MAV_TYPE (parameter MAV_TYPE in PX4): multirotors and VTOLs.
 MAV_TYPE_MULTIROTOR: dict[int, str] = {
     2: "quadrotor", 3: "coaxial", 4: "helicopter", 13: "hexarotor", 14: "octorotor",
-    15: "tricopter", 29: "dodecarotor", 35: "decarotor",
+    15: "tricopter", 29: "dodecarotor", 35: "decarotor", 43: "generic multirotor",
 }  # fmt: skip
 MAV_TYPE_VTOL = frozenset({19, 20, 21, 22, 23, 24, 25})
 MAV_TYPE_NAMES: dict[int, str] = {

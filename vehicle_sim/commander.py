@@ -9,9 +9,10 @@ vehicle was armed. A reposition (MAV_CMD_DO_REPOSITION, MAVSDK's goto) flies to 
 Sticks (MANUAL_CONTROL, an RC or a joystick) fly POSCTL and ALTCTL as PX4's manual position /
 altitude modes: velocity from the sticks, and where a stick is centred the vehicle brakes, then
 holds position (POSCTL only; ALTCTL only stops), altitude and heading. Without sticks ever
-received, POSCTL and ALTCTL hold where they were entered. Moving a stick beyond
-COM_RC_STICK_OV takes a flying vehicle out of an auto mode (COM_RC_OVERRIDE bit 0, PX4's
-default) or OFFBOARD (bit 1, off by default) into POSCTL ("Pilot took over using sticks").
+received, POSCTL and ALTCTL hold where they were entered. Moving a stick faster than
+COM_RC_STICK_OV [% of travel per s] (:class:`StickMotion`; a stick held still does not) takes a
+flying vehicle out of an auto mode (COM_RC_OVERRIDE bit 0, PX4's default) or OFFBOARD (bit 1,
+off by default) into POSCTL ("Pilot took over using sticks").
 Sticks that stop for COM_RC_LOSS_T in POSCTL/ALTCTL trigger NAV_RCL_ACT (see
 :meth:`Commander.update`).
 
@@ -31,12 +32,13 @@ import numpy as np
 
 from vehicle_sim import flight_control as fc
 from vehicle_sim.failsafe import FailsafeAction, FailsafeMonitor, Trigger
-from vehicle_sim.manual_control import StickCommand, Sticks, deflection, stick_command
+from vehicle_sim.manual_control import StickCommand, StickMotion, Sticks, stick_command
 from vehicle_sim.mission_plan import MissionItem
 from vehicle_sim.navigator import MissionNavigator
 from vehicle_sim.orbit import (
     DEFAULT_VELOCITY_MPS,
     RADIUS_MIN_M,
+    YAW_UNCHANGED,
     Orbit,
     OrbitSetpoint,
     limit_orbit,
@@ -193,6 +195,7 @@ class Commander:
         self._sticks_t: float | None = None  # when sticks last arrived (None: never)
         self._sticks_lost = False
         self._stick_cmd: StickCommand | None = None  # None: no live sticks
+        self._stick_motion = StickMotion()  # for the stick override
         self._xy_locked = self._z_locked = True  # centred sticks hold (after braking)
         self._yaw_rad = 0.0  # as of the last update [rad]
         self.orbit: Orbit | None = None  # the orbit flown in ORBIT (kept for a new command)
@@ -285,14 +288,20 @@ class Commander:
         down_m: float | None,
     ) -> CommandResult:
         """Orbit (MAV_CMD_DO_ORBIT as PX4's FlightTaskOrbit takes it): NaN radius, velocity or
-        yaw behaviour keep those of the orbit flown now (else 1 m, 1 m/s, MC_ORBIT_YAW_MOD); a
-        negative radius orbits counter-clockwise, a negative velocity reverses; None centre
-        keeps the current orbit's, else the vehicle's position (the MAVLink definition; PX4
-        puts it 1 m north of the vehicle); None altitude: the current orbit's, else here."""
+        yaw behaviour (or ORBIT_YAW_BEHAVIOUR_UNCHANGED, 5) keep those of the orbit flown now
+        (else 1 m, 1 m/s, MC_ORBIT_YAW_MOD); a negative radius orbits counter-clockwise, a
+        negative velocity reverses; None centre keeps the current orbit's, else the vehicle's
+        position (the MAVLink definition and FlightTaskOrbit::activate's; PX4 releases before
+        the position smoothing put it 1 m south, the vehicle on the circle); None altitude:
+        the current orbit's, else here."""
         if not self.armed or self._landed:
             return self._deny("Orbit denied: not flying")
+        if yaw_behaviour == YAW_UNCHANGED:
+            yaw_behaviour = math.nan
         if not (math.isnan(yaw_behaviour) or yaw_behaviour in (0, 1, 2, 3, 4)):
-            return self._deny(f"Orbit denied: yaw behaviour {yaw_behaviour:g} is not 0-4")
+            return self._deny(
+                f"Orbit denied: yaw behaviour {yaw_behaviour:g} is not 0-4, 5 (unchanged) or NaN"
+            )
         now = self.orbit if self.mode is FlightMode.ORBIT else None
         clockwise = now is None or now.velocity_mps >= 0.0
         radius = RADIUS_MIN_M if now is None else now.radius_m
@@ -456,17 +465,23 @@ class Commander:
 
     def on_sticks(self, t: float, sticks: Sticks, pos_ned_m: np.ndarray, yaw_rad: float) -> None:
         """Sticks arrived (validated by the caller): they fly POSCTL/ALTCTL from now on, and a
-        stick moved beyond COM_RC_STICK_OV takes a flying vehicle out of an auto mode or
-        OFFBOARD as COM_RC_OVERRIDE allows (PX4's commander, "Pilot took over using sticks")."""
+        stick moving faster than COM_RC_STICK_OV [% of travel per s] takes a flying vehicle out
+        of an auto mode or OFFBOARD as COM_RC_OVERRIDE allows (PX4's commander, "Pilot took
+        over using sticks"); a stick held still, however far out, does not."""
         if self._sticks_lost:
             self.events.append((SEVERITY_INFO, "Manual control regained"))
+        fresh = self._sticks_t is None or self._sticks_lost
+        if fresh:
+            self._stick_motion.reset()
+        dt_s = 0.0 if fresh else max(t - self._sticks_t, 0.0)
+        speed = self._stick_motion.update(sticks, dt_s)
         self._sticks_t, self._sticks_lost = t, False
         self._stick_cmd = stick_command(sticks, self.params)
         bits = int(self.params.get("COM_RC_OVERRIDE"))
         overridable = (self.mode in AUTO_MODES and bits & OVERRIDE_AUTO_BIT) or (
             self.mode is FlightMode.OFFBOARD and bits & OVERRIDE_OFFBOARD_BIT
         )
-        moved = deflection(sticks) > 0.01 * self.params.get("COM_RC_STICK_OV")
+        moved = speed > 0.01 * self.params.get("COM_RC_STICK_OV")
         if overridable and moved and self.armed and not self._landed:
             self._pending = None  # the pilot takes over from a pending failsafe too
             self._hold(pos_ned_m, yaw_rad)

@@ -120,7 +120,40 @@ def stick_command(sticks: Sticks, params: Px4Params) -> StickCommand:
     )
 
 
-def deflection(sticks: Sticks) -> float:
-    """The largest deflection from centre over the axes, as a fraction of full travel; the
-    throttle's half range counts double, as PX4's stick-override check counts it."""
-    return max(abs(sticks.x), abs(sticks.y), abs(sticks.r), 2.0 * abs(sticks.z - 0.5))
+STICK_MOTION_TAU_S = 0.1  # time constant of PX4's MovingDiff low-pass [s]
+
+
+class StickMotion:
+    """How fast the sticks move, as PX4's stick-override check measures it (manual_control's
+    MovingDiff per axis): each axis's rate of change [full travel per s; the throttle over
+    [-1, 1], as PX4 scales it], low-passed with a time constant of STICK_MOTION_TAU_S.
+
+    A stick held still, however far from centre, does not move: PX4 overrides an auto mode or
+    OFFBOARD only when the pilot moves a stick faster than COM_RC_STICK_OV [%] of its travel
+    per second. Before the first reading (and after :meth:`reset`) the sticks count as
+    centred, so a pilot appearing with a stick out moves it.
+    """
+
+    def __init__(self) -> None:
+        self._last = _axes(CENTRED)
+        self._rate = [0.0, 0.0, 0.0, 0.0]
+
+    def reset(self) -> None:
+        """Forget the sticks (they were lost): the next reading moves from centre."""
+        self.__init__()
+
+    def update(self, sticks: Sticks, dt_s: float) -> float:
+        """Take a reading ``dt_s`` [s] (>= 0) after the previous one; return the largest
+        filtered rate [1/s] over the axes. The low-pass step ``r += (d/dt - r) dt/(tau+dt)`` is
+        written as ``r tau/(tau+dt) + d/(tau+dt)``, which also holds for dt = 0."""
+        axes = _axes(sticks)
+        tau = STICK_MOTION_TAU_S
+        for i, (value, last) in enumerate(zip(axes, self._last, strict=True)):
+            self._rate[i] = (self._rate[i] * tau + (value - last)) / (tau + dt_s)
+        self._last = axes
+        return max(abs(rate) for rate in self._rate)
+
+
+def _axes(sticks: Sticks) -> tuple[float, float, float, float]:
+    """x, y, r in [-1, 1] and the throttle rescaled to [-1, 1] (PX4's manual_control_setpoint)."""
+    return (sticks.x, sticks.y, sticks.r, 2.0 * sticks.z - 1.0)

@@ -12,7 +12,7 @@ kept within [1 m, MC_ORBIT_RAD_MAX], the speed below MPC_XY_VEL_MAX and below th
 centripetal acceleration v^2/r reaches MPC_ACC_HOR ("small radius is more important than high
 velocity"). Yaw (ORBIT_YAW_BEHAVIOUR, default MC_ORBIT_YAW_MOD): 0 front to the centre,
 1 the heading when the orbit was commanded, 2 uncontrolled, 3 front along the tangent,
-4 the yaw stick.
+4 the yaw stick; 5 (UNCHANGED) in a command keeps the behaviour flown, as NaN does.
 """
 
 from __future__ import annotations
@@ -25,6 +25,7 @@ from vehicle_sim.params import Px4Params
 RADIUS_MIN_M = 1.0  # PX4's FlightTaskOrbit _radius_min
 DEFAULT_VELOCITY_MPS = 1.0  # PX4's orbit speed before one is commanded
 YAW_FRONT_TO_CENTRE, YAW_INITIAL, YAW_UNCONTROLLED, YAW_TANGENT, YAW_STICK = 0, 1, 2, 3, 4
+YAW_UNCHANGED = 5  # ORBIT_YAW_BEHAVIOUR_UNCHANGED: a command keeps the behaviour flown
 ACCEL_MARGIN = 0.99  # the limited speed sits just inside PX4's strict v^2 < a r
 
 

@@ -78,7 +78,9 @@ PX4_PARAMS: dict[str, Px4ParamSpec] = {
     "COM_RC_IN_MODE": _i(3, "manual control input: 0 RC, 1 joystick, 2-3 either, 4 none", 0, 4),
     "COM_RC_LOSS_T": _F(0.5, "manual control (RC or joystick) loss timeout [s]", 0.0, 35.0),
     "COM_RC_OVERRIDE": _i(1, "stick override bits: 0 auto modes, 1 offboard", 0, 3),
-    "COM_RC_STICK_OV": _F(30.0, "stick deflection that overrides auto/offboard [%]", 5.0, 80.0),
+    "COM_RC_STICK_OV": _F(
+        30.0, "stick motion that overrides auto/offboard [% of travel/s]", 5.0, 80.0
+    ),
     "MAN_DEADZONE": _F(0.1, "stick deadzone around centre, fraction of full deflection", 0.0, 1.0),
     "MAV_SYS_ID": _i(1, "MAVLink system id", 1, 250),
     "MC_ORBIT_RAD_MAX": _F(1000.0, "max orbit radius (MAV_CMD_DO_ORBIT) [m]", 1.0, 10000.0),

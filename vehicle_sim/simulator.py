@@ -278,9 +278,9 @@ class Simulator:
         """Fly PX4's Orbit mode (MAV_CMD_DO_ORBIT): circle ``centre_ne_m`` (local north, east
         [m]; None: the current orbit's centre, else here) at ``radius_m`` [m] (negative:
         counter-clockwise) and ``velocity_mps`` [m/s] at ``down_m`` (local NED [m]; None: the
-        current orbit's, else here), yaw per ``yaw_behaviour`` (ORBIT_YAW_BEHAVIOUR 0-4); NaN
-        keeps a value of the orbit flown (see :mod:`vehicle_sim.orbit` for defaults and
-        limits). Needs the vehicle flying.
+        current orbit's, else here), yaw per ``yaw_behaviour`` (ORBIT_YAW_BEHAVIOUR 0-4; 5,
+        UNCHANGED, as NaN); NaN keeps a value of the orbit flown (see :mod:`vehicle_sim.orbit`
+        for defaults and limits). Needs the vehicle flying.
 
         Raises:
             ValueError: an infinite value, or a centre or altitude that is not finite.

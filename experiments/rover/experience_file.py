@@ -73,6 +73,15 @@ def save_experience(
     write_bytes_atomic(file, buffer.getvalue())
 
 
+def _same_path_resampled(xy: np.ndarray, length_m: float, path: TaughtPath) -> bool:
+    """Whether vertices ``xy`` (n, 2) [m], a polyline ``length_m`` [m] long, are ``path`` read
+    at another vertex spacing: another vertex count, the same ends, a length within 2 %."""
+    if xy.ndim != 2 or len(xy) < 3 or len(xy) == len(path):
+        return False
+    ends_m = np.hypot(*(xy[[0, -1]] - path.xy_m[[0, -1]]).T)
+    return bool(ends_m.max() <= _PATH_ATOL_M and abs(length_m - path.length_m) <= 0.02 * length_m)
+
+
 def load_experience(file: Path, gp: LocalGP, path: TaughtPath) -> Memory:
     """Add the experiences in ``file`` to the empty ``gp``; a missing file is no experience.
 
@@ -117,6 +126,12 @@ def load_experience(file: Path, gp: LocalGP, path: TaughtPath) -> Memory:
     xy = data["path_xy_m"]
     if xy.shape != path.xy_m.shape or not np.allclose(xy, path.xy_m, atol=_PATH_ATOL_M):
         length = float(np.sum(np.hypot(*np.diff(xy, axis=0).T))) if xy.ndim == 2 else 0.0
+        if _same_path_resampled(xy, length, path):
+            spacing = length / (len(xy) - 1)
+            raise ExperienceFileError(
+                f"{file}: learned on this path at a vertex spacing of {spacing:.2f} m, not "
+                f"{path.spacing_m:.2f} m; pass --spacing {spacing:.2f}, or {fix}"
+            )
         raise ExperienceFileError(
             f"{file}: learned on another path ({len(xy)} vertices, {length:.1f} m; this one "
             f"has {len(path)} vertices, {path.length_m:.1f} m); {fix}"

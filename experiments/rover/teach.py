@@ -6,10 +6,10 @@ is how a simulator or an empty field is taught without a pilot); this records it
 from the Link's telemetry, in the path frame (x north, y west of the local origin), every
 ``sample_period_s`` once it has moved. Recording starts when the rover is armed (at once if it
 is) and ends when it disarms, when it has driven ``max_distance_m``, at ``timeout_s``, at the
-end of the scripted pattern, or on Ctrl-C. The positions become a TaughtPath resampled to the
-vertex spacing. A pass is refused (TeachError, one line, nothing to write) when the position is
-not finite, the rover moved too little, the link was lost or someone took the rover out of
-OFFBOARD during a scripted drive.
+end of the scripted pattern, or on Ctrl-C (or SIGTERM, said as such). The positions become a
+TaughtPath resampled to the vertex spacing. A pass is refused (TeachError, one line, nothing
+to write) when the position is not finite, the rover moved too little, the link was lost or
+someone took the rover out of OFFBOARD during a scripted drive.
 """
 
 from __future__ import annotations
@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from companion.link import ZERO_VELOCITY, Link, LinkError, VelocityCommand
+from companion.runner import Terminated
 from experiments.rover.link_drive import require_a_rover, stop_rover
 from planners.rover.path import TaughtPath
 
@@ -44,7 +45,8 @@ class TeachPass:
     Attributes:
         path: the taught path, resampled to the vertex spacing.
         driven_m: distance the rover drove while recording [m].
-        ended_for: why recording stopped (disarmed, distance, pattern done, Ctrl-C, timeout).
+        ended_for: why recording stopped (disarmed, distance, pattern done, Ctrl-C, SIGTERM,
+            timeout).
     """
 
     path: TaughtPath
@@ -144,8 +146,8 @@ def record_teach(
         if drive is not None:
             stop_rover(link)
         raise TeachError(f"{exc}; nothing written: teach again") from None
-    except KeyboardInterrupt:
-        ended = "Ctrl-C"
+    except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM as companion.runner.Terminated
+        ended = "SIGTERM" if isinstance(exc, Terminated) else "Ctrl-C"
     except HandedOver:
         raise
     except TeachError:

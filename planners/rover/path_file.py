@@ -19,7 +19,7 @@ class PathFileError(ValueError):
 
 
 def path_csv_text(path: TaughtPath) -> str:
-    """The CSV text of ``path``: the header, then one ``x_m,y_m`` row per vertex (mm)."""
+    """The CSV text of ``path``: the header, then one ``x_m,y_m`` row per vertex (to 0.1 mm)."""
     rows = (f"{x:.4f},{y:.4f}" for x, y in path.xy_m)
     return "\n".join([HEADER, *rows]) + "\n"
 

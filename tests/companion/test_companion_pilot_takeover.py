@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from companion.inprocess_link import InProcessLink
-from companion.link import VelocityCommand
+from companion.link import CommandOutcome, VelocityCommand
 from companion.mavsdk_link import MavsdkLink
 from companion.mission import load_mission
 from companion.mission_reference import reference_of
@@ -110,19 +110,27 @@ def _take_over_in_process(mode: str, after_s: float) -> None:
     assert sim.state.mode is FlightMode[mode]
 
 
+def _await_offboard(
+    gcs: mavutil.mavfile, endpoint: MavlinkEndpoint, deadline: float, rate_s: float = 0.1
+) -> None:
+    """As a GCS (``gcs``, a pymavlink connection), send heartbeats every ``rate_s`` [s] until
+    the vehicle has been in OFFBOARD for TAKEOVER_AFTER_S, or until ``deadline``
+    (time.monotonic() [s])."""
+    offboard_since = None
+    while time.monotonic() < deadline:
+        gcs.mav.heartbeat_send(6, 8, 0, 0, 0)
+        if endpoint.state.mode is FlightMode.OFFBOARD:
+            offboard_since = offboard_since or time.monotonic()
+            if time.monotonic() - offboard_since >= TAKEOVER_AFTER_S:
+                return
+        time.sleep(rate_s)
+
+
 def _pilot_switches(port: int, mode: str, endpoint: MavlinkEndpoint, marks: dict) -> None:
     """A GCS on its own link: waits for OFFBOARD plus a while, then commands ``mode``."""
     gcs = mavutil.mavlink_connection(f"udpout:127.0.0.1:{port}", source_system=245)
     try:
-        deadline = time.monotonic() + 90.0
-        offboard_since = None
-        while time.monotonic() < deadline:
-            gcs.mav.heartbeat_send(6, 8, 0, 0, 0)
-            if endpoint.state.mode is FlightMode.OFFBOARD:
-                offboard_since = offboard_since or time.monotonic()
-                if time.monotonic() - offboard_since >= TAKEOVER_AFTER_S:
-                    break
-            time.sleep(0.1)
+        _await_offboard(gcs, endpoint, time.monotonic() + 90.0)
         custom = FlightMode[mode].value
         main_mode, sub_mode = (custom >> 16) & 0xFF, (custom >> 24) & 0xFF
         for _ in range(20):  # until the endpoint reports the pilot's mode
@@ -299,14 +307,7 @@ def _pilot_takes_over_with_sticks(
         gcs.mav.heartbeat_send(6, 8, 0, 0, 0)
         gcs.mav.param_set_send(1, 1, b"COM_RC_OVERRIDE", int32_as_float(3), 6)
         deadline = time.monotonic() + 90.0
-        offboard_since = None
-        while time.monotonic() < deadline:
-            gcs.mav.heartbeat_send(6, 8, 0, 0, 0)
-            if endpoint.state.mode is FlightMode.OFFBOARD:
-                offboard_since = offboard_since or time.monotonic()
-                if time.monotonic() - offboard_since >= TAKEOVER_AFTER_S:
-                    break
-            time.sleep(rate_s)
+        _await_offboard(gcs, endpoint, deadline, rate_s)
         marks["before_sticks"] = endpoint.stats
         pushed_at = time.monotonic()
         modes_after: set[FlightMode] = set()
@@ -375,3 +376,35 @@ def _iris_with_a_ground_station(companion_port: int) -> MavlinkEndpoint:
     links = (LinkConfig("offboard", remote=("127.0.0.1", companion_port)), LinkConfig("gcs"))
     sim = Simulator(load_sim_config("iris"), seed=7)
     return MavlinkEndpoint(sim, EndpointConfig(links=links)).start()
+
+
+class RefusedOnceLink(CountingInProcessLink):
+    """The real in-process link whose first OFFBOARD request the autopilot refuses (as PX4
+    may, e.g. a setpoint stream it has not yet taken as fresh); the pilot then takes POSCTL
+    while the companion streams before asking again."""
+
+    def __init__(self, sim: Simulator) -> None:
+        super().__init__(sim)
+        self.offboard_requests = 0
+
+    def start_offboard(self):
+        self.offboard_requests += 1
+        if self.counting:
+            self.sent_after.append("offboard")
+        if self.offboard_requests > 1:
+            return super().start_offboard()
+        assert self._sim.set_mode(FlightMode.POSCTL).accepted  # the pilot, meanwhile
+        self.counting = True
+        return CommandOutcome(False, "Offboard denied: no setpoint stream")
+
+
+def test_a_pilot_who_takes_over_while_offboard_is_retried_is_not_fought() -> None:
+    """OFFBOARD refused, then the pilot switches to POSCTL: the companion must not ask for
+    OFFBOARD again (that would take the vehicle back from the pilot); it hands over."""
+    sim = Simulator(load_sim_config("iris"), seed=5)
+    link = RefusedOnceLink(sim)
+    outcome = fly_quietly(link, load_mission(LINE))
+    assert outcome.status == "handed_over", outcome.detail
+    assert outcome.detail.startswith("pilot took control in POSCTL at t=")
+    assert link.sent_after == []
+    assert sim.state.mode is FlightMode.POSCTL

@@ -16,8 +16,8 @@ from vehicle_sim.rover.mavlink_rover import RoverMavlinkEndpoint
 
 @pytest.mark.parametrize(
     ("mav_type", "kind"),
-    [(2, "multirotor"), (13, "multirotor"), (22, "VTOL"), (1, "fixed wing"), (10, "rover"),
-     (11, "boat"), (0, "other"), (6, "other")],
+    [(2, "multirotor"), (13, "multirotor"), (43, "multirotor"), (22, "VTOL"), (1, "fixed wing"),
+     (10, "rover"), (11, "boat"), (0, "other"), (6, "other")],
 )  # fmt: skip
 def test_each_mav_type_names_its_kind(mav_type, kind):
     assert vehicle_kind(mav_type) == kind

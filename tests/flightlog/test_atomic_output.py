@@ -95,3 +95,17 @@ def test_a_figure_is_written_whole_and_closed_even_when_saving_fails(tmp_path) -
         write_figure_atomic(fig, tmp_path / "b.png", dpi=40)
     assert not plt.fignum_exists(fig.number)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.png"]  # no temporary left
+
+
+def test_a_written_file_is_synced_to_disk_before_it_is_renamed_into_place(
+    tmp_path, monkeypatch
+) -> None:
+    """An experience or path file written on the vehicle must survive a power cut: its bytes
+    reach the disk (fsync) before the rename makes it the file, never an empty file renamed."""
+    calls: list[str] = []
+    fsync, replace = os.fsync, os.replace
+    monkeypatch.setattr(os, "fsync", lambda fd: (calls.append("fsync"), fsync(fd))[1])
+    monkeypatch.setattr(os, "replace", lambda a, b: (calls.append("replace"), replace(a, b))[1])
+    path = write_text_atomic(tmp_path / "path.csv", "x_m,y_m\n")
+    assert calls == ["fsync", "replace"]
+    assert path.read_text() == "x_m,y_m\n"

@@ -9,36 +9,16 @@ import subprocess
 import sys
 from pathlib import Path
 
-import numpy as np
 import pytest
 
-from flightlog.schema import FlightLogRecorder, write_flight_log
+from flightlog.schema import write_flight_log
+from tests.gp.gp_synthetic_logs import record_log
 
 REPO = Path(__file__).resolve().parents[2]
 ULOGS = REPO / "tests" / "fixtures" / "ulog"
 
 
-def _long_log(n_rows: int = 6000, dt_s: float = 0.05) -> FlightLogRecorder:
-    """A level flight whose velocity follows smooth commands with drag: enough rows that a
-    200-point GP takes many seconds to fit."""
-    rec = FlightLogRecorder({"source": "synthetic"})
-    vel = np.zeros(3)
-    for k in range(n_rows):
-        cmd = 2.0 * np.array([np.sin(0.05 * k), np.cos(0.03 * k), 0.2 * np.sin(0.02 * k)])
-        row = {
-            "t_s": k * dt_s,
-            "pos_n_m": 0.0, "pos_e_m": 0.0, "pos_d_m": -5.0,
-            "vel_n_mps": vel[0], "vel_e_mps": vel[1], "vel_d_mps": vel[2],
-            "q_w": 1.0, "q_x": 0.0, "q_y": 0.0, "q_z": 0.0,
-            "cmd_vel_n_mps": cmd[0], "cmd_vel_e_mps": cmd[1], "cmd_vel_d_mps": cmd[2],
-            "cmd_yaw_rate_radps": 0.0,
-        }  # fmt: skip
-        rec.append(row)
-        vel = cmd - dt_s * 0.3 * vel + 0.01 * np.sin(7.0 * k + np.arange(3))
-    return rec
-
-
-def _interrupt(module: str, args: list[str], when: str) -> tuple[int, str, str]:
+def run_and_interrupt(module: str, args: list[str], when: str) -> tuple[int, str, str]:
     """Run ``python -m module args``, send Ctrl-C (SIGINT) once a stderr line contains
     ``when``; returns the exit code, stdout and the rest of stderr."""
     proc = subprocess.Popen(
@@ -67,7 +47,7 @@ def test_ctrl_c_during_a_diagnosis_is_one_line_exit_130_and_writes_nothing(tmp_p
     logs = [str(ULOGS / f"{name}.ulg") for name in ("quad_sitl_v1_15_auto", "quad_posctl_v1_15")]
     out = tmp_path / "diag"
     args = [*logs, "--sim-config", "iris", "--out", str(out)]
-    code, _, err = _interrupt("scripts.diagnose", args, "read 2 log(s)")
+    code, _, err = run_and_interrupt("scripts.diagnose", args, "read 2 log(s)")
     assert code == 130, err
     assert "Traceback" not in err
     assert err.strip().splitlines()[-1] == f"diagnose: stopped by Ctrl-C; nothing written to {out}"
@@ -75,9 +55,9 @@ def test_ctrl_c_during_a_diagnosis_is_one_line_exit_130_and_writes_nothing(tmp_p
 
 
 def test_ctrl_c_during_a_gp_fit_is_one_line_exit_130_and_writes_no_model(tmp_path):
-    log = write_flight_log(tmp_path / "long.csv", _long_log().to_log())
+    log = write_flight_log(tmp_path / "long.csv", record_log(n_rows=6000))  # a fit of seconds
     args = [str(log), "--out", str(tmp_path / "model"), "--m", "200", "--optimize-inducing"]
-    code, out, err = _interrupt("scripts.fit_gp", [*args, "--restarts", "10"], "fitting")
+    code, out, err = run_and_interrupt("scripts.fit_gp", [*args, "--restarts", "10"], "fitting")
     assert code == 130, err
     assert "Traceback" not in err
     assert err.strip().splitlines()[-1] == "fit-gp: stopped by Ctrl-C; no model written"
@@ -87,7 +67,7 @@ def test_ctrl_c_during_a_gp_fit_is_one_line_exit_130_and_writes_no_model(tmp_pat
 @pytest.mark.slow
 def test_ctrl_c_during_bench_is_one_line_exit_130_with_the_parts_done():
     args = ["--only", "sim", "--only", "diagnose", "--quick", "--json"]
-    code, out, err = _interrupt("scripts.bench", args, "[bench] diagnose ...")
+    code, out, err = run_and_interrupt("scripts.bench", args, "[bench] diagnose ...")
     assert code == 130, err
     assert "Traceback" not in err
     assert err.strip().splitlines()[-1] == (

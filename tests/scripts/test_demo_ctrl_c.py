@@ -4,36 +4,16 @@ not complete: interrupted by Ctrl-C' and exited 1, as for a failed flight)."""
 
 from __future__ import annotations
 
-import signal
-import subprocess
-import sys
-from pathlib import Path
-
 import pytest
 
-REPO = Path(__file__).resolve().parents[2]
+from tests.scripts.test_ctrl_c_one_line import run_and_interrupt
 
 
 @pytest.mark.slow
 def test_ctrl_c_in_the_nominal_flight_exits_130_in_one_line(tmp_path):
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "scripts.demo", "--out", str(tmp_path / "demo")],
-        cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
-    )  # fmt: skip
-    try:
-        for line in proc.stderr:
-            if "offboard; following the reference" in line:
-                break
-        else:
-            pytest.fail("the demo ended before its first flight followed the reference")
-        proc.send_signal(signal.SIGINT)
-        out, err = proc.communicate(timeout=120)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait(5)
-    assert proc.returncode == 130, err
+    args = ["--out", str(tmp_path / "demo")]
+    code, out, err = run_and_interrupt("scripts.demo", args, "offboard; following the reference")
+    assert code == 130, err
     lines = err.strip().splitlines()
     assert "safe stop: landed and disarmed" in err and "Traceback" not in err
     assert lines[-1] == "demo: interrupted; the simulator was stopped", lines[-3:]

@@ -9,6 +9,7 @@ import subprocess
 import sys
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -177,21 +178,34 @@ def _endpoint(port: int) -> RoverMavlinkEndpoint:
     return endpoint
 
 
+def _repeat_while(
+    path: Path, tmp_path: Path, event: Callable[[RoverMavlinkEndpoint], None]
+) -> tuple[RoverMavlinkEndpoint, int]:
+    """`rover-path repeat` of ``path`` against a simulated rover on which ``event`` happens 4 s
+    in (a pilot's mode switch, the link going); returns the endpoint, closed, and the exit
+    code."""
+    port = _free_port()
+    endpoint = _endpoint(port)
+    timer = threading.Timer(4.0, event, args=(endpoint,))
+    timer.start()
+    argv = ["repeat", "--path", str(path), "--url", f"udpin://127.0.0.1:{port}",
+            "--experience", str(tmp_path / "e.npz"), "--out", str(tmp_path / "rep")]  # fmt: skip
+    try:
+        return endpoint, main(argv)
+    finally:
+        timer.cancel()
+        endpoint.close()
+
+
 @pytest.mark.slow
 def test_a_pilot_switching_to_manual_mid_repeat_ends_it_with_exit_3(
     files: dict[str, Path], tmp_path: Path, capsys
 ) -> None:
-    port = _free_port()
-    endpoint = _endpoint(port)
-    pilot = threading.Timer(4.0, endpoint._set_mode, args=(1, 0))  # MANUAL, as an RC switch
-    pilot.start()
-    argv = ["repeat", "--path", str(files["loop"]), "--url", f"udpin://127.0.0.1:{port}",
-            "--experience", str(tmp_path / "e.npz"), "--out", str(tmp_path / "rep")]  # fmt: skip
-    try:
-        code = main(argv)
-    finally:
-        pilot.cancel()
-        endpoint.close()
+    endpoint, code = _repeat_while(
+        files["loop"],
+        tmp_path,
+        lambda e: e._set_mode(1, 0),  # MANUAL, as an RC switch
+    )
     err = capsys.readouterr().err
     assert code == 3, err
     assert "left OFFBOARD for MANUAL during trial 1" in err
@@ -203,17 +217,7 @@ def test_a_pilot_switching_to_manual_mid_repeat_ends_it_with_exit_3(
 def test_a_lost_link_mid_repeat_stops_with_exit_1(
     files: dict[str, Path], tmp_path: Path, capsys
 ) -> None:
-    port = _free_port()
-    endpoint = _endpoint(port)
-    cut = threading.Timer(4.0, endpoint.close)  # the radio goes: no more telemetry
-    cut.start()
-    argv = ["repeat", "--path", str(files["loop"]), "--url", f"udpin://127.0.0.1:{port}",
-            "--experience", str(tmp_path / "e.npz"), "--out", str(tmp_path / "rep")]  # fmt: skip
-    try:
-        code = main(argv)
-    finally:
-        cut.cancel()
-        endpoint.close()
+    _, code = _repeat_while(files["loop"], tmp_path, lambda e: e.close())  # the radio goes
     err = capsys.readouterr().err
     assert code == 1, err
     assert "trial 1 stopped: link lost" in err and "sent Hold" in err

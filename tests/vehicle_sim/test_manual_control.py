@@ -12,9 +12,9 @@ import pytest
 from vehicle_sim import FlightMode, Simulator, Sticks, load_sim_config
 from vehicle_sim.manual_control import (
     CENTRED,
+    StickMotion,
     check_sticks,
     deadzone,
-    deflection,
     expo,
     stick_command,
 )
@@ -62,12 +62,23 @@ def test_stick_command_follows_the_parameters() -> None:
     assert cmd.forward_mps == pytest.approx(2.5) and math.degrees(cmd.yaw_rate_radps) == 90.0
 
 
-def test_deadzone_expo_and_deflection_by_hand() -> None:
+def test_deadzone_and_expo_by_hand() -> None:
     assert deadzone(0.1, 0.1) == 0.0 and deadzone(-0.55, 0.1) == pytest.approx(-0.5)
     assert expo(0.5, 0.6) == pytest.approx(0.275) and expo(-1.0, 0.6) == -1.0
-    assert deflection(Sticks(0.2, -0.35, 0.5, 0.1)) == pytest.approx(0.35)
-    assert deflection(Sticks(0.0, 0.0, 0.3, 0.0)) == pytest.approx(0.4)  # throttle counts double
-    assert deflection(CENTRED) == 0.0
+
+
+def test_stick_motion_by_hand() -> None:
+    """PX4's MovingDiff: the rate of change low-passed with tau 0.1 s; the throttle over
+    [-1, 1]; a held stick's rate decays, however far out it is."""
+    motion = StickMotion()
+    assert motion.update(Sticks(0.0, 0.0, 0.3, 0.0), 0.0) == pytest.approx(0.4 / 0.1)
+    motion = StickMotion()
+    assert motion.update(CENTRED, 0.1) == 0.0
+    assert motion.update(Sticks(0.2, 0.0, 0.5, 0.0), 0.1) == pytest.approx(0.2 / 0.2)
+    assert motion.update(Sticks(0.2, 0.0, 0.5, 0.0), 0.1) == pytest.approx(0.5)
+    for _ in range(30):
+        held = motion.update(Sticks(0.2, 0.0, 0.5, 0.0), 0.1)
+    assert held < 1e-6
 
 
 @pytest.mark.parametrize(
@@ -191,12 +202,27 @@ def test_sticks_that_stop_outside_the_manual_modes_change_nothing() -> None:
 
 def test_moved_sticks_take_over_from_auto_modes_by_default() -> None:
     sim = _hovering()
-    _fly(sim, Sticks(0.25, -0.2, 0.6, 0.29), 1.0)  # below COM_RC_STICK_OV (30 %)
+    _fly(sim, CENTRED, 1.0)
+    for i in range(20):  # 0.2 of travel per s: slower than COM_RC_STICK_OV (30 %/s)
+        _fly(sim, Sticks(0.01 * i, 0.0, 0.5, 0.0), 0.05)
     assert sim.state.mode is FlightMode.HOLD
     sim.drain_events()
     _fly(sim, Sticks(0.35, 0.0, 0.5, 0.0), 0.05)
     assert sim.state.mode is FlightMode.POSCTL
     assert (6, "Pilot took over using sticks") in sim.drain_events()
+
+
+def test_a_stick_held_out_does_not_take_back_a_mode_the_pilot_chose() -> None:
+    """PX4 overrides on stick motion, not position: flying POSCTL with the stick held forward,
+    a switch to HOLD (or RTL, a failsafe) stays while the stick stays where it is."""
+    sim = _hovering()
+    assert sim.set_mode(FlightMode.POSCTL).accepted
+    _fly(sim, Sticks(0.6, 0.0, 0.5, 0.0), 2.0)
+    assert sim.set_mode(FlightMode.HOLD).accepted
+    _fly(sim, Sticks(0.6, 0.0, 0.5, 0.0), 2.0)
+    assert sim.state.mode is FlightMode.HOLD
+    _fly(sim, Sticks(0.1, 0.0, 0.5, 0.0), 0.05)  # the pilot moves it: takes over
+    assert sim.state.mode is FlightMode.POSCTL
 
 
 @pytest.mark.parametrize(("bits", "taken_over"), [(1, False), (2, True), (3, True)])

@@ -122,3 +122,13 @@ def test_orbit_mode_by_set_mode_uses_px4s_defaults() -> None:
     assert sim.set_mode(FlightMode.ORBIT).accepted
     status = sim.orbit_status
     assert (status.radius_m, status.velocity_mps, status.yaw_behaviour) == (1.0, 1.0, 0)
+
+
+def test_yaw_behaviour_unchanged_keeps_the_behaviour_flown() -> None:
+    """ORBIT_YAW_BEHAVIOUR_UNCHANGED (5) is MAVLink's "keep the yaw behaviour": accepted as
+    NaN is, not denied as an unknown behaviour."""
+    sim = _hovering()
+    assert sim.orbit(6.0, 1.0, 3).accepted
+    changed = sim.orbit(8.0, math.nan, 5)
+    assert changed.accepted, changed.reason
+    assert (sim.orbit_status.radius_m, sim.orbit_status.yaw_behaviour) == (8.0, 3)

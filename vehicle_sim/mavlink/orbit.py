@@ -1,8 +1,9 @@
 """PX4's Orbit over MAVLink: MAV_CMD_DO_ORBIT in, ORBIT_EXECUTION_STATUS out.
 
 [MAVLink] MAV_CMD_DO_ORBIT: param1 radius [m] (negative: counter-clockwise; NaN: keep),
-param2 velocity [m/s] (NaN: keep), param3 ORBIT_YAW_BEHAVIOUR (NaN: MC_ORBIT_YAW_MOD), param4
-orbits (PX4 orbits until told otherwise; not honoured), param5/6 (COMMAND_INT x/y) the
+param2 velocity [m/s] (NaN: keep), param3 ORBIT_YAW_BEHAVIOUR (NaN or 5, UNCHANGED: keep, else
+MC_ORBIT_YAW_MOD), param4 orbits (PX4 orbits until told otherwise; not honoured), param5/6
+(COMMAND_INT x/y) the
 centre's latitude/longitude [deg] (NaN, or INT32_MAX in COMMAND_INT: the current centre or
 the vehicle's position), param7 (z) the altitude AMSL [m] (NaN: keep). MAVSDK's do_orbit
 sends it as COMMAND_INT. PX4 reports the mode as POSCTL sub mode ORBIT in HEARTBEAT and

@@ -14,6 +14,7 @@ import pytest
 
 from companion.inprocess_rover_link import InProcessRoverLink
 from companion.pymavlink_link import PymavlinkLink
+from companion.runner import Terminated
 from experiments.rover import learner
 from experiments.rover.drive_back import DriveBack, drive_back, reverse_along
 from experiments.rover.experience_file import (
@@ -44,6 +45,27 @@ def test_a_scripted_teach_drive_records_the_pattern_resampled_to_the_spacing() -
     assert taught.path.length_m == pytest.approx(length, rel=0.05)
     assert taught.path.spacing_m == pytest.approx(0.5, rel=0.05)
     assert is_loop(taught.path)
+
+
+class TerminatedLink(InProcessRoverLink):
+    """The in-process rover, on which SIGTERM arrives (as companion.runner.Terminated, what
+    rover-path's handler raises) after ``after`` telemetry reads."""
+
+    def __init__(self, after: int) -> None:
+        super().__init__(RoverSim(rover_preset("husky_50kg")))
+        self.reads_left = after
+
+    def read_state(self):  # noqa: ANN201
+        self.reads_left -= 1
+        if self.reads_left < 0:
+            raise Terminated
+        return super().read_state()
+
+
+def test_sigterm_ends_a_teach_pass_and_is_said_as_sigterm_not_ctrl_c() -> None:
+    taught = record_teach(TerminatedLink(after=120), drive=LOOP)
+    assert taught.ended_for == "SIGTERM"
+    assert taught.path.length_m > 2.0
 
 
 def test_a_teach_pass_with_too_little_motion_is_refused() -> None:
@@ -132,6 +154,9 @@ def test_an_experience_file_refuses_another_path_and_damage(tmp_path: Path) -> N
     other = TaughtPath.from_segments([(5.0, 0.0)])
     with pytest.raises(ExperienceFileError, match="learned on another path"):
         load_experience(f, learner.make_history_gp(), other)
+    coarser = TaughtPath(path.xy_m, spacing_m=0.5)  # the same file read with --spacing 0.5
+    with pytest.raises(ExperienceFileError, match=r"at a vertex spacing of 0\.2\d m.*--spacing 0"):
+        load_experience(f, learner.make_history_gp(), coarser)
     damaged = tmp_path / "damaged.npz"
     damaged.write_bytes(f.read_bytes()[:200])
     not_npz = tmp_path / "notes.npz"
