@@ -13,8 +13,8 @@ received, POSCTL and ALTCTL hold where they were entered. Moving a stick faster 
 COM_RC_STICK_OV [% of travel per s] (:class:`StickMotion`; a stick held still does not) takes a
 flying vehicle out of an auto mode (COM_RC_OVERRIDE bit 0, PX4's default) or OFFBOARD (bit 1,
 off by default) into POSCTL ("Pilot took over using sticks").
-Sticks that stop for COM_RC_LOSS_T in POSCTL/ALTCTL trigger NAV_RCL_ACT (see
-:meth:`Commander.update`).
+Sticks that stop for COM_RC_LOSS_T trigger NAV_RCL_ACT, in every mode but those PX4 exempts
+(see :meth:`Commander.update`).
 
 A pure state machine on simulated time: the simulator calls the command methods, calls
 :meth:`Commander.update` after each stretch of physics, asks :meth:`Commander.next_deadline`
@@ -65,6 +65,7 @@ AUTO_MODES = frozenset(
     {FlightMode.HOLD, FlightMode.TAKEOFF, FlightMode.LAND, FlightMode.RTL, FlightMode.MISSION}
 )
 OVERRIDE_AUTO_BIT, OVERRIDE_OFFBOARD_BIT = 1, 2  # COM_RC_OVERRIDE
+RCL_EXCEPT_MISSION_BIT, RCL_EXCEPT_HOLD_BIT, RCL_EXCEPT_OFFBOARD_BIT = 1, 2, 4  # COM_RCL_EXCEPT
 
 # Commander.fill_setpoint writes the whole setpoint vector in this order
 SETPOINT_LAYOUT = (
@@ -158,6 +159,21 @@ def _land_speed_mps(p: _SetpointParams, height_m: float) -> float:
         return p.z_v_auto_dn
     frac = (height_m - p.land_alt2) / (p.land_alt1 - p.land_alt2)
     return p.land_speed + frac * (p.z_v_auto_dn - p.land_speed)
+
+
+def manual_control_loss_ignored(mode: FlightMode, rcl_except: int) -> bool:
+    """Whether PX4's failsafe ignores a manual-control loss in ``mode`` (v1.14+,
+    Failsafe::checkStateAndMode): returning and landing always; MISSION with COM_RCL_EXCEPT
+    bit 0, HOLD and TAKEOFF with bit 1, OFFBOARD with bit 2. Every other mode (the manual
+    ones, Orbit) runs NAV_RCL_ACT."""
+    return (
+        mode in (FlightMode.RTL, FlightMode.LAND)
+        or (mode is FlightMode.MISSION and bool(rcl_except & RCL_EXCEPT_MISSION_BIT))
+        or (
+            mode in (FlightMode.HOLD, FlightMode.TAKEOFF) and bool(rcl_except & RCL_EXCEPT_HOLD_BIT)
+        )
+        or (mode is FlightMode.OFFBOARD and bool(rcl_except & RCL_EXCEPT_OFFBOARD_BIT))
+    )
 
 
 def _ok(reason: str = "") -> CommandResult:
@@ -502,13 +518,15 @@ class Commander:
         remaining as a fraction, velocity NED [m/s] (3,) for the brake-then-hold of centred
         sticks; None counts as at rest).
 
-        Manual-control loss: in POSCTL/ALTCTL, once sticks have been received, COM_RC_LOSS_T
-        without them triggers NAV_RCL_ACT through the failsafe framework ("Failsafe: manual
-        control lost, ..."). Never before the first sticks: PX4 without any RC or joystick does
-        not fail over for it either (it has none to lose; it only refuses the manual modes,
-        which the simulator lets a ground station enter to hold). In OFFBOARD and the auto
-        modes a loss is only noted (as PX4 with every COM_RCL_EXCEPT bit set): those modes do
-        not use sticks, and the companion must keep its own mode when a joystick goes away."""
+        Manual-control loss: once sticks have been received, COM_RC_LOSS_T without them
+        triggers NAV_RCL_ACT through the failsafe framework ("Failsafe: manual control lost,
+        ...") in a flying vehicle's every mode but those PX4's failsafe exempts
+        (:func:`manual_control_loss_ignored`): RTL and LAND always, MISSION, HOLD and TAKEOFF,
+        OFFBOARD as COM_RCL_EXCEPT's bits say (PX4's default 0: none of them; a companion that
+        wants its OFFBOARD flight to survive a joystick going away sets bit 2). There a loss is
+        only noted. Never before the first sticks: PX4 without any RC or joystick does not fail
+        over for it either (it has none to lose; it only refuses the manual modes, which the
+        simulator lets a ground station enter to hold)."""
         self._landed = contact
         self._height_m = float(self._home[2] - pos_ned_m[2])
         self._yaw_rad = float(yaw_rad)
@@ -554,7 +572,8 @@ class Commander:
             return
         self._sticks_lost = True
         self._stick_cmd = None
-        if self.mode in MANUAL_MODES and self.armed and not self._landed:
+        exempt = manual_control_loss_ignored(self.mode, int(self.params.get("COM_RCL_EXCEPT")))
+        if self.armed and not self._landed and not exempt:
             self._trigger(self.failsafes.manual_control_lost(), t, pos_ned_m, yaw_rad)
         else:
             self.events.append((SEVERITY_NOTICE, "Manual control lost"))

@@ -77,6 +77,9 @@ PX4_PARAMS: dict[str, Px4ParamSpec] = {
     "COM_OF_LOSS_T": _F(1.0, "offboard setpoint timeout [s]", 0.0, 60.0),
     "COM_RC_IN_MODE": _i(3, "manual control input: 0 RC, 1 joystick, 2-3 either, 4 none", 0, 4),
     "COM_RC_LOSS_T": _F(0.5, "manual control (RC or joystick) loss timeout [s]", 0.0, 35.0),
+    "COM_RCL_EXCEPT": _i(
+        0, "manual control loss ignored in: bit 0 mission, 1 hold/takeoff, 2 offboard", 0, 7
+    ),
     "COM_RC_OVERRIDE": _i(1, "stick override bits: 0 auto modes, 1 offboard", 0, 3),
     "COM_RC_STICK_OV": _F(
         30.0, "stick motion that overrides auto/offboard [% of travel/s]", 5.0, 80.0

@@ -191,13 +191,55 @@ def test_without_sticks_ever_posctl_holds_and_never_fails_over() -> None:
     assert np.linalg.norm(sim.state.pos_ned_m - start) < 0.1
 
 
-def test_sticks_that_stop_outside_the_manual_modes_change_nothing() -> None:
-    sim = _hovering(COM_RC_OVERRIDE=0)
+@pytest.mark.parametrize(("rcl_except", "exempt"), [(0, False), (1, False), (2, True), (7, True)])
+def test_sticks_that_stop_in_hold_fail_over_unless_com_rcl_except_exempts_hold(
+    rcl_except: int, exempt: bool
+) -> None:
+    """PX4's failsafe runs NAV_RCL_ACT (default 2, return) on a manual-control loss in HOLD
+    unless COM_RCL_EXCEPT's bit 1 (value 2) is set; bit 0 (mission) does not exempt HOLD."""
+    sim = _hovering(COM_RC_OVERRIDE=0, COM_RCL_EXCEPT=rcl_except)
     _fly(sim, Sticks(1.0, 0.0, 0.5, 0.0), 1.0)  # in HOLD, override off: not flown
     sim.step(3.0)
-    assert sim.state.mode is FlightMode.HOLD
-    assert (5, "Manual control lost") in sim.drain_events()  # said, nothing done
-    assert np.hypot(*sim.state.pos_ned_m[:2]) < 0.1
+    texts = [text for _severity, text in sim.drain_events()]
+    assert ("Manual control lost" in texts) is exempt
+    assert any(t.startswith("Failsafe: manual control lost, holding;") for t in texts) is not exempt
+    sim.step(3.0)  # COM_FAIL_ACT_T (5 s) after the loss at 0.5 s
+    assert sim.state.mode is (FlightMode.HOLD if exempt else FlightMode.RTL)
+    if exempt:
+        assert np.hypot(*sim.state.pos_ned_m[:2]) < 0.1
+
+
+@pytest.mark.parametrize(("rcl_except", "exempt"), [(0, False), (3, False), (4, True)])
+def test_a_joystick_that_goes_away_in_offboard_fails_over_unless_bit_2_is_set(
+    rcl_except: int, exempt: bool
+) -> None:
+    """A ground station's joystick sent sticks (held still: no override), then stopped while a
+    companion flies OFFBOARD: PX4 runs NAV_RCL_ACT unless COM_RCL_EXCEPT has bit 2 (value 4)."""
+    from vehicle_sim import VelocitySetpoint
+
+    sim = _hovering(COM_RCL_EXCEPT=rcl_except)
+    for _ in range(10):
+        sim.set_velocity_setpoint(VelocitySetpoint((0.5, 0.0, 0.0)))
+        sim.step(0.05)
+    assert sim.set_mode(FlightMode.OFFBOARD).accepted
+    for k in range(60):
+        sim.set_velocity_setpoint(VelocitySetpoint((0.5, 0.0, 0.0)))
+        if k < 20:
+            sim.set_sticks(CENTRED)
+        sim.step(0.05)
+    texts = [text for _severity, text in sim.drain_events()]
+    assert ("Manual control lost" in texts) is exempt
+    assert sim.state.mode is (FlightMode.OFFBOARD if exempt else FlightMode.HOLD)
+
+
+@pytest.mark.parametrize("mode", [FlightMode.RTL, FlightMode.LAND])
+def test_sticks_that_stop_while_returning_or_landing_change_nothing(mode: FlightMode) -> None:
+    sim = _hovering()
+    assert sim.set_mode(mode).accepted
+    _fly(sim, CENTRED, 0.5)
+    sim.step(1.0)
+    assert sim.state.mode is mode
+    assert (5, "Manual control lost") in sim.drain_events()
 
 
 def test_moved_sticks_take_over_from_auto_modes_by_default() -> None:

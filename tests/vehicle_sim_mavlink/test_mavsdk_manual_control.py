@@ -1,8 +1,10 @@
 """MAVSDK's manual_control example flow against vehicle-sim, as against PX4 SITL: set a centred
 input, arm, take off, set the input again, start position control, then stream stick inputs at
-10 Hz (MAVSDK sends one MANUAL_CONTROL per set_manual_control_input). The sticks fly the
-vehicle; altitude control is entered the same way; when the inputs stop, PX4's
-manual-control-loss failsafe runs (NAV_RCL_ACT, here land)."""
+10 Hz (MAVSDK sends one MANUAL_CONTROL per set_manual_control_input). The one input before
+arming is lost during the takeoff, and PX4's failsafe (COM_RCL_EXCEPT 0: TAKEOFF is not exempt)
+ends the climb in its hold, as it would on PX4; the streamed sticks then take the vehicle into
+POSCTL and fly it; altitude control is entered the same way; when the inputs stop, the
+manual-control-loss failsafe runs again (NAV_RCL_ACT, here land)."""
 
 from __future__ import annotations
 
@@ -79,5 +81,5 @@ def test_manual_control_example_flow(drone: Drone) -> None:
     wait(lambda: drone.state.mode is FlightMode.HOLD, 5.0, "the manual-control-loss hold")
     wait(lambda: drone.state.mode is FlightMode.LAND, 10.0, "NAV_RCL_ACT 3: land")
     wait(lambda: not drone.state.armed, 60.0, "landing and disarm")
-    assert drone.endpoint.stats.manual_control_accepted > 50
+    assert drone.endpoint.stats.manual_control_accepted > 30  # 10 Hz while the sticks fly
     assert drone.endpoint.stats.handler_errors == 0
