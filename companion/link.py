@@ -35,8 +35,9 @@ def vehicle_kind(mav_type: int) -> VehicleKind:
 
 
 FlightModeName = Literal[
-    "MANUAL", "POSCTL", "ALTCTL", "HOLD", "TAKEOFF", "LAND", "RTL", "MISSION", "OFFBOARD", "UNKNOWN"
-]
+    "MANUAL", "POSCTL", "ALTCTL", "HOLD", "TAKEOFF", "LAND", "RTL", "MISSION", "OFFBOARD", "ORBIT",
+    "STABILIZED", "ACRO", "UNKNOWN",
+]  # fmt: skip
 FLIGHT_MODE_NAMES: tuple[str, ...] = get_args(FlightModeName)
 
 

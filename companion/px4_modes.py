@@ -18,6 +18,9 @@ PX4_MAIN_SUB: dict[str, tuple[int, int]] = {
     "MISSION": (4, 4),
     "OFFBOARD": (6, 0),
     "MANUAL": (1, 0),  # a pilot's sticks: where an RC switch puts a rover
+    "ORBIT": (3, 1),  # POSCTL's sub mode: MAV_CMD_DO_ORBIT from a ground station
+    "STABILIZED": (7, 0),  # a pilot's modes on real PX4, read to name who took over
+    "ACRO": (5, 0),
 }
 
 

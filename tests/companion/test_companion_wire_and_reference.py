@@ -14,17 +14,20 @@ from companion.waypoint_reference import WaypointReference
 PROTOCOL_CUSTOM_MODES = {
     "POSCTL": 196608, "ALTCTL": 131072, "HOLD": 50593792, "TAKEOFF": 33816576, "LAND": 100925440,
     "RTL": 84148224, "MISSION": 67371008, "OFFBOARD": 393216, "MANUAL": 65536,
+    "ORBIT": 16973824,
 }  # fmt: skip
+# Modes only a pilot on a real PX4 selects (px4_custom_mode.h: main 7 STABILIZED, 5 ACRO).
+PILOT_ONLY_CUSTOM_MODES = {"STABILIZED": 458752, "ACRO": 327680}
 
 
 def test_px4_custom_modes_match_the_protocol() -> None:
-    for name, value in PROTOCOL_CUSTOM_MODES.items():
+    for name, value in {**PROTOCOL_CUSTOM_MODES, **PILOT_ONLY_CUSTOM_MODES}.items():
         assert custom_mode_of(name) == value
         assert mode_name_of(value) == name
-    assert set(PX4_MAIN_SUB) == set(PROTOCOL_CUSTOM_MODES)
+    assert set(PX4_MAIN_SUB) == set(PROTOCOL_CUSTOM_MODES) | set(PILOT_ONLY_CUSTOM_MODES)
     assert mode_name_of(12345) == "UNKNOWN"
     with pytest.raises(ValueError, match="choose one of POSCTL"):
-        custom_mode_of("ACRO")
+        custom_mode_of("RATTITUDE")
 
 
 @pytest.mark.parametrize(
