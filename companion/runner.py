@@ -152,6 +152,8 @@ class FlightOutcome:
         landed_error_m: horizontal distance from the goal after landing [m], or None.
         disarmed: True if the vehicle was seen disarmed at the end.
         ticks, deadline_misses: control loop counts over the whole flight.
+        tracking_rmse_m: RMSE [m] of the distance from the reference position over the
+            following steps in OFFBOARD (what a learned model should lower), None if none.
         autopilot_metadata: what the autopilot reported before flying that a flight log
             keeps (its velocity-loop gains, companion.autopilot_gains; empty when not read).
     """
@@ -164,6 +166,7 @@ class FlightOutcome:
     ticks: int
     deadline_misses: int
     autopilot_metadata: Mapping[str, object] = field(default_factory=dict)
+    tracking_rmse_m: float | None = None
 
 
 def fly_mission(
@@ -216,6 +219,7 @@ def _fly(
     goal = np.asarray(mission.goal_ned_m, dtype=float)
     airborne = False
     goal_error_m: float | None = None
+    tracking_rmse_m: float | None = None
     status: FlightStatus = "failed"
     detail = ""
     autopilot: dict[str, object] = {}
@@ -255,6 +259,7 @@ def _fly(
         progress("offboard; following the reference")
         last = _follow(link, planner, reference, mission, config, counters, on_tick, progress)
         goal_error_m = float(np.linalg.norm(last.state.pos_ned_m - goal))
+        tracking_rmse_m = last.tracking_rmse_m
         if last.stop_reason == "handed_over":
             link.stop_streaming()
             airborne = False  # the vehicle is the pilot's now: no safe stop, no command
@@ -307,6 +312,7 @@ def _fly(
         ticks=counters.ticks,
         deadline_misses=counters.deadline_misses,
         autopilot_metadata=autopilot,
+        tracking_rmse_m=tracking_rmse_m,
     )
 
 
@@ -427,6 +433,7 @@ class _FollowEnd:
     state: LinkState
     stop_reason: Literal["done", "timeout", "handed_over"]
     detail: str
+    tracking_rmse_m: float | None
 
 
 def _follow(
@@ -448,9 +455,13 @@ def _follow(
     t0_s = link.clock.now_s()
     policy = PlannerPolicy(planner, reference, t0_s, limits)
     monitor = _FollowMonitor(t0_s, goal, reference.duration_s, mission, config, progress)
+    squared_errors_m2: list[float] = []
 
     def on_follow_tick(tick: Tick) -> None:
         monitor.sent(tick.decision.reason if not tick.decision.ok else "")
+        ref = tick.decision.ref_pos_ned_m
+        if tick.state.mode == "OFFBOARD" and ref is not None:
+            squared_errors_m2.append(float(np.sum((tick.state.pos_ned_m - ref) ** 2)))
         on_tick(tick)
 
     result = run_fixed_rate(
@@ -462,6 +473,7 @@ def _follow(
         on_tick=on_follow_tick,
         counters=counters,
     )
+    tracking = float(np.sqrt(np.mean(squared_errors_m2))) if squared_errors_m2 else None
     if monitor.taken_over is not None:
         mode, t_s, seen = monitor.taken_over
         if seen:
@@ -471,10 +483,10 @@ def _follow(
                 f"the vehicle never reported OFFBOARD (it reports {mode} after {t_s:.1f} s); "
                 "mission abandoned"
             )
-        return _FollowEnd(result.last_state, "handed_over", detail)
+        return _FollowEnd(result.last_state, "handed_over", detail, tracking)
     if result.stop_reason == "timeout":
-        return _FollowEnd(result.last_state, "timeout", "follow deadline passed")
-    return _FollowEnd(result.last_state, "done", "")
+        return _FollowEnd(result.last_state, "timeout", "follow deadline passed", tracking)
+    return _FollowEnd(result.last_state, "done", "", tracking)
 
 
 class _FollowMonitor:

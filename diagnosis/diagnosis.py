@@ -8,7 +8,8 @@
 5. What stays large without a generalising cause is reported as ``unexplained`` (a stochastic
    disturbance such as gusts), and so is a held-out replay error that stays well above the log's
    own noise floor (:mod:`.noise_floor`): the report never says "the config explains the logs"
-   beside a large error. With nothing to report the ranking starts with ``none``.
+   beside a large error, and warns of that replay error also when the force residual is
+   already ``unexplained``. With nothing to report the ranking starts with ``none``.
 6. Honesty: causes that could not be examined (no thrust, no ground holds, ...) are listed in
    ``not_examined``; fits on a search bound in ``at_bound`` (never named).
 """
@@ -279,7 +280,7 @@ def diagnose(
     floor_rmse = float(np.sqrt(replay_floor_mse))
     left_rmse = extended.rmse_mps()
     limit = max(config.unexplained_replay_ratio * floor_rmse, 0.05)
-    if np.isfinite(left_rmse) and left_rmse > limit and "unexplained" not in verdict:
+    if np.isfinite(left_rmse) and left_rmse > limit:
         ratio = left_rmse / max(floor_rmse, 1e-9)
         evidence = (
             f"held-out replay velocity RMSE {left_rmse:.3f} m/s stays {ratio:.1f}x "
@@ -287,8 +288,9 @@ def diagnose(
             "simulation does not reproduce this flight (another controller, an effect outside "
             "the vocabulary, or disturbances)"
         )
-        causes.append(Cause("unexplained", {"replay_rmse_mps": left_rmse}, 0.0, 1.0, evidence))
-        verdict.append("unexplained")
+        if "unexplained" not in verdict:  # else the force residual's row already names it
+            causes.append(Cause("unexplained", {"replay_rmse_mps": left_rmse}, 0.0, 1.0, evidence))
+            verdict.append("unexplained")
         warnings.append(evidence)
     if not test:
         warnings.append(

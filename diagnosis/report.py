@@ -78,12 +78,13 @@ def report_document(diagnosis: Diagnosis) -> dict[str, Any]:
 
 def headline(diagnosis: Diagnosis) -> str:
     """One line for the terminal: the verdict and the held-out replay gain, or that the replay
-    was not examined (then no gain was measured, and the causes the logs could not examine
-    are named)."""
+    was not examined (then no gain was measured), and the causes the logs could not examine
+    (a verdict of none says nothing about them)."""
     verdict = ", ".join(diagnosis.verdict) or "none"
     if math.isfinite(diagnosis.gain):
-        return f"{verdict}; gain {diagnosis.gain:.1f}x"
-    line = f"{verdict}; held-out replay not examined (no gain measured)"
+        line = f"{verdict}; gain {diagnosis.gain:.1f}x"
+    else:
+        line = f"{verdict}; held-out replay not examined (no gain measured)"
     if diagnosis.not_examined:
         line += f"; not examined: {', '.join(diagnosis.not_examined)}"
     return line

@@ -139,7 +139,9 @@ def _progress(message: str) -> None:
 
 def _summary(outcome: FlightOutcome) -> str:
     """The flight's last line: how it ended, where it landed (when it came down from a
-    followed reference) and its deadline misses (when it flew a control step)."""
+    followed reference), how closely it tracked the reference (when it followed one: the
+    figure to compare flights with and without ``--gp-model``) and its deadline misses (when
+    it flew a control step)."""
     parts = [
         outcome.detail
         if outcome.detail.startswith(outcome.status)  # "interrupted by Ctrl-C"
@@ -147,6 +149,8 @@ def _summary(outcome: FlightOutcome) -> str:
     ]
     if outcome.landed_error_m is not None:
         parts.append(f"landed {outcome.landed_error_m:.2f} m from the goal")
+    if outcome.tracking_rmse_m is not None:
+        parts.append(f"tracking RMSE {outcome.tracking_rmse_m:.3f} m")
     if outcome.ticks:
         parts.append(f"{outcome.deadline_misses} deadline misses in {outcome.ticks} steps")
     return "; ".join(parts)

@@ -24,6 +24,7 @@ from vehicle_sim.effects.base import SimConfigError
 GRAVITY_MPS2 = 9.80665
 PRESET_DIR = Path(__file__).with_name("presets")
 PRESET_NAMES: tuple[str, ...] = tuple(sorted(p.stem for p in PRESET_DIR.glob("*.toml")))
+FLIGHT_LOG_SUFFIXES = (".ulg", ".csv")  # logs config-from-log reads, passed as a config by mistake
 BACKEND_NAMES: tuple[str, ...] = ("builtin", "jsbsim")
 """Physics backends a config can name: the built-in rigid body, or JSBSim's F450."""
 
@@ -200,7 +201,17 @@ def load_sim_config(
             )
     try:
         doc = tomllib.loads(path.read_text())
-    except tomllib.TOMLDecodeError as exc:
+    except (UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        if path.suffix.lower() in FLIGHT_LOG_SUFFIXES:  # the log given where its config goes
+            raise SimConfigError(
+                f"{path}: a flight log, not a sim config; make a config from it with "
+                f"vehicle-sim config-from-log {path} --out my_vehicle.toml"
+            ) from None
+        if isinstance(exc, UnicodeDecodeError):
+            raise SimConfigError(
+                f"{path}: a binary file, not a config TOML; use one of "
+                f"{', '.join(PRESET_NAMES)} or the path of a TOML file"
+            ) from None
         raise SimConfigError(f"{path}: not valid TOML ({exc}); fix the syntax") from None
     try:
         config = config_from_mapping(doc, preset_name=path.stem)

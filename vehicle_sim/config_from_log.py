@@ -52,7 +52,9 @@ def config_from_log(log: FlightLog, preset: str = "iris") -> ConfigFromLog:
             f"{log.where}: no MPC_THR_HOVER parameter and no produced thrust while "
             "hovering; use a PX4 ULog (it records parameters) or log actuator_motors"
         )
-    return _build(log.where, params, hover, hover_how, preset, ())
+    vehicle = log.metadata.get("vehicle")
+    kind = vehicle.get("type") if isinstance(vehicle, Mapping) else None
+    return _build(log.where, params, hover, hover_how, preset, (), kind)
 
 
 def config_from_log_file(path: str | Path, preset: str = "iris") -> ConfigFromLog:
@@ -81,7 +83,9 @@ def config_from_log_file(path: str | Path, preset: str = "iris") -> ConfigFromLo
             f"parameters only: its flight cannot be read ({why}), so the hover thrust is the "
             "MPC_THR_HOVER parameter, not measured"
         )
-        return _build(str(path), params, hover, HOVER_PARAMETER, preset, (note,))
+        return _build(
+            str(path), params, hover, HOVER_PARAMETER, preset, (note,), summary.get("vehicle")
+        )
 
 
 def _build(
@@ -91,10 +95,12 @@ def _build(
     hover_how: str,
     preset: str,
     notes: tuple[str, ...],
+    vehicle: str | None = None,
 ) -> ConfigFromLog:
     """The config TOML: mass from ``hover`` (normalised thrust) x the preset's maximum thrust,
     the PX4 parameters ``params`` it knows, the rest from ``preset``; ``notes`` lead the lines
-    of what came from the log."""
+    of what came from the log. ``vehicle``: the log's vehicle type in words (MAV_TYPE), said
+    among the assumptions when the preset's rotors cannot be its own (not a quadrotor)."""
     base = load_sim_config(preset)
     v = base.vehicle
     if hover_how == HOVER_PARAMETER and hover == PX4_PARAMS["MPC_THR_HOVER"].default:
@@ -122,6 +128,12 @@ def _build(
         f"inertia_kgm2, rotor geometry, rotor speed, thrust and torque coefficients, motor "
         f"time constant{'' if battery else ', battery voltages'}: from preset {preset!r}",
     ]
+    if vehicle is not None and vehicle != "quadrotor":
+        assumed.append(
+            f"rotors: the log's vehicle ({vehicle}) flies as the {len(v.rotor_spin)} rotors of "
+            f"preset {preset!r}: its mass and hover thrust stand for the whole vehicle, its rotor "
+            "layout and torques do not (edit [rotors] and [vehicle] to match it)"
+        )
     if defaults:
         assumed.append(f"PX4 defaults for {', '.join(defaults)} (not in the log)")
     lines = [f"# Built from {where} by vehicle-sim config-from-log.", "# From the log:"]

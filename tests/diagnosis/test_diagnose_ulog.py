@@ -113,3 +113,29 @@ def test_every_progress_line_names_diagnose(tmp_path, capsys):
     assert diagnose_cli.main([str(AUTO), "--sim-config", "iris", "--out", str(tmp_path)]) == 0
     lines = capsys.readouterr().err.splitlines()
     assert lines and all(line.startswith("diagnose") for line in lines), lines[:3]
+
+
+def test_the_last_line_names_what_was_not_examined_also_beside_a_gain(tmp_path, capsys):
+    """The real POSCTL hover spans 1.1 m/s and no setpoint step: 8 of the causes cannot be
+    examined. The last line said 'unexplained; gain 1.0x' and nothing of them (it named them
+    only when the replay itself was not examined), as did each --batch line."""
+    assert diagnose_cli.main([str(POSCTL), "--sim-config", "iris", "--out", str(tmp_path)]) == 0
+    last = capsys.readouterr().err.strip().splitlines()[-1]
+    not_examined = json.loads((tmp_path / "report.json").read_text())["not_examined"]
+    assert "rotor_drag" in not_examined and "command_delay" in not_examined
+    assert "gain 1.0x" in last and f"not examined: {', '.join(not_examined)}" in last, last
+
+
+def test_a_large_replay_error_is_warned_of_beside_an_unexplained_force_residual():
+    """PX4 SITL's AUTO flight on iris: the force residual stays (unexplained) and the held-out
+    replay error stays about 100x the log's noise floor. The replay error was warned of only
+    when nothing else had said unexplained, so the report's warnings kept silent about it."""
+    from flightlog.reader import read_log
+
+    d = diagnose([read_log(AUTO)], load_sim_config("iris"))
+    assert "rms_force_n" in next(c for c in d.causes if c.name == "unexplained").params
+    rmse, floor = d.extended.rmse_mps(), d.noise_floor["replay_rmse_mps"]
+    assert rmse > 20 * floor
+    said = [w for w in d.warnings if w.startswith("held-out replay velocity RMSE")]
+    assert len(said) == 1 and f"{rmse:.3f} m/s" in said[0], d.warnings
+    assert d.verdict.count("unexplained") == 1

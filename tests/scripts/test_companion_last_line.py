@@ -4,6 +4,8 @@ steps" for one that never flew a step, and no status said twice."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from companion.runner import FlightOutcome
@@ -31,3 +33,19 @@ from scripts.companion_cli import _summary
 def test_the_last_line_has_only_what_the_flight_did(status, detail, landed_m, ticks, line):
     outcome = FlightOutcome(status, detail, None, landed_m, True, ticks, 1 if ticks else 0)
     assert _summary(outcome) == line
+
+
+def test_the_last_line_gives_the_tracking_error_the_log_holds(tmp_path, capsys):
+    """Flown with and without ``--gp-model``, a flight said nothing of how closely it tracked
+    the reference: the user had to compute it from the logs to see whether the learned model
+    helped. The last line now gives the tracking RMSE over the OFFBOARD rows of its log."""
+    from experiments.study.metrics import tracking_rmse_m
+    from flightlog.reader import read_log
+    from scripts import companion_cli
+
+    mission = Path(__file__).resolve().parents[2] / "missions" / "line_20m.toml"
+    log = tmp_path / "flight.csv"
+    argv = [str(mission), "--link", "inprocess", "--planner", "nmpc", "--log", str(log)]
+    assert companion_cli.main(argv) == 0
+    last = capsys.readouterr().err.strip().splitlines()[-1]
+    assert f"tracking RMSE {tracking_rmse_m(read_log(log)):.3f} m" in last, last

@@ -74,3 +74,54 @@ def test_ctrl_c_during_bench_is_one_line_exit_130_with_the_parts_done():
         "bench: stopped by Ctrl-C; the figures of the parts done are printed"
     )
     assert set(json.loads(out)) == {"sim_realtime_factor"}
+
+
+CTRL_C_WHILE_LOADING = """
+import os, signal, sys
+from importlib.abc import MetaPathFinder
+
+class CtrlCAsTheCommandLoads(MetaPathFinder):
+    def find_spec(self, name, path=None, target=None):
+        if name.startswith("scripts.") and name != "scripts.launch":
+            os.kill(os.getpid(), signal.SIGINT)
+
+sys.meta_path.insert(0, CtrlCAsTheCommandLoads())
+from scripts import launch
+run, sys.argv = getattr(launch, sys.argv[1]), [sys.argv[1], "--help"]
+sys.exit(run())
+"""
+
+
+def _console_scripts() -> dict[str, str]:
+    """pyproject's [project.scripts]: command -> entry point."""
+    import tomllib
+
+    return tomllib.loads((REPO / "pyproject.toml").read_text())["project"]["scripts"]
+
+
+@pytest.mark.parametrize("command", sorted(_console_scripts()))
+def test_ctrl_c_while_a_command_loads_is_one_line(command):
+    """A Ctrl-C in the second or two a command spends loading its libraries was a
+    KeyboardInterrupt traceback through importlib: now one line and exit 130."""
+    entry = _console_scripts()[command]
+    assert entry.startswith("scripts.launch:"), entry
+    proc = subprocess.run(
+        [sys.executable, "-c", CTRL_C_WHILE_LOADING, entry.split(":")[1]],
+        cwd=REPO, capture_output=True, text=True, timeout=120,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )  # fmt: skip
+    assert proc.returncode == 130, proc.stderr
+    assert proc.stderr == f"{command}: stopped by Ctrl-C while starting; nothing done\n"
+
+
+@pytest.mark.parametrize("command", sorted(_console_scripts()))
+def test_every_console_script_reaches_its_command(command, monkeypatch, capsys):
+    from scripts import launch
+
+    monkeypatch.setattr(sys, "argv", [command, "--help"])
+    try:
+        code = getattr(launch, _console_scripts()[command].split(":")[1])()
+    except SystemExit as exc:  # some parsers exit on --help
+        code = exc.code
+    assert code in (0, None)
+    assert capsys.readouterr().out.startswith(f"usage: {command}")

@@ -185,3 +185,15 @@ def test_out_onto_the_log_is_refused_and_the_log_kept(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "is an input being read" in err[0], err
     assert log.read_bytes() == AUTO.read_bytes()
+
+
+def test_a_vehicle_that_is_no_quadrotor_is_said_to_fly_as_the_presets_rotors(tmp_path, capsys):
+    """The real coaxial octocopter: its config flies iris's 4 rotors. That was only inside
+    'rotor geometry ... from preset iris', which reads the same for a quadrotor's log."""
+    out = tmp_path / "octo.toml"
+    log = FIXTURES / "octo_altctl_v1_14.ulg"
+    assert vehicle_sim_cli.main(["config-from-log", str(log), "--out", str(out)]) == 0
+    said = "rotors: the log's vehicle (octorotor) flies as the 4 rotors of preset 'iris'"
+    assert said in capsys.readouterr().err and said in out.read_text()
+    assert vehicle_sim_cli.main(["config-from-log", str(AUTO), "--out", str(out)]) == 0
+    assert "rotors: the log's vehicle" not in capsys.readouterr().err  # a quadrotor's

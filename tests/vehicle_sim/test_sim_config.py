@@ -156,3 +156,22 @@ def test_the_sim_backend_key_names_the_physics_backend(tmp_path):
     assert config.backend == "jsbsim" and BACKEND_NAMES == ("builtin", "jsbsim")
     with pytest.raises(SimConfigError, match=r"sim\.backend = 'JSBSim' is unknown; choose one of"):
         replace(config, backend="JSBSim")
+
+
+def test_a_flight_log_or_a_binary_file_given_as_the_config_is_one_line_with_the_fix(tmp_path):
+    """diagnose LOG --sim-config LOG (the arguments swapped) raised a UnicodeDecodeError
+    traceback for a .ulg and called a CSV log 'not valid TOML; fix the syntax'."""
+    ulog = Path(__file__).resolve().parents[1] / "fixtures" / "ulog" / "quad_posctl_v1_15.ulg"
+    csv = tmp_path / "flight.csv"
+    csv.write_text("t_s,pos_n_m\n0.0,1.0\n")
+    for log in (ulog, csv):
+        with pytest.raises(SimConfigError) as exc:
+            load_sim_config(log)
+        assert str(exc.value) == (
+            f"{log}: a flight log, not a sim config; make a config from it with "
+            f"vehicle-sim config-from-log {log} --out my_vehicle.toml"
+        )
+    binary = tmp_path / "vehicle.toml"
+    binary.write_bytes(ulog.read_bytes()[:4096])
+    with pytest.raises(SimConfigError, match=r"a binary file, not a config TOML; use one of "):
+        load_sim_config(binary)
