@@ -2,14 +2,12 @@
 
 A simulated vehicle of the config (a copy of a hovering template) follows each log: at every
 row it is put into the measured state (``Simulator.anchor``) while its flight control runs on the
-logged setpoint, so its controller state (velocity integral, delayed setpoints in flight, rotor
-speeds, yaw setpoint) builds up as the measured vehicle's did; over the first ``LEAD_IN_S`` of
-each airborne run (the warm-up) the integral is read off the measured thrust at every row, and
-at its end the integral is set from all of them, past the attitude lag (:mod:`.warm_up`: one
-noisy row's integral would stay in every window of the run, and a vehicle already accelerating
-shows its lag as an integral); windows start after that. At each window's anchor row a copy
-of it flies free for ``window_s`` on the logged setpoints; the error is simulated minus measured
-velocity.
+logged setpoint, so its controller state (velocity and rate integrals, delayed setpoints in
+flight, rotor speeds, yaw setpoint) builds up as the measured vehicle's did, from the velocity
+integral the vehicle had at the start of each airborne run, fitted to the run's first
+``LEAD_IN_S`` (the warm-up, :mod:`.warm_up`); windows start after that. At each window's anchor
+row a copy of it flies free for ``window_s`` on the logged setpoints; the error is simulated
+minus measured velocity.
 """
 
 from __future__ import annotations
@@ -23,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from diagnosis import sim_anchor
-from diagnosis.warm_up import LEAD_IN_S, integral_offset, smoothed_jerk
+from diagnosis.warm_up import LEAD_IN_S, start_integral
 from flightlog.schema import FlightLog
 from vehicle_sim import AnchorState, SimConfig, VelocitySetpoint
 
@@ -164,22 +162,21 @@ def _flown_windows(
             if not any(run_start <= anchor < run_stop for anchor in mine):
                 continue
             follower = sim_anchor.fresh_copy(template)
-            follower.anchor(a.anchor(run_start, lead=False), integral="reset")
-            lead_end = a.t[run_start] + LEAD_IN_S
+            first = a.anchor(run_start, lead=True)
+            follower.anchor(first, integral="reset")
+            follower.set_velocity_setpoint(a.setpoint[run_start])
+            lead_stop = int(np.searchsorted(a.t, a.t[run_start] + LEAD_IN_S))
+            warm_up = slice(run_start, lead_stop)
+            follower.set_velocity_integral(
+                start_integral(
+                    follower, first, a.t[run_start : lead_stop + 1], a.setpoint[warm_up],
+                    a.state[run_start + 1 : lead_stop + 1, 3:6],
+                )
+            )  # fmt: skip
             last = max(w.stop for w in wins if w.log_index == i and w.anchor < run_stop)
-            diffs, jerks = [], []
             for j in range(run_start, last):
-                lead = a.t[j] < lead_end
-                if not lead and diffs:  # the warm-up's end: its integral, past the lag
-                    offset, _ = integral_offset(np.array(diffs), np.array(jerks))
-                    follower.set_velocity_integral(follower.velocity_integral_mps2 + offset)
-                    diffs = []
                 follower.set_velocity_setpoint(a.setpoint[j])
-                if lead and a.thrust[j] > 0.0:
-                    diffs.append(sim_anchor.matched_minus_carried(follower, a.anchor(j, lead)))
-                    jerks.append(a.jerk[j])
-                else:
-                    follower.anchor(a.anchor(j, lead), integral="keep")
+                follower.anchor(a.anchor(j, lead=j < lead_stop), integral="keep")
                 if j in mine:
                     k, w = mine[j]
                     free = sim_anchor.fresh_copy(follower)
@@ -217,7 +214,6 @@ class LogArrays:
         ]
         self.thrust = log["thrust_n"] if log.has("thrust_n") else np.zeros(n)
         self.acc = log.stack(*ACC_COLUMNS) if log.has(*ACC_COLUMNS) else np.zeros((n, 3))
-        self.jerk = smoothed_jerk(self.t, self.acc)
         self._anchors: dict[tuple[int, bool], AnchorState] = {}
         self._noisy: dict[tuple[float, ...], LogArrays] = {}
 

@@ -2,9 +2,8 @@
 
 A hovering OFFBOARD template of the config is copied for each airborne run and each replay
 window; the copies are put into measured states with the simulator's public
-``Simulator.anchor`` (position, velocity, attitude, rates, rotor thrust and, while the
-controller warms up, the velocity-loop integral that reproduces the measured thrust vector:
-:func:`matched_minus_carried`, fitted over the warm-up by :mod:`.warm_up`).
+``Simulator.anchor`` (position, velocity, attitude, rates, rotor thrust; the velocity-loop
+integral a run starts with is fitted by :mod:`.warm_up`).
 """
 
 from __future__ import annotations
@@ -12,9 +11,7 @@ from __future__ import annotations
 import copy
 from functools import lru_cache
 
-import numpy as np
-
-from vehicle_sim import AnchorState, FlightMode, SimConfig, Simulator, VelocitySetpoint
+from vehicle_sim import FlightMode, SimConfig, Simulator, VelocitySetpoint
 
 TEMPLATE_ALT_M = 5.0
 TEMPLATES_KEPT = 16  # configs whose template is kept (a diagnosis replays a few again and again)
@@ -45,14 +42,3 @@ def hovering_template(config: SimConfig) -> Simulator:
 def fresh_copy(template: Simulator) -> Simulator:
     """An independent copy of ``template``."""
     return copy.deepcopy(template)
-
-
-def matched_minus_carried(sim: Simulator, state: AnchorState) -> np.ndarray:
-    """(3,) [m/s^2] the velocity-loop integral the measured thrust vector of ``state`` implies
-    (``Simulator.anchor``'s ``integral="match_thrust"``) minus the one ``sim`` carries; ``sim``
-    is left anchored at ``state`` with its carried integral (:mod:`.warm_up` fits these)."""
-    carried = np.array(sim.velocity_integral_mps2, dtype=float)
-    sim.anchor(state, integral="match_thrust")
-    matched = np.array(sim.velocity_integral_mps2, dtype=float)
-    sim.set_velocity_integral(carried)
-    return matched - carried

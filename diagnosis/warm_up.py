@@ -1,66 +1,80 @@
-"""The autopilot's velocity integral at the end of a replay's warm-up, read past the attitude lag.
+"""The autopilot's velocity integral at the start of a replay's airborne run, by output error.
 
-During a replay's warm-up (the first ``LEAD_IN_S`` of an airborne run) the integral is read off
-each row's measured thrust vector by inverting the velocity loop
-(``Simulator.anchor``'s ``integral="match_thrust"``), which assumes the attitude is the one the
-loop commands. While the commanded acceleration changes, the attitude lags it, and the
-inversion returns that lag as an integral: matched minus true is about -lag x the rate of
-change of the acceleration (the jerk). A companion mission starts moving as OFFBOARD starts: on
-the project's square mission, flown in process and diagnosed against the very config that flew
-it, the plain mean over the warm-up gave an integral 0.3-0.4 m/s^2 off, kept for the whole run:
-held-out replay error 0.336 m/s, 4168x the noise floor, verdict "unexplained" (the S-curve and
-the demo B-spline, flown by the PD regulator, were called unexplained too).
+A replay's follower carries the velocity loop's integral from the run's first row, integrating
+the measured velocity errors as the measured vehicle's loop did; what it cannot know is the
+integral the vehicle already had there (it hovered against a payload, a wind, or had started
+accelerating). That start integral c (3,) is fitted to the run's first ``LEAD_IN_S`` (the
+warm-up, never part of a replay window): copies of the vehicle fly free from the first row on
+the logged setpoints with c = 0 and with each axis of c perturbed, and the c that best explains
+the measured velocities is solved for by linear least squares, together with the first row's
+velocity error dv0 (3,) (its noise would otherwise be read as an integral: a constant
+acceleration error and a decaying start error leave different traces).
 
-So per row j of the warm-up the follower (re-anchored at every row, its integral carried by the
-loop's own integration from the run's start) gives d_j = matched_j - carried_j, and
-
-    d_j = c - lag jerk_j + noise          (c (3,) per axis, lag [s] shared by north and east)
-
-is fitted by least squares; the integral at the end of the warm-up is the carried one plus c.
-The lag is the tilt's, so it is fitted and applied on the horizontal axes only: vertically the
-thrust follows through the motors alone, and there a config of the wrong mass leaves a
-mismatch between matched and carried that a vertical lag term would take up (a payload of 1.35
-was then also read as a thrust curve).
-The jerk is the measured acceleration's, smoothed over ``SMOOTH_S``. With no jerk to speak of
-(a hover) the fit is the mean of d_j ([Kulathunga23]-style logs, and the earlier rule: one noisy
-row's integral would otherwise stay in every window of the run); noise in the jerk only pulls
-the lag towards 0, and the lag is kept within [0, ``MAX_LAG_S``].
+This replaced reading the integral off each warm-up row's thrust vector by inverting the
+velocity loop, which takes the attitude as the one the loop commands: while the commanded
+acceleration changes, the attitude lags it (second order, through the rate loop), and no lag
+term fitted it well enough. On the project's own line and square missions flown by the NMPC
+in process and diagnosed against the very config that flew them, the integral came out
+0.03 m/s^2 off for the whole run, the follower's rate integral wound up on it, and the held-out
+replay error was 0.067 and 0.093 m/s, 700-900x the noise floor: "unexplained", and on the square
+a command delay named that was not there. By output error: 0.0003 m/s on both. It also needs no
+thrust, which MAVLink telemetry does not carry.
 """
 
 from __future__ import annotations
 
+import copy
+from collections.abc import Sequence
+from dataclasses import replace
+
 import numpy as np
 
+from vehicle_sim import AnchorState, Simulator, VelocitySetpoint
+
 LEAD_IN_S = 1.0
-SMOOTH_S = 0.2
-MAX_LAG_S = 0.5
+_STEP_MPS2 = 0.1  # integral perturbation of the finite differences [m/s^2]
+_STEP_MPS = 0.1  # start-velocity perturbation of the finite differences [m/s]
 
 
-def smoothed_jerk(t_s: np.ndarray, acc_mps2: np.ndarray) -> np.ndarray:
-    """(n, 3) rate of change [m/s^3] of the acceleration (n, 3) [m/s^2] logged at times t_s (n,)
-    [s]: a centred moving average over ``SMOOTH_S``, then its centred difference over the same
-    span (rows near the ends use what they have)."""
-    n = len(t_s)
-    lo = np.searchsorted(t_s, t_s - 0.5 * SMOOTH_S)
-    hi = np.searchsorted(t_s, t_s + 0.5 * SMOOTH_S, side="right")
-    csum = np.vstack([np.zeros((1, 3)), np.cumsum(acc_mps2, axis=0)])
-    smooth = (csum[hi] - csum[lo]) / np.maximum(hi - lo, 1)[:, None]
-    ahead = np.minimum(np.searchsorted(t_s, t_s + 0.5 * SMOOTH_S), n - 1)
-    span = np.maximum(t_s[ahead] - t_s[lo], 1e-9)[:, None]
-    return (smooth[ahead] - smooth[lo]) / span
+def start_integral(
+    start: Simulator,
+    first: AnchorState,
+    t_s: np.ndarray,
+    setpoints: Sequence[VelocitySetpoint],
+    meas_vel_ned_mps: np.ndarray,
+) -> np.ndarray:
+    """(3,) NED [m/s^2] the velocity-loop integral at the warm-up's first row.
 
-
-def integral_offset(diffs: np.ndarray, jerks: np.ndarray) -> tuple[np.ndarray, float]:
-    """(c (3,) [m/s^2], lag [s]) of the fit in the module docstring.
+    The vehicle's response is linear enough in both unknowns over a second that one finite
+    difference per unknown (7 free flights of the warm-up) and one least-squares solve do.
 
     Args:
-        diffs: (n, 3) matched minus carried integral per warm-up row, NED [m/s^2], n >= 1.
-        jerks: (n, 3) the rows' smoothed jerk, NED [m/s^3] (the down axis is not used).
+        start: the vehicle anchored at ``first`` (the warm-up's first row) with that row's
+            setpoint given; left unchanged (copies fly).
+        first: the first row's measured state.
+        t_s: (m + 1,) times of the m warm-up rows and of the row after them [s].
+        setpoints: the m warm-up rows' logged setpoints.
+        meas_vel_ned_mps: (m, 3) measured velocity NED [m/s] of the m rows after the first,
+            which the copies' velocity after each row's interval is compared with.
     """
-    d = diffs[:, :2] - diffs[:, :2].mean(axis=0)
-    j = jerks[:, :2] - jerks[:, :2].mean(axis=0)
-    den = float(np.sum(j * j))
-    lag = 0.0 if den <= 1e-12 else float(np.clip(-np.sum(d * j) / den, 0.0, MAX_LAG_S))
-    offset = diffs.mean(axis=0)
-    offset[:2] += lag * jerks[:, :2].mean(axis=0)
-    return offset, lag
+
+    def fly(integral: np.ndarray, dv0: np.ndarray) -> np.ndarray:
+        free = copy.deepcopy(start)
+        free.set_velocity_integral(integral)
+        if dv0.any():
+            free.anchor(replace(first, vel_ned_mps=np.add(first.vel_ned_mps, dv0)))
+        out = []
+        for r, setpoint in enumerate(setpoints):
+            if r > 0:
+                free.set_velocity_setpoint(setpoint)
+            free.advance(t_s[r + 1] - t_s[r])
+            out.append(free.vel_ned_mps)
+        return np.array(out)
+
+    zero = np.zeros(3)
+    nominal = fly(zero, zero)
+    columns = [(fly(_STEP_MPS2 * e, zero) - nominal) / _STEP_MPS2 for e in np.eye(3)]
+    columns += [(fly(zero, _STEP_MPS * e) - nominal) / _STEP_MPS for e in np.eye(3)]
+    jac = np.stack(columns, axis=-1).reshape(-1, 6)
+    solution, *_ = np.linalg.lstsq(jac, (meas_vel_ned_mps - nominal).reshape(-1), rcond=None)
+    return solution[:3]
