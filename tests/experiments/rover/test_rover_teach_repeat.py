@@ -84,6 +84,24 @@ def test_the_path_file_round_trips_and_bad_files_are_one_line(tmp_path: Path) ->
         assert message in text and str(f) in text and "\n" not in text, (name, text)
 
 
+def test_a_path_file_keeps_vertices_to_the_millimetre_and_refuses_swapped_columns(
+    tmp_path: Path,
+) -> None:
+    """The rows are the vertices in metres to better than a millimetre (a resampled path read
+    back lies where it was taught); a header naming the columns in another order (y_m,x_m,
+    which would mirror the path about x = y) or in other units (feet) is refused."""
+    path = TaughtPath.from_csv_text("0,0\n1.23456,0.654321\n2.5,1.0\n")
+    rows = np.array(
+        [[float(v) for v in line.split(",")] for line in path_csv_text(path).splitlines()[1:]]
+    )
+    assert np.abs(rows - path.xy_m).max() < 1e-3
+    for header in ("y_m,x_m", "x_ft,y_ft"):
+        other = tmp_path / "other.csv"
+        other.write_text(f"{header}\n0,0\n1,0\n2,0\n")
+        with pytest.raises(PathFileError, match="expected the header 'x_m,y_m'"):
+            read_path_file(other)
+
+
 def test_repeating_a_loop_learns_and_the_experience_file_carries_it_on(tmp_path: Path) -> None:
     """Two trials on the in-process Link: each stores one experience per vertex and speed bin;
     saved and loaded into a fresh GP the bins are the same, and a third trial (a later run)
