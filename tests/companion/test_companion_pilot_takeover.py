@@ -78,6 +78,44 @@ def test_a_takeover_soon_after_offboard_is_handed_over_at_once() -> None:
     _take_over_in_process("POSCTL", 0.5)
 
 
+class PilotAtTheSwitchLink(CountingInProcessLink):
+    """The pilot switches to POSCTL the instant the vehicle enters OFFBOARD, so telemetry
+    never shows OFFBOARD; counting starts then."""
+
+    def __init__(self, sim: Simulator) -> None:
+        super().__init__(sim)
+        self._pilot_sim = sim
+
+    def start_offboard(self):
+        outcome = super().start_offboard()
+        if outcome.accepted:
+            assert self._pilot_sim.set_mode(FlightMode.POSCTL).accepted
+            self.counting = True
+        return outcome
+
+
+def test_a_vehicle_that_never_reports_offboard_is_handed_over_after_the_grace() -> None:
+    """A vehicle that accepted OFFBOARD but reports another mode for longer than the grace
+    the runner allows telemetry (offboard_grace_s, 2.5 s) is someone else's: the companion
+    hands it over saying so, and neither holds nor lands it."""
+    sim = Simulator(load_sim_config("iris"), seed=5)
+    link = PilotAtTheSwitchLink(sim)
+    mission = load_mission(LINE)
+    outcome = fly_mission(
+        link,
+        make_planner("pd", 3.0),
+        reference_of(mission),
+        mission,
+        RunnerConfig(),
+        lambda _tick: None,
+        lambda _m: None,
+    )
+    assert outcome.status == "handed_over", outcome.detail
+    assert outcome.detail.startswith("the vehicle never reported OFFBOARD (it reports POSCTL")
+    assert "hold" not in link.sent_after and "land" not in link.sent_after
+    assert sim.state.mode is FlightMode.POSCTL
+
+
 def _take_over_in_process(mode: str, after_s: float) -> None:
     """Fly LINE in process; ``after_s`` of following in OFFBOARD, the pilot switches to
     ``mode``: the companion hands over and sends nothing more."""
