@@ -101,15 +101,7 @@ def test_a_vehicle_that_never_reports_offboard_is_handed_over_after_the_grace() 
     sim = Simulator(load_sim_config("iris"), seed=5)
     link = PilotAtTheSwitchLink(sim)
     mission = load_mission(LINE)
-    outcome = fly_mission(
-        link,
-        make_planner("pd", 3.0),
-        reference_of(mission),
-        mission,
-        RunnerConfig(),
-        lambda _tick: None,
-        lambda _m: None,
-    )
+    outcome = fly_quietly(link, mission)
     assert outcome.status == "handed_over", outcome.detail
     assert outcome.detail.startswith("the vehicle never reported OFFBOARD (it reports POSCTL")
     assert "hold" not in link.sent_after and "land" not in link.sent_after
@@ -319,6 +311,35 @@ def test_a_pilot_switch_during_the_climb_is_handed_over_too() -> None:
     assert outcome.status == "handed_over", outcome.detail
     assert outcome.detail.startswith("pilot took control in POSCTL at t=")
     assert link.sent_after == [] and sim.state.mode is FlightMode.POSCTL
+
+
+def test_a_pilot_switch_during_the_start_hold_is_handed_over_and_never_switched_back() -> None:
+    """Climbed and holding, the companion streams zero setpoints before asking for OFFBOARD;
+    a pilot who switches to POSCTL then has the vehicle: the companion hands over and never
+    asks for OFFBOARD (which would take the vehicle back from the pilot)."""
+    sim = Simulator(load_sim_config("iris"), seed=5)
+    mission = load_mission(LINE)
+
+    class PilotDuringTheHold(CountingInProcessLink):
+        offboard_asked = False
+
+        def send_velocity(self, command: VelocityCommand) -> None:
+            super().send_velocity(command)
+            if sim.state.mode is FlightMode.HOLD and not self.counting:
+                assert sim.set_mode(FlightMode.POSCTL).accepted
+                self.counting = True
+
+        def start_offboard(self):
+            self.offboard_asked = True
+            return super().start_offboard()
+
+    link = PilotDuringTheHold(sim)
+    outcome = fly_quietly(link, mission)
+    assert outcome.status == "handed_over", outcome.detail
+    assert outcome.detail.startswith("pilot took control in POSCTL at t=")
+    assert not link.offboard_asked
+    assert "hold" not in link.sent_after and "land" not in link.sent_after
+    assert sim.state.mode is FlightMode.POSCTL
 
 
 STICKS_FORWARD_S = 3.0  # the pilot pushes forward this long, then centres and keeps sending
