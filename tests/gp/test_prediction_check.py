@@ -84,6 +84,33 @@ def test_a_model_without_a_residual_starts_its_integrator_at_zero():
     np.testing.assert_array_equal(start[others], x[others])
 
 
+def test_a_rollouts_previous_velocity_is_measured_until_it_has_predicted_it():
+    """The previous velocity ``lag`` = 3 rows back of rollouts from rows 10 and 20 of a log
+    whose north velocity is its row number: before step h it is the velocity at row k0 + h - 3,
+    measured for h <= 3 (rows 7, 17 at h = 0; rows 10, 20, the starts, at h = 3), then the
+    rollout's own prediction (after step h - 4)."""
+    from gp.prediction_check import _History
+    from planners.nominal_models import HISTORY_STATES
+    from planners.velocity_history import with_velocity_history
+
+    rec = FlightLogRecorder({"source": "synthetic"})
+    for k in range(40):
+        vel = np.array([float(k), 0.0, 0.0])
+        rec.append(level_flight_row(k * 0.02, np.zeros(3), vel, vel))
+    model = with_velocity_history(first_order_lag(0.3))
+    history = _History(model, rec.to_log(), np.array([10, 20]), 3)
+    prev_n = model.state_names.index(HISTORY_STATES[0])
+    vel_n = model.state_names.index("vel_n_mps")
+    x = np.zeros((model.nx, 2))
+    seen = []
+    for h in range(5):
+        x = history.fill(x, h)
+        seen.append(list(x[prev_n]))
+        x[vel_n] = [-1.0 - h, -101.0 - h]  # the rollout's prediction after step h
+        history.append(x)
+    assert seen == [[7, 17], [8, 18], [9, 19], [10, 20], [-1, -101]]
+
+
 def test_split_logs_holds_out_whole_logs_or_each_log_tail(hidden_plant_logs):
     train, held = split_logs(hidden_plant_logs, 0.25)
     assert len(train) == 4 and len(held) == 1
