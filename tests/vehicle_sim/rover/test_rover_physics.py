@@ -96,6 +96,20 @@ def test_an_ackermann_robot_steers_no_further_than_its_limit() -> None:
     assert st.yaw_rate_radps == pytest.approx(1.0 * math.tan(0.6) / 2.0, rel=0.01)
 
 
+def test_an_ackermann_robot_braking_turns_no_faster_than_commanded() -> None:
+    """[Ostafew16] eq. 32 inverted, delta = atan(L omega / v), on the speed the wheels still
+    have: braking from 1 m/s to a stop with 0.1 rad/s commanded, the DMRV never turns faster
+    than 0.1 rad/s (steering for the commanded stop speed would steer as if at the 0.2 m/s
+    floor, five times too hard)."""
+    sim = RoverSim(rover_preset("dmrv_600kg"))
+    sim.arm()
+    sim.set_setpoint(1.0, 0.0)
+    sim.step(20.0)
+    sim.set_setpoint(0.0, 0.1)
+    rates = [sim.step(0.01).yaw_rate_radps for _ in range(400)]
+    assert 0.0 < max(rates) <= 0.1
+
+
 def test_terrain_effects_by_hand() -> None:
     """Each effect's formula at hand-picked states.
 
