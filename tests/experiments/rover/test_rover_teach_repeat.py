@@ -149,6 +149,11 @@ def test_an_experience_file_refuses_another_path_and_damage(tmp_path: Path) -> N
     other = TaughtPath.from_segments([(5.0, 0.0)])
     with pytest.raises(ExperienceFileError, match="learned on another path"):
         load_experience(f, learner.make_history_gp(), other)
+    # as many vertices, but the path moved 0.5 m: its vertex indices mean other places
+    shifted = TaughtPath(path.xy_m + [0.5, 0.0], spacing_m=path.spacing_m)
+    assert len(shifted) == len(path)
+    with pytest.raises(ExperienceFileError, match="learned on another path"):
+        load_experience(f, learner.make_history_gp(), shifted)
     damaged = tmp_path / "damaged.npz"
     damaged.write_bytes(f.read_bytes()[:200])
     not_npz = tmp_path / "notes.npz"
@@ -159,7 +164,38 @@ def test_an_experience_file_refuses_another_path_and_damage(tmp_path: Path) -> N
     np.savez(tmp_path / "foreign.npz", weights=np.zeros(3))
     with pytest.raises(ExperienceFileError, match="lacks"):
         load_experience(tmp_path / "foreign.npz", learner.make_history_gp(), path)
+    with np.load(f) as npz:
+        arrays = {k: npz[k] for k in npz.files}
+    arrays["disturbance"] = np.full_like(arrays["disturbance"], np.nan)
+    np.savez(tmp_path / "nan.npz", **arrays)
+    with pytest.raises(ExperienceFileError, match="damaged"):
+        load_experience(tmp_path / "nan.npz", learner.make_history_gp(), path)
+    finer = learner.make_history_gp(replace(learner.PAPER_BINS, speed_bin_mps=0.1))
+    with pytest.raises(ExperienceFileError, match="kept with other experience bins"):
+        load_experience(f, finer, path)
     assert load_experience(tmp_path / "none.npz", learner.make_history_gp(), path).trials_done == 0
+
+
+def test_an_experience_file_gives_every_experience_back_in_its_own_bin(tmp_path: Path) -> None:
+    """Saved and loaded, each experience is in the vertex and speed bin it was kept in, for
+    bins of 0.05 m/s too, where bin 43 (2.15-2.20 m/s) read back at its lower edge 43 x 0.05
+    would land in bin 42 by rounding; the trials driven and the schedule come back too, a
+    schedule only when it gives one speed per vertex."""
+    path = TaughtPath.from_segments([(5.0, 0.0)])
+    bins = replace(learner.PAPER_BINS, speed_bin_mps=0.05)
+    gp = learner.make_history_gp(bins)
+    for vertex, speed in ((3, 2.16), (4, 0.52), (5, 1.01)):
+        gp.add(vertex, speed, np.full(8, float(vertex)), np.full(3, speed))
+    f = tmp_path / "exp.npz"
+    schedule = np.linspace(0.4, 0.8, len(path))
+    save_experience(f, gp, path, 7, schedule)
+    again = learner.make_history_gp(bins)
+    memory = load_experience(f, again, path)
+    assert [(v, b) for v, b, _, _ in again.stored()] == [(3, 43), (4, 10), (5, 20)]
+    assert memory.trials_done == 7 and np.array_equal(memory.schedule_mps, schedule)
+    # a schedule that does not give one speed per vertex is not flown
+    save_experience(f, gp, path, 7, schedule[:3])
+    assert load_experience(f, learner.make_history_gp(bins), path).schedule_mps is None
 
 
 def _free_port() -> int:
