@@ -21,7 +21,7 @@ from experiments.rover.experience_file import (
     save_experience,
 )
 from experiments.rover.link_drive import drive_path
-from experiments.rover.repeat import is_loop, repeat_path
+from experiments.rover.repeat import is_loop, repeat_path, start_offset
 from experiments.rover.teach import TeachError, record_teach
 from planners.rover.path import TaughtPath
 from planners.rover.path_file import PathFileError, path_csv_text, read_path_file
@@ -196,6 +196,40 @@ def test_an_experience_file_gives_every_experience_back_in_its_own_bin(tmp_path:
     # a schedule that does not give one speed per vertex is not flown
     save_experience(f, gp, path, 7, schedule[:3])
     assert load_experience(f, learner.make_history_gp(bins), path).schedule_mps is None
+
+
+def test_a_loop_ends_where_it_starts_facing_the_way_it_started() -> None:
+    """A loop's end is the next trial's start, within 1 m and 0.5 rad: a full circle of 1.5 m
+    radius is one; a U-turn (2 m out, a half circle of 0.4 m radius, 2 m back) ends about 0.8 m
+    from its start but facing back, so it is not."""
+    assert is_loop(TaughtPath.from_segments([(math.pi * 3.0, 1 / 1.5)]))
+    u_turn = TaughtPath.from_segments([(2.0, 0.0), (math.pi * 0.4, 1 / 0.4), (2.0, 0.0)])
+    assert np.hypot(*(u_turn.xy_m[-1] - u_turn.xy_m[0])) == pytest.approx(0.8, abs=0.05)
+    assert not is_loop(u_turn)
+
+
+def test_a_rover_at_the_start_facing_away_is_not_at_the_start() -> None:
+    """The rover (at the origin, facing along x) on the first vertex of a path that starts
+    facing -x is pi rad off its heading, past the 0.5 rad start tolerance: without a drive
+    back the run stops before the first trial, saying so."""
+    path = TaughtPath.from_segments([(5.0, 0.0)], start=(0.0, 0.0, math.pi))
+    link = InProcessRoverLink.from_preset("husky_50kg")
+    link.connect(1.0)
+    out = repeat_path(link, path, 1, learner.make_history_gp(), np.full(len(path), 0.5))
+    assert out.status == "not_at_start" and out.trials == []
+    assert "0.0 m from the path's start" in out.detail and "3.14 rad off" in out.detail
+
+
+def test_the_start_heading_error_is_the_short_way_round() -> None:
+    """A rover facing 3.0 rad on a path that starts facing -3.0 rad is 2 pi - 6 = 0.283 rad
+    off, within the start tolerance, not 6 rad."""
+    sim = RoverSim(rover_preset("husky_50kg"), pose=(0.0, 0.0, 3.0))
+    link = InProcessRoverLink(sim, {"rover_preset": "husky_50kg", "seed": 0})
+    link.connect(1.0)
+    path = TaughtPath.from_segments([(5.0, 0.0)], start=(0.0, 0.0, -3.0))
+    dist, dhead = start_offset(link, path)
+    assert dist == pytest.approx(0.0, abs=1e-9)
+    assert dhead == pytest.approx(2 * math.pi - 6.0)
 
 
 def _free_port() -> int:
