@@ -15,12 +15,13 @@ import pytest
 from companion.inprocess_rover_link import InProcessRoverLink
 from companion.pymavlink_link import PymavlinkLink
 from experiments.rover import learner
+from experiments.rover.drive_back import drive_back
 from experiments.rover.experience_file import (
     ExperienceFileError,
     load_experience,
     save_experience,
 )
-from experiments.rover.link_drive import drive_path
+from experiments.rover.link_drive import drive_path, pose_of
 from experiments.rover.repeat import is_loop, repeat_path, start_offset
 from experiments.rover.teach import TeachError, record_teach
 from planners.rover.path import TaughtPath
@@ -230,6 +231,28 @@ def test_the_start_heading_error_is_the_short_way_round() -> None:
     dist, dhead = start_offset(link, path)
     assert dist == pytest.approx(0.0, abs=1e-9)
     assert dhead == pytest.approx(2 * math.pi - 6.0)
+
+
+def test_drive_back_gets_to_the_pose_and_holds() -> None:
+    """From the origin facing x, back to (3, 1) m facing +y (pi/2 rad): the rover turns,
+    drives, turns and holds there, within a few centimetres and hundredths of a radian
+    (ARRIVED_M 0.05 m, ALIGNED_RAD 0.05 rad, plus what it coasts once stopped), never
+    commanding a turn faster than max_turn_radps (0.4 rad/s here)."""
+    turns: list[float] = []
+
+    class Recording(InProcessRoverLink):
+        def send_velocity(self, command) -> None:
+            turns.append(command.yaw_rate_radps)
+            super().send_velocity(command)
+
+    link = Recording(RoverSim(rover_preset("husky_50kg")), {"rover_preset": "husky_50kg"})
+    link.connect(1.0)
+    assert drive_back(link, (3.0, 1.0, math.pi / 2), 0.5, 0.4, timeout_s=60.0) == ("", "")
+    assert max(abs(w) for w in turns) == pytest.approx(0.4)  # max_turn_radps, reached
+    x, y, heading = pose_of(link)
+    assert math.hypot(x - 3.0, y - 1.0) < 0.08
+    assert abs(heading - math.pi / 2) < 0.08
+    assert link.read_state().mode == "HOLD"
 
 
 def _free_port() -> int:
