@@ -255,6 +255,32 @@ def test_drive_back_gets_to_the_pose_and_holds() -> None:
     assert link.read_state().mode == "HOLD"
 
 
+def test_drive_back_yields_to_a_pilot_who_takes_the_rover_out_of_offboard() -> None:
+    """A pilot switches the rover to Hold after 20 commands of the drive back: the drive ends
+    at once, naming the mode, and sends nothing more (no stop, no further setpoint)."""
+
+    class PilotAfterTwenty(InProcessRoverLink):
+        sent = 0
+        after = 0
+
+        def send_velocity(self, command) -> None:
+            if self.sent >= 20:
+                self.after += 1
+            self.sent += 1
+            super().send_velocity(command)
+            if self.sent == 20:
+                InProcessRoverLink.hold(self)  # the pilot's switch, not the drive's
+
+        def hold(self):
+            self.after += 1
+            return super().hold()
+
+    link = PilotAfterTwenty(RoverSim(rover_preset("husky_50kg")), {"rover_preset": "husky_50kg"})
+    link.connect(1.0)
+    assert drive_back(link, (3.0, 1.0, math.pi / 2), 0.5, timeout_s=60.0) == ("HOLD", "")
+    assert link.after == 0
+
+
 def _free_port() -> int:
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
         s.bind(("127.0.0.1", 0))
