@@ -23,7 +23,7 @@ from experiments.rover.experience_file import (
 )
 from experiments.rover.link_drive import drive_path, pose_of
 from experiments.rover.repeat import is_loop, repeat_path, start_offset
-from experiments.rover.teach import TeachError, record_teach
+from experiments.rover.teach import HandedOver, TeachError, record_teach
 from planners.rover.path import TaughtPath
 from planners.rover.path_file import PathFileError, path_csv_text, read_path_file
 from planners.rover.speed_scheduler import TABLE_I, initial_schedule
@@ -44,6 +44,36 @@ def test_a_scripted_teach_drive_records_the_pattern_resampled_to_the_spacing() -
     assert taught.path.length_m == pytest.approx(length, rel=0.05)
     assert taught.path.spacing_m == pytest.approx(0.5, rel=0.05)
     assert is_loop(taught.path)
+    # LOOP's arcs turn left (curvature > 0) with a 1.5 m radius: in the path frame (x north,
+    # y west) the loop lies left of its first leg along +x, up to 2 x 1.5 m = 3 m to the left
+    y = taught.path.xy_m[:, 1]
+    assert y.min() > -0.05 and y.max() == pytest.approx(3.0, abs=0.1)
+
+
+def test_a_pilot_who_takes_the_rover_out_of_offboard_ends_a_scripted_teach() -> None:
+    """The pilot switches the rover to Hold 20 commands into the scripted teach drive: the
+    teach ends at once saying so, writes no path and sends nothing more."""
+
+    class PilotAfterTwenty(InProcessRoverLink):
+        sent = 0
+        after = 0
+
+        def send_velocity(self, command) -> None:
+            if self.sent >= 20:
+                self.after += 1
+            self.sent += 1
+            super().send_velocity(command)
+            if self.sent == 20:
+                InProcessRoverLink.hold(self)  # the pilot's switch, not the teach's
+
+        def hold(self):
+            self.after += 1
+            return super().hold()
+
+    link = PilotAfterTwenty(RoverSim(rover_preset("husky_50kg")), {"rover_preset": "husky_50kg"})
+    with pytest.raises(HandedOver, match="left OFFBOARD for HOLD during the teach drive"):
+        record_teach(link, drive=LOOP, timeout_s=60.0)
+    assert link.after == 0
 
 
 def test_a_teach_pass_with_too_little_motion_is_refused() -> None:
