@@ -33,6 +33,30 @@ from vehicle_sim.rover.mavlink_rover import RoverMavlinkEndpoint
 LOOP = [(2.0, 0.0), (math.pi * 1.5, 1 / 1.5), (2.0, 0.0), (math.pi * 1.5, 1 / 1.5)]
 
 
+class PilotAfterTwenty(InProcessRoverLink):
+    """The in-process rover whose pilot switches it to Hold after 20 commands; counts what is
+    sent after that (setpoints and holds)."""
+
+    sent = 0
+    after = 0
+
+    def send_velocity(self, command) -> None:
+        if self.sent >= 20:
+            self.after += 1
+        self.sent += 1
+        super().send_velocity(command)
+        if self.sent == 20:
+            InProcessRoverLink.hold(self)  # the pilot's switch, not the program's
+
+    def hold(self):
+        self.after += 1
+        return super().hold()
+
+
+def _pilot_link() -> PilotAfterTwenty:
+    return PilotAfterTwenty(RoverSim(rover_preset("husky_50kg")), {"rover_preset": "husky_50kg"})
+
+
 def _taught_loop() -> TaughtPath:
     return record_teach(InProcessRoverLink.from_preset("husky_50kg"), drive=LOOP).path
 
@@ -54,23 +78,7 @@ def test_a_pilot_who_takes_the_rover_out_of_offboard_ends_a_scripted_teach() -> 
     """The pilot switches the rover to Hold 20 commands into the scripted teach drive: the
     teach ends at once saying so, writes no path and sends nothing more."""
 
-    class PilotAfterTwenty(InProcessRoverLink):
-        sent = 0
-        after = 0
-
-        def send_velocity(self, command) -> None:
-            if self.sent >= 20:
-                self.after += 1
-            self.sent += 1
-            super().send_velocity(command)
-            if self.sent == 20:
-                InProcessRoverLink.hold(self)  # the pilot's switch, not the teach's
-
-        def hold(self):
-            self.after += 1
-            return super().hold()
-
-    link = PilotAfterTwenty(RoverSim(rover_preset("husky_50kg")), {"rover_preset": "husky_50kg"})
+    link = _pilot_link()
     with pytest.raises(HandedOver, match="left OFFBOARD for HOLD during the teach drive"):
         record_teach(link, drive=LOOP, timeout_s=60.0)
     assert link.after == 0
@@ -289,25 +297,24 @@ def test_drive_back_yields_to_a_pilot_who_takes_the_rover_out_of_offboard() -> N
     """A pilot switches the rover to Hold after 20 commands of the drive back: the drive ends
     at once, naming the mode, and sends nothing more (no stop, no further setpoint)."""
 
-    class PilotAfterTwenty(InProcessRoverLink):
-        sent = 0
-        after = 0
-
-        def send_velocity(self, command) -> None:
-            if self.sent >= 20:
-                self.after += 1
-            self.sent += 1
-            super().send_velocity(command)
-            if self.sent == 20:
-                InProcessRoverLink.hold(self)  # the pilot's switch, not the drive's
-
-        def hold(self):
-            self.after += 1
-            return super().hold()
-
-    link = PilotAfterTwenty(RoverSim(rover_preset("husky_50kg")), {"rover_preset": "husky_50kg"})
+    link = _pilot_link()
     link.connect(1.0)
     assert drive_back(link, (3.0, 1.0, math.pi / 2), 0.5, timeout_s=60.0) == ("HOLD", "")
+    assert link.after == 0
+
+
+def test_a_pilot_who_takes_over_during_the_drive_back_ends_the_run_as_handed_over() -> None:
+    """Repeating a path that starts 3 m ahead of the rover, with a drive back: the pilot's
+    switch to Hold during the drive back ends the run as "handed_over", naming the mode, with
+    no trial driven and nothing sent after it."""
+    path = TaughtPath.from_segments([(5.0, 0.0)], start=(3.0, 0.0, 0.0))
+    link = _pilot_link()
+    link.connect(1.0)
+    out = repeat_path(
+        link, path, 1, learner.make_history_gp(), np.full(len(path), 0.5), drive_back_mps=0.5
+    )
+    assert out.status == "handed_over" and out.trials == []
+    assert "left OFFBOARD for HOLD while driving back" in out.detail
     assert link.after == 0
 
 
