@@ -78,6 +78,36 @@ def test_a_takeover_soon_after_offboard_is_handed_over_at_once() -> None:
     _take_over_in_process("POSCTL", 0.5)
 
 
+class PilotAtTheSwitchLink(CountingInProcessLink):
+    """The pilot switches to POSCTL the instant the vehicle enters OFFBOARD, so telemetry
+    never shows OFFBOARD; counting starts then."""
+
+    def __init__(self, sim: Simulator) -> None:
+        super().__init__(sim)
+        self._pilot_sim = sim
+
+    def start_offboard(self):
+        outcome = super().start_offboard()
+        if outcome.accepted:
+            assert self._pilot_sim.set_mode(FlightMode.POSCTL).accepted
+            self.counting = True
+        return outcome
+
+
+def test_a_vehicle_that_never_reports_offboard_is_handed_over_after_the_grace() -> None:
+    """A vehicle that accepted OFFBOARD but reports another mode for longer than the grace
+    the runner allows telemetry (offboard_grace_s, 2.5 s) is someone else's: the companion
+    hands it over saying so, and neither holds nor lands it."""
+    sim = Simulator(load_sim_config("iris"), seed=5)
+    link = PilotAtTheSwitchLink(sim)
+    mission = load_mission(LINE)
+    outcome = fly_quietly(link, mission)
+    assert outcome.status == "handed_over", outcome.detail
+    assert outcome.detail.startswith("the vehicle never reported OFFBOARD (it reports POSCTL")
+    assert "hold" not in link.sent_after and "land" not in link.sent_after
+    assert sim.state.mode is FlightMode.POSCTL
+
+
 def _take_over_in_process(mode: str, after_s: float) -> None:
     """Fly LINE in process; ``after_s`` of following in OFFBOARD, the pilot switches to
     ``mode``: the companion hands over and sends nothing more."""
@@ -289,6 +319,35 @@ def test_a_pilot_switch_during_the_climb_is_handed_over_too() -> None:
     assert outcome.status == "handed_over", outcome.detail
     assert outcome.detail.startswith("pilot took control in POSCTL at t=")
     assert link.sent_after == [] and sim.state.mode is FlightMode.POSCTL
+
+
+def test_a_pilot_switch_during_the_start_hold_is_handed_over_and_never_switched_back() -> None:
+    """Climbed and holding, the companion streams zero setpoints before asking for OFFBOARD;
+    a pilot who switches to POSCTL then has the vehicle: the companion hands over and never
+    asks for OFFBOARD (which would take the vehicle back from the pilot)."""
+    sim = Simulator(load_sim_config("iris"), seed=5)
+    mission = load_mission(LINE)
+
+    class PilotDuringTheHold(CountingInProcessLink):
+        offboard_asked = False
+
+        def send_velocity(self, command: VelocityCommand) -> None:
+            super().send_velocity(command)
+            if sim.state.mode is FlightMode.HOLD and not self.counting:
+                assert sim.set_mode(FlightMode.POSCTL).accepted
+                self.counting = True
+
+        def start_offboard(self):
+            self.offboard_asked = True
+            return super().start_offboard()
+
+    link = PilotDuringTheHold(sim)
+    outcome = fly_quietly(link, mission)
+    assert outcome.status == "handed_over", outcome.detail
+    assert outcome.detail.startswith("pilot took control in POSCTL at t=")
+    assert not link.offboard_asked
+    assert "hold" not in link.sent_after and "land" not in link.sent_after
+    assert sim.state.mode is FlightMode.POSCTL
 
 
 STICKS_FORWARD_S = 3.0  # the pilot pushes forward this long, then centres and keeps sending

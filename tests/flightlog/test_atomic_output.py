@@ -10,8 +10,10 @@ import pytest
 from flightlog.atomic_output import (
     OutputError,
     atomic_output_dir,
+    check_not_an_input,
     check_writable_dir,
     check_writable_file,
+    write_bytes_atomic,
     write_text_atomic,
 )
 
@@ -109,3 +111,26 @@ def test_a_written_file_is_synced_to_disk_before_it_is_renamed_into_place(
     path = write_text_atomic(tmp_path / "path.csv", "x_m,y_m\n")
     assert calls == ["fsync", "replace"]
     assert path.read_text() == "x_m,y_m\n"
+
+
+def test_a_file_that_cannot_be_put_in_place_leaves_no_temporary_behind(tmp_path) -> None:
+    """A folder standing where the file should go: the write fails in one line and the
+    temporary sibling it was filled in is gone, so the folder holds only what it held."""
+    target = tmp_path / "report.json"
+    target.mkdir()
+    with pytest.raises(OutputError, match="report.json"):
+        write_bytes_atomic(target, b"{}")
+    assert list(tmp_path.iterdir()) == [target]
+
+
+def test_an_output_spelled_another_way_is_still_recognised_as_the_input(tmp_path) -> None:
+    """The same file named through another folder (sub/../flight.ulg) or a symbolic link is
+    the input all the same: writing there would replace it."""
+    flight = tmp_path / "flight.ulg"
+    flight.write_bytes(b"ULog")
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "link.ulg").symlink_to(flight)
+    for out in (tmp_path / "sub" / ".." / "flight.ulg", tmp_path / "link.ulg"):
+        with pytest.raises(OutputError, match="is an input being read"):
+            check_not_an_input(out, [flight])
+    check_not_an_input(tmp_path / "other.ulg", [flight])

@@ -2,11 +2,24 @@
 
 import numpy as np
 import pytest
-from gp_synthetic_logs import lag_plant_log
+from gp_synthetic_logs import lag_plant_log, level_flight_row
 
-from gp.prediction_check import Predictor, check_prediction, refusal, split_logs
+from flightlog.schema import FlightLogRecorder
+from gp.prediction_check import (
+    PredictionCheck,
+    Predictor,
+    check_prediction,
+    horizon_prediction_rmse,
+    refusal,
+    split_logs,
+)
 from gp.training import TrainingConfig, train_residual_model
-from planners.nominal_models import first_order_lag, kinematic_4dof
+from planners.nominal_models import (
+    INTEGRATOR_STATES,
+    first_order_lag,
+    kinematic_4dof,
+    px4_velocity_pi,
+)
 
 
 @pytest.fixture(scope="module")
@@ -33,6 +46,69 @@ def test_a_model_that_predicts_worse_is_refused_in_one_line(hidden_plant_logs):
     worse = Predictor("kinematic", kinematic_4dof())
     check = check_prediction(worse, truthish, held, horizon_s=2.0)
     assert not check.passed and "does NOT beat" in check.describe()
+
+
+def test_a_model_that_is_the_truth_predicts_with_no_error_from_every_stride_th_row():
+    """A vehicle cruising at (2, -1, 0) m/s under that very command, 101 rows 0.02 s apart:
+    the kinematic model predicts its position exactly, so the RMSE over a 1 s horizon (50
+    rows, each compared with the row it predicts) is 0; a start k needs rows k+1..k+50, so
+    the starts are rows 0, 5, ..., 50: 11 rollouts."""
+    rec = FlightLogRecorder({"source": "synthetic"})
+    v = np.array([2.0, -1.0, 0.0])
+    for k in range(101):
+        rec.append(level_flight_row(k * 0.02, np.array([0.0, 0.0, -5.0]) + v * k * 0.02, v, v))
+    rmse, starts = horizon_prediction_rmse(
+        Predictor("truth", kinematic_4dof()), [rec.to_log()], 1.0
+    )
+    assert rmse == pytest.approx(0.0, abs=1e-9)
+    assert starts == 11
+
+
+def test_a_candidate_that_only_ties_the_incumbent_does_not_pass():
+    """The candidate passes when its error is strictly below the incumbent's."""
+    tie = PredictionCheck("learned", "nominal", 0.05, 0.05, 2.0, 10)
+    assert not tie.passed and "does NOT beat" in tie.describe()
+    assert PredictionCheck("learned", "nominal", 0.049, 0.05, 2.0, 10).passed
+
+
+def test_a_model_without_a_residual_starts_its_integrator_at_zero():
+    """As the companion plans without a residual (offset-free from 0), the rollouts of a model
+    with an autopilot integrator state and no residual start it at 0; the other states start
+    as measured."""
+    model = px4_velocity_pi()
+    x = np.arange(1.0, model.nx + 1.0)[:, None] * np.ones((1, 3))  # (nx, 3 starts)
+    start = Predictor("pi", model).start_states(x)
+    rows = [i for i, c in enumerate(model.state_names) if c in INTEGRATOR_STATES]
+    assert len(rows) == 3 and np.all(start[rows] == 0.0)
+    others = [i for i in range(model.nx) if i not in rows]
+    np.testing.assert_array_equal(start[others], x[others])
+
+
+def test_a_rollouts_previous_velocity_is_measured_until_it_has_predicted_it():
+    """The previous velocity ``lag`` = 3 rows back of rollouts from rows 10 and 20 of a log
+    whose north velocity is its row number: before step h it is the velocity at row k0 + h - 3,
+    measured for h <= 3 (rows 7, 17 at h = 0; rows 10, 20, the starts, at h = 3), then the
+    rollout's own prediction (after step h - 4)."""
+    from gp.prediction_check import _History
+    from planners.nominal_models import HISTORY_STATES
+    from planners.velocity_history import with_velocity_history
+
+    rec = FlightLogRecorder({"source": "synthetic"})
+    for k in range(40):
+        vel = np.array([float(k), 0.0, 0.0])
+        rec.append(level_flight_row(k * 0.02, np.zeros(3), vel, vel))
+    model = with_velocity_history(first_order_lag(0.3))
+    history = _History(model, rec.to_log(), np.array([10, 20]), 3)
+    prev_n = model.state_names.index(HISTORY_STATES[0])
+    vel_n = model.state_names.index("vel_n_mps")
+    x = np.zeros((model.nx, 2))
+    seen = []
+    for h in range(5):
+        x = history.fill(x, h)
+        seen.append(list(x[prev_n]))
+        x[vel_n] = [-1.0 - h, -101.0 - h]  # the rollout's prediction after step h
+        history.append(x)
+    assert seen == [[7, 17], [8, 18], [9, 19], [10, 20], [-1, -101]]
 
 
 def test_split_logs_holds_out_whole_logs_or_each_log_tail(hidden_plant_logs):

@@ -62,9 +62,23 @@ def test_stick_command_follows_the_parameters() -> None:
     assert cmd.forward_mps == pytest.approx(2.5) and math.degrees(cmd.yaw_rate_radps) == 90.0
 
 
+def test_each_axis_takes_its_own_expo() -> None:
+    """Sticks at 0.55 (x, yaw) and throttle 0.775 are 0.5 past the 0.1 deadzone on every
+    axis; MPC_XY_MAN_EXPO 0 keeps x at 0.5 (5 m/s of 10), MPC_Z_MAN_EXPO 1 makes the throttle
+    0.5^3 = 0.125 (of 3 m/s up), MPC_YAW_EXPO 0.5 makes yaw 0.25 + 0.0625 = 0.3125 (of 150
+    deg/s)."""
+    params = Px4Params({"MPC_XY_MAN_EXPO": 0.0, "MPC_Z_MAN_EXPO": 1.0, "MPC_YAW_EXPO": 0.5})
+    cmd = stick_command(Sticks(0.55, 0.0, 0.775, 0.55), params)
+    assert cmd.forward_mps == pytest.approx(5.0)
+    assert cmd.down_mps == pytest.approx(-0.375)
+    assert math.degrees(cmd.yaw_rate_radps) == pytest.approx(46.875)
+
+
 def test_deadzone_and_expo_by_hand() -> None:
     assert deadzone(0.1, 0.1) == 0.0 and deadzone(-0.55, 0.1) == pytest.approx(-0.5)
     assert expo(0.5, 0.6) == pytest.approx(0.275) and expo(-1.0, 0.6) == -1.0
+    # PX4's math::expo limits its input to [-1, 1] first
+    assert expo(1.5, 0.6) == 1.0 and expo(-2.0, 0.3) == -1.0
 
 
 def test_stick_motion_by_hand() -> None:

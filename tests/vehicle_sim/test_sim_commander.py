@@ -6,7 +6,15 @@ import numpy as np
 import pytest
 
 from tests.vehicle_sim.sim_flying import fly, hovering
-from vehicle_sim import FlightMode, LandedState, Simulator, VelocitySetpoint, load_sim_config
+from vehicle_sim import (
+    FlightMode,
+    LandedState,
+    Simulator,
+    Sticks,
+    VelocitySetpoint,
+    load_sim_config,
+)
+from vehicle_sim.manual_control import CENTRED
 
 
 def new_sim(**params) -> Simulator:
@@ -228,6 +236,36 @@ def test_a_failsafe_holds_for_com_fail_act_t_then_acts_unless_the_pilot_takes_ov
     assert sim.set_mode(FlightMode.POSCTL).accepted  # the pilot takes over within the delay
     sim.step(8.0)
     assert sim.state.mode is FlightMode.POSCTL and sim.state.armed
+
+
+def test_a_pilot_who_moves_the_sticks_during_the_failsafe_hold_cancels_its_action():
+    """As a mode switch does (above), sticks moved past COM_RC_STICK_OV during the
+    COM_FAIL_ACT_T hold (5 s) take the vehicle into POSCTL and the pending landing never
+    runs."""
+    sim = hovering(settle_s=1.0)
+    sim.set_param("COM_OBL_RC_ACT", 4)  # land
+    run_until(sim, lambda s: s.mode is not FlightMode.OFFBOARD, 3.0)
+    assert sim.state.mode is FlightMode.HOLD
+    assert sim.set_sticks(Sticks(0.5, 0.0, 0.5, 0.0))
+    sim.step(0.05)
+    assert sim.state.mode is FlightMode.POSCTL
+    for _ in range(160):  # 8 s of centred sticks
+        sim.set_sticks(CENTRED)
+        sim.step(0.05)
+    assert sim.state.mode is FlightMode.POSCTL and sim.state.armed
+
+
+def test_sticks_moved_on_the_ground_take_nothing_over():
+    """PX4 overrides a flying vehicle's auto mode with the sticks; an armed vehicle still on
+    the ground keeps its mode however far they move."""
+    sim = Simulator(load_sim_config("iris"), seed=0)
+    assert sim.arm().accepted
+    sim.step(0.5)
+    mode = sim.state.mode
+    for _ in range(10):
+        sim.set_sticks(Sticks(1.0, 0.0, 0.5, 0.0))
+        sim.step(0.05)
+    assert sim.state.mode is mode and sim.state.armed
 
 
 @pytest.mark.parametrize(("action", "mode"), [(2, FlightMode.RTL), (3, FlightMode.LAND)])

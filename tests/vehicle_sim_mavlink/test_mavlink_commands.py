@@ -50,6 +50,17 @@ def test_takeoff_altitude_is_amsl_and_at_least_the_minimum(ctx):
     assert -ctx.sim.state.pos_ned_m[2] == pytest.approx(4.0, abs=0.15)
 
 
+def test_a_takeoff_above_home_but_below_the_minimum_climbs_to_the_minimum(ctx):
+    """PX4's navigator: a takeoff altitude under MIS_TAKEOFF_ALT (2.5 m) above home, here 1 m,
+    is raised to it ("Using minimum takeoff altitude: 2.50 m")."""
+    handle_command(400, params(1), ctx)
+    low = handle_command(22, params(0, 0, 0, 0, 0, 0, ctx.telemetry.origin.alt_amsl_m + 1.0), ctx)
+    assert low.result == MAV_RESULT_ACCEPTED
+    assert any("minimum takeoff altitude: 2.50 m" in text for _, text in low.notices)
+    ctx.sim.step(6.0)
+    assert -ctx.sim.state.pos_ned_m[2] == pytest.approx(2.5, abs=0.15)
+
+
 @pytest.mark.parametrize(
     ("main", "sub", "mode"),
     [(3, 0, FlightMode.POSCTL), (4, 3, FlightMode.HOLD), (4, 6, FlightMode.LAND)],
@@ -87,6 +98,9 @@ def test_disarm_in_air_needs_force(ctx):
     handle_command(22, NAN7, ctx)
     ctx.sim.step(4.0)
     assert handle_command(400, params(0), ctx).result == MAV_RESULT_DENIED
+    # [MAVLink] only param2 = 21196 forces it: any other value is no force
+    assert handle_command(400, params(0, 1), ctx).result == MAV_RESULT_DENIED
+    assert ctx.sim.state.armed
     assert handle_command(400, params(0, 21196), ctx).result == MAV_RESULT_ACCEPTED
     assert not ctx.sim.state.armed
 
@@ -100,6 +114,28 @@ def test_request_message_and_message_interval(ctx):
     assert handle_command(511, params(32, 100_000), ctx).result == MAV_RESULT_ACCEPTED
     interval = handle_command(510, params(32), ctx).replies[0]
     assert (interval.message_id, interval.interval_us) == (32, 100_000)
+    # [MAVLink] MESSAGE_INTERVAL: -1 for a stream switched off (SET_MESSAGE_INTERVAL -1)
+    assert handle_command(511, params(32, -1), ctx).result == MAV_RESULT_ACCEPTED
+    interval = handle_command(510, params(32), ctx).replies[0]
+    assert (interval.message_id, interval.interval_us) == (32, -1)
+    # MESSAGE_INTERVAL's message_id is a uint16: a larger id cannot be answered
+    assert handle_command(510, params(70_000), ctx).result == MAV_RESULT_DENIED
+
+
+@pytest.mark.parametrize("lat", [90.5, -91.0])
+def test_a_reposition_off_the_earth_is_denied_and_nothing_moves(ctx, lat):
+    """DO_REPOSITION to a latitude outside [-90, 90] deg is no place: denied, the vehicle
+    keeps its mode and its hold."""
+    handle_command(400, params(1), ctx)
+    handle_command(22, NAN7, ctx)
+    ctx.sim.step(4.0)
+    mode = ctx.sim.state.mode
+    outcome = handle_command(192, params(-1, 0, 0, math.nan, lat, 8.5, math.nan), ctx)
+    assert outcome.result == MAV_RESULT_DENIED
+    assert any("invalid position" in text for _, text in outcome.notices)
+    ctx.sim.step(1.0)
+    assert ctx.sim.state.mode == mode
+    assert abs(ctx.sim.state.pos_ned_m[0]) < 0.5
 
 
 def test_gps_global_origin_on_request_is_home(ctx):

@@ -96,6 +96,91 @@ def test_an_item_it_cannot_fly_is_refused_at_once_with_the_reason(endpoint, clie
     assert endpoint.sim.mission == ()
 
 
+def test_an_item_out_of_sequence_is_asked_for_again(endpoint, client):
+    """[MAVLink] mission upload: the vehicle asks for items in order; an item other than the
+    one asked for (here item 1 when item 0 was asked) is not stored, item 0 is asked again."""
+    client.forget()
+    with client.send_lock:
+        client.mav.mission_count_send(1, 1, 2)
+    assert client.recv("MISSION_REQUEST_INT", 3.0).seq == 0
+    with client.send_lock:
+        client.mav.send(MISSION[1])
+    assert client.recv("MISSION_REQUEST_INT", 3.0).seq == 0
+    with client.send_lock:
+        client.mav.send(MISSION[0])
+    assert client.recv("MISSION_REQUEST_INT", 3.0).seq == 1
+    with client.send_lock:
+        client.mav.send(MISSION[1])
+    assert client.recv("MISSION_ACK", 3.0).type == mavlink2.MAV_MISSION_ACCEPTED
+    assert [i.command for i in endpoint.sim.mission] == [
+        mavlink2.MAV_CMD_NAV_TAKEOFF,
+        mavlink2.MAV_CMD_NAV_WAYPOINT,
+    ]
+
+
+def test_a_download_marks_the_current_item_and_refuses_one_past_the_last(endpoint, client):
+    """[MAVLink] MISSION_ITEM_INT.current is 1 for the item flown next (item 0 of a mission
+    just uploaded), 0 for the others; asking for item 4 of a 4-item mission gets a
+    MISSION_ACK MAV_MISSION_INVALID_SEQUENCE."""
+    assert upload(client, MISSION).type == mavlink2.MAV_MISSION_ACCEPTED
+    flags = []
+    for seq in range(len(MISSION)):
+        with client.send_lock:
+            client.mav.mission_request_int_send(1, 1, seq)
+        flags.append(client.recv("MISSION_ITEM_INT", 3.0).current)
+    assert flags == [1, 0, 0, 0]
+    client.forget()
+    with client.send_lock:
+        client.mav.mission_request_int_send(1, 1, len(MISSION))
+    assert client.recv("MISSION_ACK", 3.0).type == mavlink2.MAV_MISSION_INVALID_SEQUENCE
+
+
+def test_a_relative_altitude_item_is_flown_that_high_above_home(endpoint, client):
+    """MAV_FRAME_GLOBAL_RELATIVE_ALT_INT's z is metres above home: the waypoint 12 m north at
+    4 m is 4 m above home (down -4 m), not 4 m above mean sea level."""
+    assert upload(client, MISSION).type == mavlink2.MAV_MISSION_ACCEPTED
+    north, east, down = endpoint.sim.mission[1].pos_ned_m
+    assert (north, east, down) == pytest.approx((12.0, 0.0, -4.0), abs=0.01)
+
+
+def test_clearing_the_mission_abandons_an_upload_under_way(endpoint, client):
+    """MISSION_CLEAR_ALL in the middle of an upload ends it: the item that follows belongs to
+    no upload (MISSION_ACK MAV_MISSION_ERROR) and the vehicle keeps no mission."""
+    client.forget()
+    with client.send_lock:
+        client.mav.mission_count_send(1, 1, 2)
+    assert client.recv("MISSION_REQUEST_INT", 3.0).seq == 0
+    with client.send_lock:
+        client.mav.send(MISSION[0])
+    assert client.recv("MISSION_REQUEST_INT", 3.0).seq == 1
+    with client.send_lock:
+        client.mav.mission_clear_all_send(1, 1)
+    assert client.recv("MISSION_ACK", 3.0).type == mavlink2.MAV_MISSION_ACCEPTED
+    with client.send_lock:
+        client.mav.send(MISSION[1])
+    assert client.recv("MISSION_ACK", 3.0).type == mavlink2.MAV_MISSION_ERROR
+    assert endpoint.sim.mission == ()
+
+
+def test_a_refused_item_ends_the_upload_and_a_count_of_zero_clears_the_mission(endpoint, client):
+    """After an item is refused the upload is over: sending a good item in its place gets
+    MAV_MISSION_ERROR, not a mission. [MAVLink]: a MISSION_COUNT of 0 clears the mission,
+    acknowledged at once."""
+    bad = [
+        MISSION[0],
+        item(1, mavlink2.MAV_CMD_DO_DIGICAM_CONTROL, frame=mavlink2.MAV_FRAME_MISSION),
+    ]
+    assert upload(client, bad).type == mavlink2.MAV_MISSION_UNSUPPORTED
+    client.forget()
+    with client.send_lock:
+        client.mav.send(MISSION[1])
+    assert client.recv("MISSION_ACK", 3.0).type == mavlink2.MAV_MISSION_ERROR
+    assert endpoint.sim.mission == ()
+    assert upload(client, MISSION).type == mavlink2.MAV_MISSION_ACCEPTED
+    assert upload(client, []).type == mavlink2.MAV_MISSION_ACCEPTED
+    assert endpoint.sim.mission == ()
+
+
 @pytest.mark.slow
 def test_auto_mission_flies_the_items_reports_progress_and_returns(endpoint, client):
     assert client.set_param("RTL_RETURN_ALT", 5.0) is not None

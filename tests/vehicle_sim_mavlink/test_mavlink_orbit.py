@@ -8,7 +8,10 @@ import math
 import pytest
 from mavlink_test_client import MAV_RESULT_ACCEPTED, wait_until
 
-from vehicle_sim import FlightMode
+from vehicle_sim import FlightMode, Simulator, load_sim_config
+from vehicle_sim.mavlink.geodetic import GeodeticOrigin
+from vehicle_sim.mavlink.orbit import orbit_execution_status, start_orbit
+from vehicle_sim.orbit import Orbit
 
 MAV_CMD_DO_ORBIT = 34
 MAV_RESULT_DENIED = 2
@@ -73,3 +76,26 @@ def test_malformed_orbits_are_denied_and_the_endpoint_keeps_serving(endpoint, cl
         ack = client.command(MAV_CMD_DO_ORBIT, *params)
         assert ack is not None and ack.result == MAV_RESULT_DENIED
     assert endpoint.stats.handler_errors == 0 and endpoint.running
+
+
+@pytest.mark.parametrize(
+    ("lat", "lon", "named"), [(95.0, 8.0, "latitude"), (47.0, 188.5, "longitude")]
+)
+def test_an_orbit_centre_off_the_globe_is_refused_naming_the_coordinate(lat, lon, named) -> None:
+    sim = Simulator(load_sim_config("iris"), seed=0)
+    with pytest.raises(ValueError, match=named):
+        start_orbit(sim, (5.0, 1.0, 0.0, NAN, lat, lon, 500.0), GeodeticOrigin())
+
+
+@pytest.mark.parametrize(("velocity", "radius"), [(2.0, 5.0), (-2.0, -5.0)])
+def test_orbit_execution_status_signs_the_radius_by_the_direction(velocity, radius) -> None:
+    """[MAVLink] ORBIT_EXECUTION_STATUS.radius: positive clockwise, negative counter-clockwise;
+    the centre in MAV_FRAME_GLOBAL (0) in degE7 and metres above mean sea level: an orbit
+    around the origin 10 m up is at the origin's latitude/longitude and 488 + 10 m."""
+    origin = GeodeticOrigin()
+    orbit = Orbit((0.0, 0.0), -10.0, 5.0, velocity, 0, 0.0)
+    status = orbit_execution_status(orbit, origin, 3.0)
+    assert status.radius == radius and status.frame == 0
+    assert (status.x, status.y) == (round(origin.lat_deg * 1e7), round(origin.lon_deg * 1e7))
+    assert status.z == pytest.approx(498.0)
+    assert status.time_usec == 3_000_000

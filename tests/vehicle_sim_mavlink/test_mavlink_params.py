@@ -53,6 +53,11 @@ def test_request_read_by_name_and_by_index():
     missing = params.request_read(store, "NOPE", -1)
     assert missing.values == () and "NOPE unknown" in missing.problem
     assert params.request_read(store, "", 7).values == ()
+    # [MAVLink] PARAM_REQUEST_READ: param_index -1 reads by name, any index from 0 by index:
+    # index 0 is the first parameter, index 3 (= param_count) is past the last
+    assert fields(params.request_read(store, "", 0).values[0])[0] == "COM_OBL_RC_ACT"
+    past = params.request_read(store, "", 3)
+    assert past.values == () and "out of range" in past.problem
 
 
 def test_param_set_applies_and_echoes_the_value():
@@ -69,7 +74,10 @@ def test_param_set_int32_is_decoded_bytewise():
     assert store.values["COM_OBL_RC_ACT"] == 4.0
 
 
-@pytest.mark.parametrize(("value", "problem"), [(-1.0, "must be >= 0"), (float("nan"), "finite")])
+@pytest.mark.parametrize(
+    ("value", "problem"),
+    [(-1.0, "must be >= 0"), (float("nan"), "finite"), (float("inf"), "finite")],
+)
 def test_rejected_set_echoes_the_old_value_and_says_why(value, problem):
     store = Store()
     reply = params.param_set(store, "MIS_TAKEOFF_ALT", value, params.PARAM_TYPE_REAL32)

@@ -33,6 +33,57 @@ def test_observed_disturbance_is_zero_for_a_unicycle_move() -> None:
     assert learner.observed_disturbance(p0, p1, 0.5, 0.2, 0.1) == pytest.approx(np.zeros(3))
 
 
+@pytest.mark.parametrize("heading", [0.0, np.pi / 2])
+def test_observed_disturbance_is_in_the_robot_frame_left_positive(heading: float) -> None:
+    """Commanded 0.5 m/s straight on, the robot moved in 0.1 s 0.04 m ahead and 0.02 m to
+    its left and turned 0.01 rad: it went 0.1 m/s slower than commanded, drifted 0.2 m/s to its
+    left and turned at 0.1 rad/s, at heading 0 (left is +y) as at pi/2 (left is -x)."""
+    c, s = np.cos(heading), np.sin(heading)
+    p0 = np.array([1.0, 2.0, heading])
+    p1 = p0 + np.array([0.04 * c - 0.02 * s, 0.04 * s + 0.02 * c, 0.01])
+    g = learner.observed_disturbance(p0, p1, 0.5, 0.0, 0.1)
+    assert g == pytest.approx([-0.1, 0.2, 0.1])
+
+
+def test_an_experience_query_holds_the_step_as_it_happened() -> None:
+    """a_k = (s, e_L, e_H, v_act_{k-1}, omega_act_{k-1}, v_cmd_k, omega_cmd_k, omega_cmd_{k-1}):
+    from consecutive poses 0.05 m apart (3-4-5) and 0.02 rad turned in 0.1 s, the velocity
+    state is 0.5 m/s and 0.2 rad/s; the commands go in as given, now then before."""
+    a = learner.experience_query(
+        3.0, 0.1, -0.05, np.array([0.0, 0.0, 0.0]), np.array([0.03, 0.04, 0.02]),
+        0.6, 0.3, -0.2, 0.1,
+    )  # fmt: skip
+    assert a == pytest.approx([3.0, 0.1, -0.05, 0.5, 0.2, 0.6, 0.3, -0.2])
+
+
+def test_localisation_white_noise_alone_is_uncorrelated_frame_to_frame() -> None:
+    """With no wander (bias_std 0), the error is white noise of std white_std per axis, mean
+    0: consecutive draws do not repeat (a constant offset would not be noise)."""
+    cfg = LocalisationErrorConfig(bias_std=(0.0, 0.0, 0.0), white_std=(0.01, 0.02, 0.005))
+    err = LocalisationError(cfg, 0.1, np.random.default_rng(3))
+    e = np.array([err.draw() for _ in range(20000)])
+    assert np.std(e, axis=0) == pytest.approx([0.01, 0.02, 0.005], rel=0.05)
+    assert np.all(np.abs(np.mean(e, axis=0)) < 0.05 * np.array([0.01, 0.02, 0.005]))
+    lag1 = np.mean(e[1:, 0] * e[:-1, 0]) / np.var(e[:, 0])
+    assert abs(lag1) < 0.05
+
+
+def test_a_pass_keeps_its_speed_bins_apart_and_stores_the_mean_of_each() -> None:
+    """Steps at one vertex at 0.3 and 0.4 m/s (bin 0.25-0.5 m/s) and at 0.6 m/s (bin 0.5-0.75
+    m/s) make two experiences: the first the mean of its two steps (query 1 and 3 -> 2,
+    disturbance 0.5 and 0.1 -> 0.3, whichever came last), the second the 0.6 m/s step."""
+    gp = learner.make_history_gp()
+    one = np.ones(8)
+    learner.store_pass(
+        gp, [(4, 0.3, one, np.full(3, 0.5)), (4, 0.6, 5 * one, np.full(3, -1.0)),
+             (4, 0.4, 3 * one, np.full(3, 0.1))],
+    )  # fmt: skip
+    stored = {b: (a, g) for _, b, a, g in gp.stored()}
+    assert sorted(stored) == [1, 2]
+    assert stored[1][0] == pytest.approx(2 * one) and stored[1][1] == pytest.approx([0.3] * 3)
+    assert stored[2][0] == pytest.approx(5 * one) and stored[2][1] == pytest.approx([-1.0] * 3)
+
+
 @pytest.mark.slow
 def test_illustrative_example_ranks_feedback_mpc_lbnmpc() -> None:
     rms = {name: tracking_rms(run(name)) for name in ("feedback", "mpc", "lbnmpc")}

@@ -22,9 +22,9 @@ from experiments.rover.experience_file import (
     load_experience,
     save_experience,
 )
-from experiments.rover.link_drive import drive_path
+from experiments.rover.link_drive import drive_path, pose_of
 from experiments.rover.repeat import is_loop, repeat_path, start_offset
-from experiments.rover.teach import TeachError, record_teach
+from experiments.rover.teach import HandedOver, TeachError, record_teach
 from planners.rover.path import TaughtPath
 from planners.rover.path_file import PathFileError, path_csv_text, read_path_file
 from planners.rover.speed_scheduler import TABLE_I, initial_schedule
@@ -32,6 +32,30 @@ from vehicle_sim.rover import RoverSim, rover_preset
 from vehicle_sim.rover.mavlink_rover import RoverMavlinkEndpoint
 
 LOOP = [(2.0, 0.0), (math.pi * 1.5, 1 / 1.5), (2.0, 0.0), (math.pi * 1.5, 1 / 1.5)]
+
+
+class PilotAfterTwenty(InProcessRoverLink):
+    """The in-process rover whose pilot switches it to Hold after 20 commands; counts what is
+    sent after that (setpoints and holds)."""
+
+    sent = 0
+    after = 0
+
+    def send_velocity(self, command) -> None:
+        if self.sent >= 20:
+            self.after += 1
+        self.sent += 1
+        super().send_velocity(command)
+        if self.sent == 20:
+            InProcessRoverLink.hold(self)  # the pilot's switch, not the program's
+
+    def hold(self):
+        self.after += 1
+        return super().hold()
+
+
+def _pilot_link() -> PilotAfterTwenty:
+    return PilotAfterTwenty(RoverSim(rover_preset("husky_50kg")), {"rover_preset": "husky_50kg"})
 
 
 def _taught_loop() -> TaughtPath:
@@ -45,6 +69,20 @@ def test_a_scripted_teach_drive_records_the_pattern_resampled_to_the_spacing() -
     assert taught.path.length_m == pytest.approx(length, rel=0.05)
     assert taught.path.spacing_m == pytest.approx(0.5, rel=0.05)
     assert is_loop(taught.path)
+    # LOOP's arcs turn left (curvature > 0) with a 1.5 m radius: in the path frame (x north,
+    # y west) the loop lies left of its first leg along +x, up to 2 x 1.5 m = 3 m to the left
+    y = taught.path.xy_m[:, 1]
+    assert y.min() > -0.05 and y.max() == pytest.approx(3.0, abs=0.1)
+
+
+def test_a_pilot_who_takes_the_rover_out_of_offboard_ends_a_scripted_teach() -> None:
+    """The pilot switches the rover to Hold 20 commands into the scripted teach drive: the
+    teach ends at once saying so, writes no path and sends nothing more."""
+
+    link = _pilot_link()
+    with pytest.raises(HandedOver, match="left OFFBOARD for HOLD during the teach drive"):
+        record_teach(link, drive=LOOP, timeout_s=60.0)
+    assert link.after == 0
 
 
 class TerminatedLink(InProcessRoverLink):
@@ -107,6 +145,24 @@ def test_the_path_file_round_trips_and_bad_files_are_one_line(tmp_path: Path) ->
         assert message in text and str(f) in text and "\n" not in text, (name, text)
 
 
+def test_a_path_file_keeps_vertices_to_the_millimetre_and_refuses_swapped_columns(
+    tmp_path: Path,
+) -> None:
+    """The rows are the vertices in metres to better than a millimetre (a resampled path read
+    back lies where it was taught); a header naming the columns in another order (y_m,x_m,
+    which would mirror the path about x = y) or in other units (feet) is refused."""
+    path = TaughtPath.from_csv_text("0,0\n1.23456,0.654321\n2.5,1.0\n")
+    rows = np.array(
+        [[float(v) for v in line.split(",")] for line in path_csv_text(path).splitlines()[1:]]
+    )
+    assert np.abs(rows - path.xy_m).max() < 1e-3
+    for header in ("y_m,x_m", "x_ft,y_ft"):
+        other = tmp_path / "other.csv"
+        other.write_text(f"{header}\n0,0\n1,0\n2,0\n")
+        with pytest.raises(PathFileError, match="expected the header 'x_m,y_m'"):
+            read_path_file(other)
+
+
 def test_repeating_a_loop_learns_and_the_experience_file_carries_it_on(tmp_path: Path) -> None:
     """Two trials on the in-process Link: each stores one experience per vertex and speed bin;
     saved and loaded into a fresh GP the bins are the same, and a third trial (a later run)
@@ -157,6 +213,11 @@ def test_an_experience_file_refuses_another_path_and_damage(tmp_path: Path) -> N
     coarser = TaughtPath(path.xy_m, spacing_m=0.5)  # the same file read with --spacing 0.5
     with pytest.raises(ExperienceFileError, match=r"at a vertex spacing of 0\.2\d m.*--spacing 0"):
         load_experience(f, learner.make_history_gp(), coarser)
+    # as many vertices, but the path moved 0.5 m: its vertex indices mean other places
+    shifted = TaughtPath(path.xy_m + [0.5, 0.0], spacing_m=path.spacing_m)
+    assert len(shifted) == len(path)
+    with pytest.raises(ExperienceFileError, match="learned on another path"):
+        load_experience(f, learner.make_history_gp(), shifted)
     damaged = tmp_path / "damaged.npz"
     damaged.write_bytes(f.read_bytes()[:200])
     not_npz = tmp_path / "notes.npz"
@@ -167,7 +228,124 @@ def test_an_experience_file_refuses_another_path_and_damage(tmp_path: Path) -> N
     np.savez(tmp_path / "foreign.npz", weights=np.zeros(3))
     with pytest.raises(ExperienceFileError, match="lacks"):
         load_experience(tmp_path / "foreign.npz", learner.make_history_gp(), path)
+    with np.load(f) as npz:
+        arrays = {k: npz[k] for k in npz.files}
+    arrays["disturbance"] = np.full_like(arrays["disturbance"], np.nan)
+    np.savez(tmp_path / "nan.npz", **arrays)
+    with pytest.raises(ExperienceFileError, match="damaged"):
+        load_experience(tmp_path / "nan.npz", learner.make_history_gp(), path)
+    finer = learner.make_history_gp(replace(learner.PAPER_BINS, speed_bin_mps=0.1))
+    with pytest.raises(ExperienceFileError, match="kept with other experience bins"):
+        load_experience(f, finer, path)
     assert load_experience(tmp_path / "none.npz", learner.make_history_gp(), path).trials_done == 0
+
+
+def test_an_experience_file_gives_every_experience_back_in_its_own_bin(tmp_path: Path) -> None:
+    """Saved and loaded, each experience is in the vertex and speed bin it was kept in, for
+    bins of 0.05 m/s too, where bin 43 (2.15-2.20 m/s) read back at its lower edge 43 x 0.05
+    would land in bin 42 by rounding; the trials driven and the schedule come back too, a
+    schedule only when it gives one speed per vertex."""
+    path = TaughtPath.from_segments([(5.0, 0.0)])
+    bins = replace(learner.PAPER_BINS, speed_bin_mps=0.05)
+    gp = learner.make_history_gp(bins)
+    for vertex, speed in ((3, 2.16), (4, 0.52), (5, 1.01)):
+        gp.add(vertex, speed, np.full(8, float(vertex)), np.full(3, speed))
+    f = tmp_path / "exp.npz"
+    schedule = np.linspace(0.4, 0.8, len(path))
+    save_experience(f, gp, path, 7, schedule)
+    again = learner.make_history_gp(bins)
+    memory = load_experience(f, again, path)
+    assert [(v, b) for v, b, _, _ in again.stored()] == [(3, 43), (4, 10), (5, 20)]
+    assert memory.trials_done == 7 and np.array_equal(memory.schedule_mps, schedule)
+    # a schedule that does not give one speed per vertex is not flown
+    save_experience(f, gp, path, 7, schedule[:3])
+    assert load_experience(f, learner.make_history_gp(bins), path).schedule_mps is None
+
+
+def test_a_loop_ends_where_it_starts_facing_the_way_it_started() -> None:
+    """A loop's end is the next trial's start, within 1 m and 0.5 rad: a full circle of 1.5 m
+    radius is one; a U-turn (2 m out, a half circle of 0.4 m radius, 2 m back) ends about 0.8 m
+    from its start but facing back, so it is not."""
+    assert is_loop(TaughtPath.from_segments([(math.pi * 3.0, 1 / 1.5)]))
+    u_turn = TaughtPath.from_segments([(2.0, 0.0), (math.pi * 0.4, 1 / 0.4), (2.0, 0.0)])
+    assert np.hypot(*(u_turn.xy_m[-1] - u_turn.xy_m[0])) == pytest.approx(0.8, abs=0.05)
+    assert not is_loop(u_turn)
+
+
+def test_a_rover_at_the_start_facing_away_is_not_at_the_start() -> None:
+    """The rover (at the origin, facing along x) on the first vertex of a path that starts
+    facing -x is pi rad off its heading, past the 0.5 rad start tolerance: without a drive
+    back the run stops before the first trial, saying so."""
+    path = TaughtPath.from_segments([(5.0, 0.0)], start=(0.0, 0.0, math.pi))
+    link = InProcessRoverLink.from_preset("husky_50kg")
+    link.connect(1.0)
+    out = repeat_path(link, path, 1, learner.make_history_gp(), np.full(len(path), 0.5))
+    assert out.status == "not_at_start" and out.trials == []
+    assert "0.0 m from the path's start" in out.detail and "3.14 rad off" in out.detail
+
+
+def test_the_start_heading_error_is_the_short_way_round() -> None:
+    """A rover facing 3.0 rad on a path that starts facing -3.0 rad is 2 pi - 6 = 0.283 rad
+    off, within the start tolerance, not 6 rad."""
+    sim = RoverSim(rover_preset("husky_50kg"), pose=(0.0, 0.0, 3.0))
+    link = InProcessRoverLink(sim, {"rover_preset": "husky_50kg", "seed": 0})
+    link.connect(1.0)
+    path = TaughtPath.from_segments([(5.0, 0.0)], start=(0.0, 0.0, -3.0))
+    dist, dhead = start_offset(link, path)
+    assert dist == pytest.approx(0.0, abs=1e-9)
+    assert dhead == pytest.approx(2 * math.pi - 6.0)
+
+
+def test_drive_back_gets_to_the_pose_and_holds() -> None:
+    """From the origin facing x, back to (3, 1) m facing +y (pi/2 rad): the rover turns,
+    drives, turns and holds there, within a few centimetres and hundredths of a radian
+    (ARRIVED_M 0.05 m, ALIGNED_RAD 0.05 rad, plus what it coasts once stopped), never
+    commanding a turn faster than max_turn_radps (0.4 rad/s here)."""
+    turns: list[float] = []
+
+    class Recording(InProcessRoverLink):
+        def send_velocity(self, command) -> None:
+            turns.append(command.yaw_rate_radps)
+            super().send_velocity(command)
+
+    link = Recording(RoverSim(rover_preset("husky_50kg")), {"rover_preset": "husky_50kg"})
+    link.connect(1.0)
+    assert drive_back(link, (3.0, 1.0, math.pi / 2), 0.5, 0.4, timeout_s=60.0) == ("", "")
+    assert max(abs(w) for w in turns) == pytest.approx(0.4)  # max_turn_radps, reached
+    x, y, heading = pose_of(link)
+    assert math.hypot(x - 3.0, y - 1.0) < 0.08
+    assert abs(heading - math.pi / 2) < 0.08
+    assert link.read_state().mode == "HOLD"
+
+
+def test_drive_back_yields_to_a_pilot_who_takes_the_rover_out_of_offboard() -> None:
+    """A pilot switches the rover to Hold after 20 commands of the drive back: the drive ends
+    at once, naming the mode, and sends nothing more (no stop, no further setpoint)."""
+
+    link = _pilot_link()
+    link.connect(1.0)
+    assert drive_back(link, (3.0, 1.0, math.pi / 2), 0.5, timeout_s=60.0) == ("HOLD", "")
+    assert link.after == 0
+
+
+def test_a_pilot_who_takes_over_during_the_drive_back_ends_the_run_as_handed_over() -> None:
+    """Repeating a path that starts 3 m ahead of the rover, with a drive back: the pilot's
+    switch to Hold during the drive back ends the run as "handed_over", naming the mode, with
+    no trial driven and nothing sent after it."""
+    path = TaughtPath.from_segments([(5.0, 0.0)], start=(3.0, 0.0, 0.0))
+    link = _pilot_link()
+    link.connect(1.0)
+    out = repeat_path(
+        link,
+        path,
+        1,
+        learner.make_history_gp(),
+        np.full(len(path), 0.5),
+        drive_back=DriveBack("turn", 0.5),
+    )
+    assert out.status == "handed_over" and out.trials == []
+    assert "left OFFBOARD for HOLD while driving back" in out.detail
+    assert link.after == 0
 
 
 def _free_port() -> int:

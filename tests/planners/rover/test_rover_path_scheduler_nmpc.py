@@ -5,8 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from planners.rover.path import TaughtPath, project_arc_length
-from planners.rover.speed_scheduler import TABLE_I, next_schedule
+from planners.rover.path import LocalisationQuality, TaughtPath, project_arc_length
+from planners.rover.speed_scheduler import TABLE_I, SpeedSchedulerConfig, next_schedule
 from planners.rover.unicycle_nmpc import (
     ConstantDisturbance,
     UnicycleNmpc,
@@ -80,9 +80,33 @@ def test_path_from_csv_text_and_bad_rows() -> None:
     # only the first line may be a header: a later 'nan,...' row is not skipped as one
     with pytest.raises(ValueError, match=r"line 3: .*not finite"):
         TaughtPath.from_csv_text("x_m,y_m\n0,0\nnan,1\n2,0\n3,0\n")
+    # nor is a later row of words (a second header pasted in, a note): it is named, not dropped
+    with pytest.raises(ValueError, match="line 3"):
+        TaughtPath.from_csv_text("x_m,y_m\n0,0\nnorth,1\n2,0\n3,0\n")
     # a path that never moves has no heading to repeat
     with pytest.raises(ValueError, match="zero length"):
         TaughtPath.from_csv_text("0,0\n0,0\n0,0\n")
+
+
+def test_the_nearest_vertex_is_searched_a_quarter_window_behind_the_hint() -> None:
+    """On a straight 10 m path with 0.25 m vertices (vertex i at x = 0.25 i m), a robot at
+    x = 4 m is at vertex 16: found from a hint of 20 (the search starts 40 // 4 = 10 vertices
+    back), not from a hint of 30 (it starts at vertex 20, the nearest it can see)."""
+    path = TaughtPath.from_segments([(10.0, 0.0)])
+    assert path.nearest(4.0, 0.1, hint=20) == 16
+    assert path.localise(4.0, 0.1, 0.0, hint=20).vertex == 16
+    assert path.nearest(4.0, 0.1, hint=30) == 20
+
+
+def test_the_matched_feature_count_follows_light_errors_and_speed() -> None:
+    """count = 120 lighting exp(-(e_L / 0.5)^2 - (e_H / 0.35)^2) / (1 + (v / 1.5)^2): in half
+    light at rest on the path, 60; at 1.5 m/s (blur halves it), 30; 0.5 m off the path in
+    full light at rest, 120 / e; 0.35 rad off in heading, the same."""
+    q = LocalisationQuality()
+    assert q.count(0.5, 0.0, 0.0, 0.0) == pytest.approx(60.0)
+    assert q.count(0.5, 0.0, 0.0, 1.5) == pytest.approx(30.0)
+    assert q.count(1.0, 0.5, 0.0, 0.0) == pytest.approx(120.0 / math.e)
+    assert q.count(1.0, 0.0, -0.35, 0.0) == pytest.approx(120.0 / math.e)
 
 
 def test_arc_curvature() -> None:
@@ -118,6 +142,50 @@ def test_scheduler_never_schedules_below_the_first_trials_speed() -> None:
         out = next_schedule(v, np.full(3, 0.5), np.full(3, 0.5), np.full(3, 2.0),
                             np.full(3, 1.0), c)  # fmt: skip
         assert out == pytest.approx([c.v_init_mps, c.v_init_mps, 1.0 - c.gamma_down_mps])
+
+
+def test_the_scheduler_judges_errors_and_turn_commands_by_their_size_on_either_side() -> None:
+    """Eq. 31 compares |e_L|, |e_H| and |omega_cmd| with their thresholds: 0.3 m to the left
+    of the path (e_L = -0.3 m, twice lambda_L = 0.15 m) lowers the speed as 0.3 m to the right
+    does, and so do a heading error of -20 deg (lambda_H 10 deg) and a -2 rad/s turn command
+    (lambda_omega 1 rad/s)."""
+    c = TABLE_I["experiment_2"]
+    small = np.full(4, 0.01)
+    el, eh, om = small.copy(), small.copy(), small.copy()
+    el[0], el[1], eh[2], om[3] = -0.3, 0.3, -math.radians(20.0), -2.0
+    out = next_schedule(np.full(4, 0.5), el, eh, om, np.full(4, 100.0), c)
+    assert out == pytest.approx(np.full(4, 0.5 - c.gamma_down_mps))
+
+
+def test_a_turn_command_in_the_deadband_or_an_error_at_its_threshold_keeps_the_speed() -> None:
+    """Eq. 31 raises a vertex's speed only where every record is under its threshold: a turn
+    command of 1.05 rad/s (over lambda_omega = 1 rad/s, under 1.1 x 1 in the deadband) keeps
+    the speed although errors and features are fine; so does e_L equal to lambda_L = 0.15 m
+    (not under it, and not over 1.1 x 0.15 m); all small raises it."""
+    c = TABLE_I["experiment_2"]
+    el = np.array([0.01, 0.15, 0.01])
+    om = np.array([1.05, 0.01, 0.01])
+    out = next_schedule(np.full(3, 0.5), el, np.full(3, 0.01), om, np.full(3, 100.0), c)
+    assert out == pytest.approx([0.5, 0.5, 0.5 + c.gamma_up_mps])
+
+
+def test_a_vertex_with_any_record_missing_keeps_its_speed() -> None:
+    """A vertex the pass has no full record of (NaN: never passed, or its errors not measured
+    there) keeps its speed, even when the one record it has, here 5 matched features (under
+    lambda_F / lambda_db = 27), would lower it; a vertex fully recorded with as few features is
+    lowered by gamma_down = 0.1 m/s."""
+    c = TABLE_I["experiment_2"]
+    nan = np.array([math.nan, 0.01])
+    out = next_schedule(np.full(2, 0.8), nan, nan, nan, np.array([5.0, 5.0]), c)
+    assert out == pytest.approx([0.8, 0.7])
+
+
+@pytest.mark.parametrize("v_init", [0.3, 1.3])
+def test_a_first_trial_speed_outside_the_schedules_bounds_is_refused(v_init: float) -> None:
+    """The schedule is kept in [v_min, v_max] = [0.35, 1.2] m/s from the first trial on, so a
+    first-trial speed under or over them (0.3 or 1.3 m/s) is refused, not flown once."""
+    with pytest.raises(ValueError, match="v_init_mps"):
+        SpeedSchedulerConfig(v_init_mps=v_init, v_min_mps=0.35, v_max_mps=1.2)
 
 
 def test_nmpc_turns_towards_a_path_on_its_left_and_learned_drift_changes_the_answer() -> None:
