@@ -9,7 +9,10 @@ feasible. The Hessian is the exact Hessian of the least-squares cost (Gauss-Newt
 curvature is dropped). With one iteration per control step and a shifted warm start this is the
 real-time iteration scheme.
 
-The linearisation is evaluated node-parallel in NumPy by default
+The linearisation and its condensing are by default one compiled C routine whose numbers (the
+model's constants, the learned residual's data) are inputs, so one build per machine serves
+every model of the same shape (:mod:`planners.compiled_linearisation`); without a C compiler,
+or with ``linearisation="batched"``, they are evaluated node-parallel in NumPy
 (:mod:`planners.batched_linearisation`: the RK4 step's Jacobians through the chain rule, the
 residual's batched form, dense condensing); ``linearisation="symbolic"`` builds it as a single
 CasADi Function over the whole horizon instead (the path the planner used before; with
@@ -29,6 +32,7 @@ from threadpoolctl import ThreadpoolController
 
 from planners.batched_linearisation import BatchedLinearisation
 from planners.compiled_function import compiled
+from planners.compiled_linearisation import compiled_linearisation
 from planners.condensed_qp import CondensedQp
 from planners.nmpc_formulation import NmpcFormulation
 from planners.solver_output import SolverOutput
@@ -59,7 +63,7 @@ class _Linearisation(NamedTuple):
 
 
 _SPARSE_OUTPUTS = ("g_h",)  # only a few obstacle rows are picked per iteration: keep it sparse
-LINEARISATIONS: tuple[str, ...] = ("batched", "symbolic")
+LINEARISATIONS: tuple[str, ...] = ("compiled", "batched", "symbolic")
 _BLAS: list[list] = []  # the BLAS libraries' controllers, found at the first solve (a scan)
 
 
@@ -73,13 +77,15 @@ class SqpOptions:
         cold_start_iterations: iterations when there is no previous solution to start from
             (first plan, after a failure), at least ``max_iterations``.
         step_tol: stop when the largest input step and dynamics gap are below this.
-        linearisation: "batched" (NumPy, node-parallel; planners.batched_linearisation) or
-            "symbolic" (one CasADi Function over the horizon, the reference).
+        linearisation: "compiled" (one C routine per shape, planners.compiled_linearisation;
+            "batched" when it cannot be compiled), "batched" (NumPy, node-parallel;
+            planners.batched_linearisation) or "symbolic" (one CasADi Function over the
+            horizon, the reference).
         compile: compile the symbolic linearisation to C (needs a C compiler; falls back to
             the CasADi virtual machine without one). Measured on the benchmark problem: about
             15 % faster per plan, but the first build of each formulation (each new residual
-            model) takes a minute or more, so it is off by default. The batched linearisation
-            has nothing to compile and ignores it.
+            model) takes a minute or more, so it is off by default. The compiled and batched
+            linearisations ignore it.
         qp_feasibility_tol: a QP solution violating its constraints by more is a failure.
         screen_distance_m: obstacle rows whose linearised clearance exceeds this [m] are left
             out of the QP (they cannot become active within one step of a converging SQP).
@@ -92,7 +98,7 @@ class SqpOptions:
 
     max_iterations: int = 1
     cold_start_iterations: int = 10
-    linearisation: Literal["batched", "symbolic"] = "batched"
+    linearisation: Literal["compiled", "batched", "symbolic"] = "compiled"
     step_tol: float = 1e-6
     compile: bool = False
     qp_feasibility_tol: float = 1e-6
@@ -125,8 +131,13 @@ class GaussNewtonSqp:
         hi = np.tile(formulation.x_max, n)
         self._xrows = [int(i) for i in np.flatnonzero(np.isfinite(lo) | np.isfinite(hi))]
         self._x_lo, self._x_hi = lo[self._xrows], hi[self._xrows]
-        if self.options.linearisation == "batched":
-            self._lin = BatchedLinearisation(formulation, self._xrows, self._x_lo, self._x_hi)
+        kind = self.options.linearisation
+        rows = (formulation, self._xrows, self._x_lo, self._x_hi)
+        fast = compiled_linearisation(*rows) if kind == "compiled" else None
+        if fast is not None:
+            self._lin = fast
+        elif kind in ("compiled", "batched"):
+            self._lin = BatchedLinearisation(*rows)
         else:
             lin = self._build_linearisation()
             lin = compiled(lin) if self.options.compile else lin
