@@ -12,7 +12,8 @@ real-time iteration scheme.
 The linearisation and its condensing are by default one compiled C routine whose numbers (the
 model's constants, the learned residual's data) are inputs, so one build per machine serves
 every model of the same shape (:mod:`planners.compiled_linearisation`); without a C compiler,
-or with ``linearisation="batched"``, they are evaluated node-parallel in NumPy
+for a residual with a batched form (a learned GP), or with ``linearisation="batched"``, they
+are evaluated node-parallel in NumPy
 (:mod:`planners.batched_linearisation`: the RK4 step's Jacobians through the chain rule, the
 residual's batched form, dense condensing); ``linearisation="symbolic"`` builds it as a single
 CasADi Function over the whole horizon instead (the path the planner used before; with
@@ -78,7 +79,9 @@ class SqpOptions:
             (first plan, after a failure), at least ``max_iterations``.
         step_tol: stop when the largest input step and dynamics gap are below this.
         linearisation: "compiled" (one C routine per shape, planners.compiled_linearisation;
-            "batched" when it cannot be compiled), "batched" (NumPy, node-parallel;
+            "batched" when it cannot be compiled or the residual has a batched form: a learned
+            GP's step compiles for 14 s, over the 10 s a new model may take to be ready to
+            fly, measured), "batched" (NumPy, node-parallel;
             planners.batched_linearisation) or "symbolic" (one CasADi Function over the
             horizon, the reference).
         compile: compile the symbolic linearisation to C (needs a C compiler; falls back to
@@ -133,7 +136,9 @@ class GaussNewtonSqp:
         self._x_lo, self._x_hi = lo[self._xrows], hi[self._xrows]
         kind = self.options.linearisation
         rows = (formulation, self._xrows, self._x_lo, self._x_hi)
-        fast = compiled_linearisation(*rows) if kind == "compiled" else None
+        residual = formulation.residual
+        compile_it = kind == "compiled" and (residual is None or residual.batch is None)
+        fast = compiled_linearisation(*rows) if compile_it else None
         if fast is not None:
             self._lin = fast
         elif kind in ("compiled", "batched"):
