@@ -150,17 +150,15 @@ def linearisation_function(
 def _obstacle_rows(
     f: NmpcFormulation, states: ca.MX, gaps: ca.MX, slots: ca.MX
 ) -> tuple[ca.MX, ca.MX]:
-    """G_h (N N_o + 1, nx N): row j N + k - 1 holds node k's clearance gradient for slot j in
-    the columns of x_k; lba_h (N N_o + 1): minus the linearised clearance; the last row is the
-    all-zero padding row (bound -inf)."""
+    """G_h (N N_o + 1, nx): row j N + k - 1 is slot j's clearance gradient w.r.t. x_k; lba_h
+    (N N_o + 1): minus the linearised clearance; the last row is the all-zero padding row
+    (bound -inf)."""
     nx, n, n_o = f.model.nx, f.config.horizon_steps, f.config.n_obstacles
     if not n_o:
-        return ca.MX(1, nx * n), ca.MX(-ca.inf)
+        return ca.MX(1, nx), ca.MX(-ca.inf)
     x, gap, slot = ca.SX.sym("x", nx), ca.SX.sym("gap", nx), ca.SX.sym("slot", OBSTACLE_SLOT_SIZE)
     h = f.clearance(x, slot)
     grad = ca.jacobian(h, x)
     row = ca.Function("clearance_row", [x, gap, slot], [grad.T, -h - grad @ gap])
     grads, lba = row.map(n * n_o)(ca.repmat(states, 1, n_o), ca.repmat(gaps, 1, n_o), slots)
-    # Row j N + k - 1 of G_h: grads' column j N + k - 1 placed at the columns of x_k.
-    blocks = [ca.diagcat(*ca.horzsplit(grads[:, j * n : (j + 1) * n])).T for j in range(n_o)]
-    return ca.vertcat(*blocks, ca.MX(1, nx * n)), ca.vertcat(lba.T, -ca.inf)
+    return ca.vertcat(grads.T, ca.MX(1, nx)), ca.vertcat(lba.T, -ca.inf)

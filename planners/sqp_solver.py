@@ -46,8 +46,11 @@ class _Linearisation(NamedTuple):
 
     hess, grad: Gauss-Newton Hessian and gradient of the cost in the inputs; a_x, lba_x, uba_x:
     state-bound rows (sensitivity and bounds relative to the linearised trajectory); g_h, lba_h:
-    obstacle rows (Jacobian, lower bound; a padding row last); lbx, ubx: input bounds relative
-    to the iterate; x_lin: the trajectory the inputs produce; sens: d x_lin / d u.
+    obstacle rows (N N_o + 1, nx) and (N N_o + 1,), obstacle-major (row j N + k - 1: slot j at
+    node k): the clearance's gradient w.r.t. x_k (the row's only nonzero block: the QP row is
+    g_h S_k, S_k node k's rows of sens) and its lower bound, a padding row last (zero, -inf);
+    lbx, ubx: input bounds relative to the iterate; x_lin: the trajectory the inputs produce;
+    sens: d x_lin / d u.
     """
 
     hess: Any
@@ -63,7 +66,6 @@ class _Linearisation(NamedTuple):
     sens: Any
 
 
-_SPARSE_OUTPUTS = ("g_h",)  # only a few obstacle rows are picked per iteration: keep it sparse
 LINEARISATIONS: tuple[str, ...] = ("compiled", "batched", "symbolic")
 _BLAS: list[list] = []  # the BLAS libraries' controllers, found at the first solve (a scan)
 
@@ -158,13 +160,16 @@ class GaussNewtonSqp:
             for b in self._buckets
         }
         self._pad_row = n * cfg.n_obstacles  # index of the all-zero row lin appends
+        # Each obstacle row's node's rows of sens (the padding row's: node 1's, times zero).
+        node = np.append(np.tile(np.arange(n), cfg.n_obstacles), 0)
+        self._row_states = node[:, None] * nx + np.arange(nx)  # (N N_o + 1, nx)
 
     def _build_linearisation(self) -> ca.Function:
         """(w, p) -> the condensed QP at w, built block-wise in O(N^2) (no dense products).
 
         Outputs: H (nu*N, nu*N), g (nu*N), A_x (state-bound rows, nu*N), lba_x, uba_x,
-        G_h (N*N_o + 1, nx*N; sparse): clearance gradients w.r.t. x_1..x_N, so the obstacle
-        rows are G_h S; lba_h (N*N_o + 1): minus the linearised clearance, obstacle-major
+        G_h (N*N_o + 1, nx): each obstacle row's clearance gradient w.r.t. its node's state, so
+        its QP row is G_h S_k; lba_h (N*N_o + 1): minus the linearised clearance, obstacle-major
         (the last row is all zero with bound -inf, used to pad row blocks);
         lbx, ubx (nu*N; input step bounds), x_lin (nx*N): states x_1..x_N predicted with zero
         input step, S (nx*N, nu*N): their sensitivity to the input step.
@@ -222,7 +227,7 @@ class GaussNewtonSqp:
             for j in range(n_o):
                 for k in range(1, n + 1):
                     hv, gx = hjac(xs[:, k], slots[:, j * n + k - 1])
-                    grads_h.append(ca.horzcat(ca.SX(1, nx * (k - 1)), gx, ca.SX(1, nx * (n - k))))
+                    grads_h.append(gx)
                     lb_h.append(-hv - gx @ c_blk[k])
         u = ca.vec(us)
         outs = _Linearisation(
@@ -231,17 +236,14 @@ class GaussNewtonSqp:
             a_x=sens[self._xrows, :],
             lba_x=self._x_lo - x_lin[self._xrows],
             uba_x=self._x_hi - x_lin[self._xrows],
-            g_h=ca.vertcat(*grads_h, ca.SX(1, nx * n)),
+            g_h=ca.vertcat(*grads_h, ca.SX(1, nx)),
             lba_h=ca.vertcat(*lb_h, -ca.inf),
             lbx=ca.DM(np.tile(f.u_min, n)) - u,
             ubx=ca.DM(np.tile(f.u_max, n)) - u,
             x_lin=x_lin,
             sens=sens,
         )
-        dense = [
-            out if name in _SPARSE_OUTPUTS else ca.densify(out)
-            for name, out in zip(_Linearisation._fields, outs, strict=True)
-        ]
+        dense = [ca.densify(out) for out in outs]
         return ca.Function(
             "gn_sqp_linearisation", [w, p], dense, ["w", "p"], list(_Linearisation._fields)
         )
@@ -292,14 +294,16 @@ class GaussNewtonSqp:
             if near.size > self._buckets[-1]:
                 near = near[np.argsort(clearance[near])[: self._buckets[-1]]]
             bucket = next(b for b in self._buckets if b >= near.size)
-            rows = [int(i) for i in near] + [self._pad_row] * (bucket - near.size)
+            rows = np.full(bucket, self._pad_row)
+            rows[: near.size] = near
+            a_h = np.matmul(lin.g_h[rows, None, :], lin.sens[self._row_states[rows]])[:, 0, :]
             du, violation = self._qps[bucket].solve(
                 lin.hess,
                 lin.grad,
                 lin.a_x,
                 lin.lba_x,
                 lin.uba_x,
-                lin.g_h[rows, :] @ lin.sens,
+                a_h,
                 lin.lba_h[rows],
                 lin.lbx,
                 lin.ubx,
