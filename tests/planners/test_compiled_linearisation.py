@@ -8,6 +8,7 @@ loop of real-time iterations.
 
 from __future__ import annotations
 
+import os
 import shutil
 
 import casadi as ca
@@ -25,7 +26,9 @@ from planners.reference import PlannerState
 from planners.residual import ResidualTerm
 from planners.sqp_solver import GaussNewtonSqp, SqpOptions
 
-needs_cc = pytest.mark.skipif(shutil.which("cc") is None, reason="needs a C compiler")
+needs_cc = pytest.mark.skipif(
+    shutil.which(os.environ.get("CC", "cc")) is None, reason="needs a C compiler"
+)
 
 
 def gp_like(seed: int) -> ca.Function:
