@@ -105,3 +105,12 @@ def test_without_a_compiler_the_planner_flies_on_the_numpy_path(tmp_path, monkey
     commands, _ = fly(built, 10)
     assert not list(tmp_path.glob("*.so"))
     np.testing.assert_allclose(commands, fly(planner("batched"), 10)[0], rtol=0.0, atol=1e-9)
+
+
+def test_a_graph_calling_another_function_keeps_its_constants():
+    x = ca.SX.sym("x", 2)
+    inner = ca.Function("inner", [x], [ca.sin(x) * 3.0], {"never_inline": True})
+    outer = ca.Function("outer", [x], [inner(x) * 2.5 + 1.0])
+    kept, theta = constants_as_input(outer)
+    assert theta.size == 0
+    np.testing.assert_array_equal(np.asarray(kept([0.3, -1.0], theta)), outer([0.3, -1.0]))
