@@ -205,7 +205,7 @@ def _resample(rows: np.ndarray, at: np.ndarray) -> np.ndarray:
     fractional steps ``at`` (k,) and held constant beyond the ends (np.interp's rule for each
     column, with the weights computed once for all columns): (k, c)."""
     last = rows.shape[0] - 1
-    at = np.clip(at, 0.0, last)
+    at = np.minimum(np.maximum(at, 0.0), last)  # np.clip's result, a third of its cost
     i = np.minimum(at.astype(int), max(last - 1, 0))
     frac = (at - i)[:, None]
     nxt = np.minimum(i + 1, last)
