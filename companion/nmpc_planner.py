@@ -76,8 +76,8 @@ class NmpcSettings:
         max_iterations: SQP iterations per plan (None: the solver's default, 10 with early
             stop; 1 is the real-time iteration scheme).
         compile_functions: compile the symbolic linearisation to C (cached per machine and
-            formulation; planners.sqp_solver); the default batched linearisation has nothing
-            to compile and ignores it.
+            formulation; planners.sqp_solver); the default linearisation (one compiled
+            routine per shape, or NumPy) ignores it.
         latency_s: the known time [s] from the measured state to the command taking effect
             (link delay plus solve time). Before planning, the state is predicted forward over
             it with the planner's own model (and residual) under the last command sent, and

@@ -166,10 +166,10 @@ class BatchedLinearisation:
     def _obstacle_rows(
         self, states: np.ndarray, gaps: np.ndarray, slots: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Clearance gradients G_h (N N_o + 1, nx N) and lba_h (N N_o + 1,), obstacle-major,
-        with the all-zero padding row last (bound -inf)."""
+        """Clearance gradients G_h (N N_o + 1, nx) w.r.t. each row's node's state and lba_h
+        (N N_o + 1,), obstacle-major, with the all-zero padding row last (bound -inf)."""
         nx, n, n_o = self._nx, self._n, self._n_o
-        g_h = np.zeros((n * n_o + 1, nx * n))
+        g_h = np.zeros((n * n_o + 1, nx))
         lba_h = np.full(n * n_o + 1, -np.inf)
         if not n_o:
             return g_h, lba_h
@@ -180,10 +180,8 @@ class BatchedLinearisation:
         root = np.sqrt(np.sum(by_node[:, :, 3:6] * diff**2, axis=2) + _DIST_EPS_M2)
         clearance = root - by_node[:, :, 6]
         grad_pos = by_node[:, :, 3:6] * diff / root[:, :, None]  # (N_o, N, 3)
-        grad_x = np.zeros((n_o, n, nx))
+        grad_x = g_h[:-1].reshape(n_o, n, nx)
         grad_x[:, :, self._pos_index] = grad_pos[:, :, self._pos_axes]
-        nodes = np.arange(n)
-        g_h[:-1].reshape(n_o, n, n, nx)[:, nodes, nodes, :] = grad_x  # node k's own block
         lba_h[:-1] = (-clearance - np.sum(grad_x * gaps, axis=2)).ravel()
         return g_h, lba_h
 

@@ -137,9 +137,9 @@ class BSplineReference(SampledReference):
         x^2 - x^3 / 3 is 2/3 at x = 1: a ramp advances u by two thirds of its length).
         """
         k, span = self._ramp, self._span()
-        tau = np.clip(tau, 0.0, span)
-        x0 = np.clip(tau / k, 0.0, 1.0)
-        x1 = np.clip((span - tau) / k, 0.0, 1.0)
+        tau = np.minimum(np.maximum(tau, 0.0), span)  # np.clip's result, a third of its cost
+        x0 = np.minimum(np.maximum(tau / k, 0.0), 1.0)
+        x1 = np.minimum(np.maximum((span - tau) / k, 0.0), 1.0)
         start, end = tau < k, tau > span - k
         u = np.where(start, k * (x0**2 - x0**3 / 3), tau - k / 3)
         u = np.where(end, self._n_seg - k * (x1**2 - x1**3 / 3), u)
@@ -155,11 +155,13 @@ class BSplineReference(SampledReference):
 
     def _param_derivatives(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Position and its first two derivatives w.r.t. the knot parameter u, each (n, 3)."""
-        i = np.clip(np.floor(u).astype(int), 0, self._n_seg - 1)
+        # (np.minimum/np.maximum: np.clip's same result at a third of its cost on 21 values)
+        i = np.minimum(np.maximum(np.floor(u).astype(int), 0), self._n_seg - 1)
         s = (u - i)[:, None]
+        s2, s3 = s**2, s**3
         coef = self._coef[i]  # (n, 4 powers, 3)
-        pos = coef[:, 0] + s * coef[:, 1] + s**2 * coef[:, 2] + s**3 * coef[:, 3]
-        d1 = coef[:, 1] + 2 * s * coef[:, 2] + 3 * s**2 * coef[:, 3]
+        pos = coef[:, 0] + s * coef[:, 1] + s2 * coef[:, 2] + s3 * coef[:, 3]
+        d1 = coef[:, 1] + 2 * s * coef[:, 2] + 3 * s2 * coef[:, 3]
         d2 = 2 * coef[:, 2] + 6 * s * coef[:, 3]
         return pos, d1, d2
 
@@ -170,7 +172,7 @@ class BSplineReference(SampledReference):
         if self._ramp > 0:
             pos, d1, d2 = self._warped_derivatives(t / self.segment_duration_s)
         else:
-            u = np.clip(t / self.segment_duration_s, 0.0, self._n_seg)
+            u = np.minimum(np.maximum(t / self.segment_duration_s, 0.0), self._n_seg)
             pos, d1, d2 = self._param_derivatives(u)
         vel = np.where(inside[:, None], d1 / self.segment_duration_s, 0.0)
         acc = np.where(inside[:, None], d2 / self.segment_duration_s**2, 0.0)

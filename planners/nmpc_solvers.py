@@ -74,7 +74,7 @@ def make_solver(
     """Build a solver path by name; a bad name raises ValueError listing the valid ones.
 
     ``compile_functions`` compiles the fast path's symbolic linearisation to C (cached per
-    machine; the default batched one ignores it);
+    machine; the default linearisation, compiled per shape or NumPy, ignores it);
     ``max_wall_time_s`` limits each IPOPT solve (the fast path checks its budget per call).
     """
     if name == "fast":

@@ -123,13 +123,15 @@ class ObstacleWorld:
         The radius is inflated by ``safe_distance_m`` (d_o); missing slots are unused.
         """
         pts = np.atleast_2d(np.asarray(points_ned_m, dtype=float))
-        out = np.tile(UNUSED_SLOT, (pts.shape[0], count, 1))
         if not self.obstacles or count == 0:
-            return out
+            return np.tile(UNUSED_SLOT, (pts.shape[0], count, 1))
         order = np.argsort(self.surface_distance_m(pts), axis=1, kind="stable")[:, :count]
-        k = order.shape[1]
-        out[:, :k] = self._slots[order]
-        out[:, :k, 6] += safe_distance_m
+        nearest = self._slots[order]  # a new array
+        nearest[:, :, 6] += safe_distance_m
+        if order.shape[1] == count:
+            return nearest
+        out = np.tile(UNUSED_SLOT, (pts.shape[0], count, 1))
+        out[:, : order.shape[1]] = nearest
         return out
 
 

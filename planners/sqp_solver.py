@@ -9,7 +9,11 @@ feasible. The Hessian is the exact Hessian of the least-squares cost (Gauss-Newt
 curvature is dropped). With one iteration per control step and a shifted warm start this is the
 real-time iteration scheme.
 
-The linearisation is evaluated node-parallel in NumPy by default
+The linearisation and its condensing are by default one compiled C routine whose numbers (the
+model's constants, the learned residual's data) are inputs, so one build per machine serves
+every model of the same shape (:mod:`planners.compiled_linearisation`); without a C compiler,
+for a residual with a batched form (a learned GP), or with ``linearisation="batched"``, they
+are evaluated node-parallel in NumPy
 (:mod:`planners.batched_linearisation`: the RK4 step's Jacobians through the chain rule, the
 residual's batched form, dense condensing); ``linearisation="symbolic"`` builds it as a single
 CasADi Function over the whole horizon instead (the path the planner used before; with
@@ -29,6 +33,7 @@ from threadpoolctl import ThreadpoolController
 
 from planners.batched_linearisation import BatchedLinearisation
 from planners.compiled_function import compiled
+from planners.compiled_linearisation import compiled_linearisation
 from planners.condensed_qp import CondensedQp
 from planners.nmpc_formulation import NmpcFormulation
 from planners.solver_output import SolverOutput
@@ -41,8 +46,11 @@ class _Linearisation(NamedTuple):
 
     hess, grad: Gauss-Newton Hessian and gradient of the cost in the inputs; a_x, lba_x, uba_x:
     state-bound rows (sensitivity and bounds relative to the linearised trajectory); g_h, lba_h:
-    obstacle rows (Jacobian, lower bound; a padding row last); lbx, ubx: input bounds relative
-    to the iterate; x_lin: the trajectory the inputs produce; sens: d x_lin / d u.
+    obstacle rows (N N_o + 1, nx) and (N N_o + 1,), obstacle-major (row j N + k - 1: slot j at
+    node k): the clearance's gradient w.r.t. x_k (the row's only nonzero block: the QP row is
+    g_h S_k, S_k node k's rows of sens) and its lower bound, a padding row last (zero, -inf);
+    lbx, ubx: input bounds relative to the iterate; x_lin: the trajectory the inputs produce;
+    sens: d x_lin / d u.
     """
 
     hess: Any
@@ -58,8 +66,7 @@ class _Linearisation(NamedTuple):
     sens: Any
 
 
-_SPARSE_OUTPUTS = ("g_h",)  # only a few obstacle rows are picked per iteration: keep it sparse
-LINEARISATIONS: tuple[str, ...] = ("batched", "symbolic")
+LINEARISATIONS: tuple[str, ...] = ("compiled", "batched", "symbolic")
 _BLAS: list[list] = []  # the BLAS libraries' controllers, found at the first solve (a scan)
 
 
@@ -73,13 +80,17 @@ class SqpOptions:
         cold_start_iterations: iterations when there is no previous solution to start from
             (first plan, after a failure), at least ``max_iterations``.
         step_tol: stop when the largest input step and dynamics gap are below this.
-        linearisation: "batched" (NumPy, node-parallel; planners.batched_linearisation) or
-            "symbolic" (one CasADi Function over the horizon, the reference).
+        linearisation: "compiled" (one C routine per shape, planners.compiled_linearisation;
+            "batched" when it cannot be compiled or the residual has a batched form: a learned
+            GP's step compiles for 14 s, over the 10 s a new model may take to be ready to
+            fly, measured), "batched" (NumPy, node-parallel;
+            planners.batched_linearisation) or "symbolic" (one CasADi Function over the
+            horizon, the reference).
         compile: compile the symbolic linearisation to C (needs a C compiler; falls back to
             the CasADi virtual machine without one). Measured on the benchmark problem: about
             15 % faster per plan, but the first build of each formulation (each new residual
-            model) takes a minute or more, so it is off by default. The batched linearisation
-            has nothing to compile and ignores it.
+            model) takes a minute or more, so it is off by default. The compiled and batched
+            linearisations ignore it.
         qp_feasibility_tol: a QP solution violating its constraints by more is a failure.
         screen_distance_m: obstacle rows whose linearised clearance exceeds this [m] are left
             out of the QP (they cannot become active within one step of a converging SQP).
@@ -92,7 +103,7 @@ class SqpOptions:
 
     max_iterations: int = 1
     cold_start_iterations: int = 10
-    linearisation: Literal["batched", "symbolic"] = "batched"
+    linearisation: Literal["compiled", "batched", "symbolic"] = "compiled"
     step_tol: float = 1e-6
     compile: bool = False
     qp_feasibility_tol: float = 1e-6
@@ -125,8 +136,15 @@ class GaussNewtonSqp:
         hi = np.tile(formulation.x_max, n)
         self._xrows = [int(i) for i in np.flatnonzero(np.isfinite(lo) | np.isfinite(hi))]
         self._x_lo, self._x_hi = lo[self._xrows], hi[self._xrows]
-        if self.options.linearisation == "batched":
-            self._lin = BatchedLinearisation(formulation, self._xrows, self._x_lo, self._x_hi)
+        kind = self.options.linearisation
+        rows = (formulation, self._xrows, self._x_lo, self._x_hi)
+        residual = formulation.residual
+        compile_it = kind == "compiled" and (residual is None or residual.batch is None)
+        fast = compiled_linearisation(*rows) if compile_it else None
+        if fast is not None:
+            self._lin = fast
+        elif kind in ("compiled", "batched"):
+            self._lin = BatchedLinearisation(*rows)
         else:
             lin = self._build_linearisation()
             lin = compiled(lin) if self.options.compile else lin
@@ -142,13 +160,16 @@ class GaussNewtonSqp:
             for b in self._buckets
         }
         self._pad_row = n * cfg.n_obstacles  # index of the all-zero row lin appends
+        # Each obstacle row's node's rows of sens (the padding row's: node 1's, times zero).
+        node = np.append(np.tile(np.arange(n), cfg.n_obstacles), 0)
+        self._row_states = node[:, None] * nx + np.arange(nx)  # (N N_o + 1, nx)
 
     def _build_linearisation(self) -> ca.Function:
         """(w, p) -> the condensed QP at w, built block-wise in O(N^2) (no dense products).
 
         Outputs: H (nu*N, nu*N), g (nu*N), A_x (state-bound rows, nu*N), lba_x, uba_x,
-        G_h (N*N_o + 1, nx*N; sparse): clearance gradients w.r.t. x_1..x_N, so the obstacle
-        rows are G_h S; lba_h (N*N_o + 1): minus the linearised clearance, obstacle-major
+        G_h (N*N_o + 1, nx): each obstacle row's clearance gradient w.r.t. its node's state, so
+        its QP row is G_h S_k; lba_h (N*N_o + 1): minus the linearised clearance, obstacle-major
         (the last row is all zero with bound -inf, used to pad row blocks);
         lbx, ubx (nu*N; input step bounds), x_lin (nx*N): states x_1..x_N predicted with zero
         input step, S (nx*N, nu*N): their sensitivity to the input step.
@@ -206,7 +227,7 @@ class GaussNewtonSqp:
             for j in range(n_o):
                 for k in range(1, n + 1):
                     hv, gx = hjac(xs[:, k], slots[:, j * n + k - 1])
-                    grads_h.append(ca.horzcat(ca.SX(1, nx * (k - 1)), gx, ca.SX(1, nx * (n - k))))
+                    grads_h.append(gx)
                     lb_h.append(-hv - gx @ c_blk[k])
         u = ca.vec(us)
         outs = _Linearisation(
@@ -215,17 +236,14 @@ class GaussNewtonSqp:
             a_x=sens[self._xrows, :],
             lba_x=self._x_lo - x_lin[self._xrows],
             uba_x=self._x_hi - x_lin[self._xrows],
-            g_h=ca.vertcat(*grads_h, ca.SX(1, nx * n)),
+            g_h=ca.vertcat(*grads_h, ca.SX(1, nx)),
             lba_h=ca.vertcat(*lb_h, -ca.inf),
             lbx=ca.DM(np.tile(f.u_min, n)) - u,
             ubx=ca.DM(np.tile(f.u_max, n)) - u,
             x_lin=x_lin,
             sens=sens,
         )
-        dense = [
-            out if name in _SPARSE_OUTPUTS else ca.densify(out)
-            for name, out in zip(_Linearisation._fields, outs, strict=True)
-        ]
+        dense = [ca.densify(out) for out in outs]
         return ca.Function(
             "gn_sqp_linearisation", [w, p], dense, ["w", "p"], list(_Linearisation._fields)
         )
@@ -276,14 +294,16 @@ class GaussNewtonSqp:
             if near.size > self._buckets[-1]:
                 near = near[np.argsort(clearance[near])[: self._buckets[-1]]]
             bucket = next(b for b in self._buckets if b >= near.size)
-            rows = [int(i) for i in near] + [self._pad_row] * (bucket - near.size)
+            rows = np.full(bucket, self._pad_row)
+            rows[: near.size] = near
+            a_h = np.matmul(lin.g_h[rows, None, :], lin.sens[self._row_states[rows]])[:, 0, :]
             du, violation = self._qps[bucket].solve(
                 lin.hess,
                 lin.grad,
                 lin.a_x,
                 lin.lba_x,
                 lin.uba_x,
-                lin.g_h[rows, :] @ lin.sens,
+                a_h,
                 lin.lba_h[rows],
                 lin.lbx,
                 lin.ubx,

@@ -99,7 +99,7 @@ def parse_args(argv: list[str] | None) -> StudyConfig:
     parser.add_argument(
         "--compile",
         action="store_true",
-        help="compile the symbolic linearisation to C (not used by the default batched one)",
+        help="compile the symbolic linearisation to C (not used by the default one)",
     )
     parser.add_argument("--quick", action="store_true", help="small smoke version")
     args = parser.parse_args(argv)

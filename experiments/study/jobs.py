@@ -23,7 +23,7 @@ class FlightJob:
     """One flight to fly: ``planner`` is "nominal" or an inducing selection's name.
 
     ``compile_functions``: compile the NMPC's symbolic linearisation to C (cached on disk);
-    the batched linearisation the planner uses by default ignores it.
+    the default linearisation (compiled per shape, or NumPy) ignores it.
     """
 
     trajectory: int

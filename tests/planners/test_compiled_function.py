@@ -1,3 +1,4 @@
+import os
 import shutil
 
 import casadi as ca
@@ -13,7 +14,7 @@ def small_function() -> ca.Function:
     return ca.Function("small_fn", [x, y], [ca.sin(x) * y[0], ca.sumsqr(x) + y[1]])
 
 
-@pytest.mark.skipif(shutil.which("cc") is None, reason="needs a C compiler")
+@pytest.mark.skipif(shutil.which(os.environ.get("CC", "cc")) is None, reason="needs a C compiler")
 def test_compiled_matches_and_is_cached(tmp_path, monkeypatch):
     monkeypatch.setenv("RESIDUAL_COMPANION_CACHE", str(tmp_path))
     fn = small_function()
