@@ -116,7 +116,7 @@ def _markdown(
     verdict = ", ".join(f"`{v}`" for v in d.verdict) or (
         "none: no cause stands out of the log's noise floor"
     )
-    if d.not_examined and not d.verdict:
+    if d.not_examined:
         verdict += f" (not examined: {', '.join(d.not_examined)})"
     floor = d.noise_floor.get("replay_rmse_mps")
     lines = [

@@ -124,6 +124,9 @@ def test_the_last_line_names_what_was_not_examined_also_beside_a_gain(tmp_path, 
     not_examined = json.loads((tmp_path / "report.json").read_text())["not_examined"]
     assert "rotor_drag" in not_examined and "command_delay" in not_examined
     assert "gain 1.0x" in last and f"not examined: {', '.join(not_examined)}" in last, last
+    verdict = next(line for line in (tmp_path / "report.md").read_text().splitlines()
+                   if line.startswith("- **Verdict:"))  # fmt: skip
+    assert verdict.startswith("- **Verdict: `unexplained` (not examined: rotor_drag"), verdict
 
 
 def test_a_large_replay_error_is_warned_of_beside_an_unexplained_force_residual():
