@@ -286,10 +286,20 @@ def structure_only(model: ResidualModel) -> bool:
 
 
 def refusal(model: ResidualModel) -> str | None:
-    """One line refusing ``model`` if its file records a failed prediction check, else None."""
+    """One line refusing ``model`` if its file records a failed prediction check, or a check
+    without its verdict (a damaged or hand-edited file), else None (also for a model fitted
+    without the check)."""
     check = model.training.get("prediction_check")
-    if not isinstance(check, dict) or check.get("passed", True):
+    if not isinstance(check, dict) or check.get("passed") is True:
         return None
+    if "passed" not in check or any(
+        key not in check
+        for key in ("incumbent", "horizon_s", "candidate_rmse_m", "incumbent_rmse_m")
+    ):
+        return (
+            "refusing the learned model: its file records a prediction check without its "
+            "verdict (damaged or edited); fit it again with fit-gp"
+        )
     return (
         f"refusing the learned model: it predicts worse than {check['incumbent']} over "
         f"{check['horizon_s']:g} s on held-out logs ({check['candidate_rmse_m']:.4f} m vs "

@@ -150,6 +150,12 @@ def test_the_companion_refuses_a_model_file_that_failed_its_check(hidden_plant_l
         check_residual_model(bad, period_s=0.02)
     assert "\n" not in str(info.value)
     check_residual_model(model, period_s=0.02)  # an unchecked model is not refused
+    # a check without its verdict (a damaged or hand-edited file) cannot vouch for the model
+    no_verdict = {k: v for k, v in failed.items() if k != "passed"}
+    unknown = replace(model, training={**model.training, "prediction_check": no_verdict})
+    with pytest.raises(ModelFileError, match="without its verdict"):
+        check_residual_model(unknown, period_s=0.02)
+    assert refusal(replace(model, training={**model.training, "prediction_check": {}})) is not None
 
 
 def test_a_gp_that_does_not_beat_its_structure_flies_without_it(hidden_plant_logs):
