@@ -20,10 +20,8 @@ HOLD and LAND, and the companion waited for it to disarm).
 
 from __future__ import annotations
 
-import signal
 import sys
 from pathlib import Path
-from types import FrameType
 
 from companion.app import (
     DEFAULT_URL,
@@ -35,6 +33,7 @@ from companion.app import (
 from companion.planner_registry import PLANNER_NAMES
 from companion.runner import COMPANION_RT_PRIORITY, FlightOutcome, RunnerConfig, Terminated
 from scripts.one_line_parser import OneLineParser, output_path
+from scripts.stop_signals import stop_signals_answered
 
 EXIT_COMPLETED = 0
 EXIT_FAILED = 1
@@ -156,36 +155,17 @@ def _summary(outcome: FlightOutcome) -> str:
     return "; ".join(parts)
 
 
-def _sigterm_as_interrupt(_signum: int, _frame: FrameType | None) -> None:
-    raise Terminated
-
-
-def _stop_signals_answered() -> tuple[object, object, set[signal.Signals]]:
-    """Make Ctrl-C (SIGINT) and SIGTERM reach the flight as a safe stop, whatever this process
-    inherited: a parent that ignores SIGINT (a shell's background job, a supervisor) or blocks
-    it leaves it ignored or blocked in its children, and the companion would fly on through the
-    operator's stop. Returns what to restore: the two handlers and the blocked signals."""
-    previous_int = signal.signal(signal.SIGINT, signal.default_int_handler)
-    previous_term = signal.signal(signal.SIGTERM, _sigterm_as_interrupt)
-    blocked = signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM})
-    return previous_int, previous_term, blocked
-
-
 def main(argv: list[str] | None = None) -> int:
     config = parse_args(argv)
-    previous_int, previous_term, blocked = _stop_signals_answered()
     try:
-        result = run_companion(config, _progress)
+        with stop_signals_answered():
+            result = run_companion(config, _progress)
     except CompanionInputError as exc:
         print(f"companion: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt as exc:
         _progress("interrupted again during the safe stop; the vehicle was commanded to land")
         return EXIT_TERMINATED if isinstance(exc, Terminated) else EXIT_INTERRUPTED
-    finally:
-        signal.signal(signal.SIGINT, previous_int)
-        signal.signal(signal.SIGTERM, previous_term)
-        signal.pthread_sigmask(signal.SIG_SETMASK, blocked)
     outcome = result.outcome
     if outcome.status == "handed_over":
         print(f"companion: {outcome.detail}", file=sys.stderr, flush=True)

@@ -37,10 +37,8 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import signal
 import sys
 from pathlib import Path
-from types import FrameType
 
 import numpy as np
 
@@ -56,6 +54,7 @@ from flightlog.atomic_output import (
     write_text_atomic,
 )
 from scripts.one_line_parser import OneLineParser, output_path
+from scripts.stop_signals import stop_signals_answered
 
 PROG = "rover-path"
 LINKS = ("pymavlink", "mavsdk", "inprocess")
@@ -345,26 +344,20 @@ def _trials(n: int) -> str:
     return f"{n} trial" if n == 1 else f"{n} trials"
 
 
-def _sigterm_as_interrupt(_signum: int, _frame: FrameType | None) -> None:
-    raise Terminated
-
-
 def main(argv: list[str] | None = None) -> int:
     try:
         args = parse_args(argv)
     except SystemExit as exc:  # --help (0) or a one-line usage error (2)
         return int(exc.code or 0)
-    previous = signal.signal(signal.SIGTERM, _sigterm_as_interrupt)
     try:
-        return teach(args) if args.command == "teach" else repeat(args)
+        with stop_signals_answered():
+            return teach(args) if args.command == "teach" else repeat(args)
     except BadInput as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt as exc:
         _say("interrupted")
         return EXIT_TERMINATED if isinstance(exc, Terminated) else EXIT_INTERRUPTED
-    finally:
-        signal.signal(signal.SIGTERM, previous)
 
 
 if __name__ == "__main__":

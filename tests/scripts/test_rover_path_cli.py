@@ -270,7 +270,8 @@ def test_ctrl_c_or_sigterm_mid_repeat_sends_hold(
 @pytest.mark.slow
 def test_ctrl_c_ends_a_pilot_driven_teach_and_writes_the_path(tmp_path: Path) -> None:
     """A pilot drives in MANUAL; Ctrl-C on the companion ends the recording and the path so
-    far is written."""
+    far is written. Started with SIGINT ignored, as a shell's background job or nohup starts
+    it (its children inherit that): the Ctrl-C still ends it."""
     port = _free_port()
     endpoint = _endpoint(port)
     out = tmp_path / "p.csv"
@@ -278,6 +279,7 @@ def test_ctrl_c_ends_a_pilot_driven_teach_and_writes_the_path(tmp_path: Path) ->
         [sys.executable, "-m", "scripts.rover_path", "teach", "--out", str(out),
          "--url", f"udpin://127.0.0.1:{port}"],
         cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_IGN),
     )  # fmt: skip
     try:
         _wait_for(proc, "teaching over pymavlink")
