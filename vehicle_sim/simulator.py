@@ -423,8 +423,8 @@ class Simulator:
         return self._cs[fc.CS_VEL_INT : fc.CS_VEL_INT + 3].copy()
 
     def set_velocity_integral(self, value_mps2: np.ndarray) -> None:
-        """Set the velocity loop's integral term (3,) NED [m/s^2], e.g. to an average of the
-        values ``anchor(..., integral="match_thrust")`` found at several rows.
+        """Set the velocity loop's integral term (3,) NED [m/s^2], e.g. the integral a replayed
+        run starts with, fitted to its measured velocities.
 
         Raises:
             ValueError: not 3 finite numbers; nothing changes then.

@@ -2,25 +2,19 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
-from companion.link import LandedPhase, LinkState
+from companion.link import LinkState
 from companion.mission import load_mission
 from companion.runner import RunnerConfig, _FollowMonitor
 from tests.companion.test_companion_mission_on_every_link import LINE
+from tests.companion.test_companion_planner_policy import state
 
 
 def _state(t_s: float, pos_ned_m, vel_ned_mps) -> LinkState:
-    return LinkState(
-        t_s=t_s,
-        pos_ned_m=np.asarray(pos_ned_m, dtype=float),
-        vel_ned_mps=np.asarray(vel_ned_mps, dtype=float),
-        q_wxyz=np.array([1.0, 0.0, 0.0, 0.0]),
-        rates_frd_radps=np.zeros(3),
-        armed=True,
-        mode="OFFBOARD",
-        landed=LandedPhase.IN_AIR,
-    )
+    return replace(state(pos_ned_m, vel_ned_mps), t_s=t_s)
 
 
 def test_a_vehicle_at_the_goal_arrives_only_once_slower_than_arrive_speed() -> None:

@@ -136,6 +136,15 @@ def _hovering(**params: float) -> Simulator:
     return sim
 
 
+def _in_offboard(sim: Simulator, setpoint) -> Simulator:
+    """``sim`` switched to OFFBOARD after 0.5 s of ``setpoint`` streamed at 20 Hz."""
+    for _ in range(10):
+        sim.set_velocity_setpoint(setpoint)
+        sim.step(0.05)
+    assert sim.set_mode(FlightMode.OFFBOARD).accepted
+    return sim
+
+
 def _fly(sim: Simulator, sticks: Sticks, duration_s: float, rate_hz: float = 20.0) -> None:
     """Send ``sticks`` at ``rate_hz`` for ``duration_s`` of simulated time."""
     for _ in range(round(duration_s * rate_hz)):
@@ -231,11 +240,7 @@ def test_a_joystick_that_goes_away_in_offboard_fails_over_unless_bit_2_is_set(
     companion flies OFFBOARD: PX4 runs NAV_RCL_ACT unless COM_RCL_EXCEPT has bit 2 (value 4)."""
     from vehicle_sim import VelocitySetpoint
 
-    sim = _hovering(COM_RCL_EXCEPT=rcl_except)
-    for _ in range(10):
-        sim.set_velocity_setpoint(VelocitySetpoint((0.5, 0.0, 0.0)))
-        sim.step(0.05)
-    assert sim.set_mode(FlightMode.OFFBOARD).accepted
+    sim = _in_offboard(_hovering(COM_RCL_EXCEPT=rcl_except), VelocitySetpoint((0.5, 0.0, 0.0)))
     for k in range(60):
         sim.set_velocity_setpoint(VelocitySetpoint((0.5, 0.0, 0.0)))
         if k < 20:
@@ -285,11 +290,7 @@ def test_a_stick_held_out_does_not_take_back_a_mode_the_pilot_chose() -> None:
 def test_sticks_take_over_from_offboard_only_with_its_override_bit(bits, taken_over) -> None:
     from vehicle_sim import VelocitySetpoint
 
-    sim = _hovering(COM_RC_OVERRIDE=bits)
-    for _ in range(10):
-        sim.set_velocity_setpoint(VelocitySetpoint((1.0, 0.0, 0.0)))
-        sim.step(0.05)
-    assert sim.set_mode(FlightMode.OFFBOARD).accepted
+    sim = _in_offboard(_hovering(COM_RC_OVERRIDE=bits), VelocitySetpoint((1.0, 0.0, 0.0)))
     for _ in range(20):
         sim.set_velocity_setpoint(VelocitySetpoint((1.0, 0.0, 0.0)))
         sim.set_sticks(Sticks(0.0, 0.0, 0.5, -0.8))
