@@ -4,10 +4,17 @@ A MAVLink link carries position, velocity and attitude, but not the measured acc
 the rotor thrust a diagnosis needs; PX4 logs those on board (ULog) and the user copies the log
 off afterwards. :class:`OnboardLogger` does the same for a simulator behind the MAVLink endpoint:
 it stands in for the :class:`~vehicle_sim.Simulator` (every attribute is the simulator's), and
-records one schema-v1 row (:func:`vehicle_sim.truth_log.truth_row`) per logging period of
-simulated time as the endpoint steps it. The command in a row is the last velocity setpoint
-the vehicle received (what PX4 logs as it arrives), not the one it acts on after a command
-delay. Rows fall on the endpoint's steps, so their spacing jitters by up to one step. Given a
+records schema-v1 rows (:func:`vehicle_sim.truth_log.truth_row`) as the endpoint steps it.
+The command in a row is the last velocity setpoint the vehicle received (what PX4 logs as it
+arrives), not the one it acts on after a command delay, and a row's command is the one the
+vehicle flew on from that row's time to the next row's, as a replay of the log assumes
+(diagnosis.replay). So a row is written just before a step, with the state the step starts
+from: when a new setpoint was received (the step is the first to fly it; PX4's velocity
+controller likewise acts on a setpoint at a vehicle_local_position update, which is a ULog
+row), and otherwise once per logging period. Rows fall on the endpoint's steps, so their
+spacing jitters by up to one step, and a setpoint stream faster than the logging rate is
+logged at up to twice the rate (a setpoint that arrives sooner than half a period after the
+last one logged waits for the next row). Given a
 ``stream_path``, every row is also appended to the file at once (flightlog.live_log), as PX4
 writes its log while it flies: a killed simulator leaves every row logged up to then.
 """
@@ -42,7 +49,9 @@ class OnboardLogger:
         self._sim = sim
         self._period_s = 1.0 / rate_hz
         self._next_s = -math.inf
+        self._last_setpoint_row_s = -math.inf
         self._received: VelocitySetpoint | None = None
+        self._fresh = False
         metadata = {**sim.log_metadata(), "rate_hz": rate_hz}
         self._recorder = FlightLogRecorder(metadata)
         self._live = (
@@ -58,18 +67,27 @@ class OnboardLogger:
         """The simulator's; an accepted setpoint becomes the logged command."""
         self._sim.set_velocity_setpoint(sp)
         self._received = sp
+        self._fresh = True
 
     def step(self, duration_s: float) -> VehicleState:
-        """The simulator's step; then a row if a logging period has passed."""
-        state = self._sim.step(duration_s)
-        if state.t_s >= self._next_s:
-            row = self._sim.log_row(self._received)
-            self._recorder.append(row)
-            if self._live is not None:
-                self._live.append(row)
+        """A row if one is due (above), then the simulator's step."""
+        t_s = self._sim.state.t_s
+        if self._fresh and t_s - self._last_setpoint_row_s >= 0.5 * self._period_s:
+            self._log_row()
+            self._last_setpoint_row_s = t_s
+            self._next_s = t_s + self._period_s
+        elif t_s >= self._next_s:
+            self._log_row()
             due_s = self._next_s + self._period_s
-            self._next_s = due_s if due_s > state.t_s else state.t_s + self._period_s
-        return state
+            self._next_s = due_s if due_s > t_s else t_s + self._period_s
+        return self._sim.step(duration_s)
+
+    def _log_row(self) -> None:
+        row = self._sim.log_row(self._received)
+        self._recorder.append(row)
+        if self._live is not None:
+            self._live.append(row)
+        self._fresh = False
 
     def to_log(self) -> FlightLog:
         """The rows so far as a flight log."""

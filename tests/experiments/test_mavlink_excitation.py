@@ -47,7 +47,8 @@ def test_schedule_flown_over_mavlink_lands_in_the_onboard_log(tmp_path):
     cmd = log.stack("cmd_vel_n_mps", "cmd_vel_e_mps")[offboard]
     want = speed * np.array([math.cos(math.radians(heading)), math.sin(math.radians(heading))])
     sent = np.all(np.isclose(cmd, want, atol=1e-3), axis=1)
-    assert 2.5 < sent.sum() * 0.02 < 3.5  # the velocity segment's commands, as sent
+    held_s = np.diff(t, append=t[-1])  # each row's command holds until the next row
+    assert 2.5 < held_s[sent].sum() < 3.5  # the velocity segment's commands, as sent
     vel = log.stack("vel_n_mps", "vel_e_mps")[offboard]
     assert np.max(vel @ want / speed) > 0.8 * speed  # and flown
     assert np.all(np.isfinite(log["thrust_n"][offboard]))
