@@ -36,3 +36,20 @@ def test_without_compiler_returns_the_function(tmp_path, monkeypatch):
     fn = small_function()
     assert compiled(fn) is fn
     assert not list(tmp_path.glob("*.so"))
+
+
+@pytest.mark.skipif(shutil.which(os.environ.get("CC", "cc")) is None, reason="needs a C compiler")
+def test_a_damaged_cached_library_is_built_again(tmp_path, monkeypatch):
+    # a power cut soon after the first build can leave the library renamed but empty: every
+    # planner built afterwards raised CasADi's 'Cannot load shared library' instead of planning
+    monkeypatch.setenv("RESIDUAL_COMPANION_CACHE", str(tmp_path))
+    compiled(small_function())
+    (library,) = tmp_path.glob("*.so")
+    library.write_bytes(b"")
+    fn = small_function()
+    fast = compiled(fn)
+    assert fast.is_a("External")
+    x, y = np.array([0.1, -2.0, 3.0]), np.array([1.5, -0.5])
+    for a, b in zip(fn(x, y), fast(x, y), strict=True):
+        np.testing.assert_allclose(np.asarray(a), np.asarray(b), rtol=1e-14)
+    assert library.stat().st_size > 0
