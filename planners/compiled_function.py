@@ -1,8 +1,9 @@
 """Compile a CasADi Function to C once per machine and load it back.
 
 The C code is generated from our own formulation at first use, built with the system C
-compiler (``$CC``, default ``cc``) into a user cache directory (``$RESIDUAL_COMPANION_CACHE``,
-else ``$XDG_CACHE_HOME/residual-companion``, else ``~/.cache/residual-companion``) under a name
+compiler (``$CC``, a command line as make takes it, e.g. "ccache gcc"; default ``cc``) into a
+user cache directory (``$RESIDUAL_COMPANION_CACHE``, else
+``$XDG_CACHE_HOME/residual-companion``, else ``~/.cache/residual-companion``) under a name
 that hashes the source, so a changed formulation gets a new library and concurrent processes
 never see a half-written one; the library is synced to disk before it is renamed into place,
 and a cached library that does not load (left empty by a power cut, damaged) is built again.
@@ -14,6 +15,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import shlex
 import signal
 import subprocess
 import tempfile
@@ -67,7 +69,7 @@ def _build(source: str, library: Path) -> bool:
             c_file.write_text(source)
             out = Path(tmp) / library.name
             cmd = [
-                os.environ.get("CC", "cc"),
+                *shlex.split(os.environ.get("CC") or "cc"),
                 "-O2",
                 "-shared",
                 "-fPIC",

@@ -53,3 +53,12 @@ def test_a_damaged_cached_library_is_built_again(tmp_path, monkeypatch):
     for a, b in zip(fn(x, y), fast(x, y), strict=True):
         np.testing.assert_allclose(np.asarray(a), np.asarray(b), rtol=1e-14)
     assert library.stat().st_size > 0
+
+
+@pytest.mark.skipif(shutil.which("cc") is None, reason="needs a C compiler")
+def test_a_compiler_named_with_its_options_compiles(tmp_path, monkeypatch):
+    # $CC as make takes it, a command line ("ccache gcc", "gcc -m64"): it was run as one
+    # program name, not found, and the planner fell back to the slower path without a word
+    monkeypatch.setenv("RESIDUAL_COMPANION_CACHE", str(tmp_path))
+    monkeypatch.setenv("CC", f"{shutil.which('cc')} -Wall")
+    assert compiled(small_function()).is_a("External")
