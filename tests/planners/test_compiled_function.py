@@ -1,4 +1,5 @@
 import os
+import shlex
 import shutil
 
 import casadi as ca
@@ -14,7 +15,9 @@ def small_function() -> ca.Function:
     return ca.Function("small_fn", [x, y], [ca.sin(x) * y[0], ca.sumsqr(x) + y[1]])
 
 
-@pytest.mark.skipif(shutil.which(os.environ.get("CC", "cc")) is None, reason="needs a C compiler")
+@pytest.mark.skipif(
+    shutil.which(shlex.split(os.environ.get("CC") or "cc")[0]) is None, reason="needs a C compiler"
+)
 def test_compiled_matches_and_is_cached(tmp_path, monkeypatch):
     monkeypatch.setenv("RESIDUAL_COMPANION_CACHE", str(tmp_path))
     fn = small_function()
@@ -38,7 +41,9 @@ def test_without_compiler_returns_the_function(tmp_path, monkeypatch):
     assert not list(tmp_path.glob("*.so"))
 
 
-@pytest.mark.skipif(shutil.which(os.environ.get("CC", "cc")) is None, reason="needs a C compiler")
+@pytest.mark.skipif(
+    shutil.which(shlex.split(os.environ.get("CC") or "cc")[0]) is None, reason="needs a C compiler"
+)
 def test_a_damaged_cached_library_is_built_again(tmp_path, monkeypatch):
     # a power cut soon after the first build can leave the library renamed but empty: every
     # planner built afterwards raised CasADi's 'Cannot load shared library' instead of planning
