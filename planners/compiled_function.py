@@ -1,17 +1,21 @@
 """Compile a CasADi Function to C once per machine and load it back.
 
 The C code is generated from our own formulation at first use, built with the system C
-compiler (``$CC``, default ``cc``) into a user cache directory (``$RESIDUAL_COMPANION_CACHE``,
-else ``$XDG_CACHE_HOME/residual-companion``, else ``~/.cache/residual-companion``) under a name
+compiler (``$CC``, a command line as make takes it, e.g. "ccache gcc"; default ``cc``) into a
+user cache directory (``$RESIDUAL_COMPANION_CACHE``, else
+``$XDG_CACHE_HOME/residual-companion``, else ``~/.cache/residual-companion``) under a name
 that hashes the source, so a changed formulation gets a new library and concurrent processes
-never see a half-written one. Without a working compiler the Function is returned unchanged
-(the CasADi virtual machine evaluates it, slower but identical).
+never see a half-written one; the library is synced to disk before it is renamed into place,
+and a cached library that does not load (left empty by a power cut, damaged) is built again.
+Without a working compiler the Function is returned unchanged (the CasADi virtual machine
+evaluates it, slower but identical).
 """
 
 from __future__ import annotations
 
 import hashlib
 import os
+import shlex
 import signal
 import subprocess
 import tempfile
@@ -41,9 +45,20 @@ def compiled(fn: ca.Function) -> ca.Function:
     digest = hashlib.sha256(source.encode()).hexdigest()[:20]
     directory = cache_dir()
     library = directory / f"{name}_{digest}.so"
-    if not library.exists() and not _build(source, library):
-        return fn
-    return ca.external(name, str(library))
+    if library.exists():
+        loaded = _load(name, library)
+        if loaded is not None:
+            return loaded
+    built = _load(name, library) if _build(source, library) else None
+    return fn if built is None else built
+
+
+def _load(name: str, library: Path) -> ca.Function | None:
+    """The Function ``name`` of ``library``, or None when it does not load."""
+    try:
+        return ca.external(name, str(library))
+    except RuntimeError:
+        return None
 
 
 def _build(source: str, library: Path) -> bool:
@@ -54,7 +69,7 @@ def _build(source: str, library: Path) -> bool:
             c_file.write_text(source)
             out = Path(tmp) / library.name
             cmd = [
-                os.environ.get("CC", "cc"),
+                *shlex.split(os.environ.get("CC") or "cc"),
                 "-O2",
                 "-shared",
                 "-fPIC",
@@ -64,6 +79,8 @@ def _build(source: str, library: Path) -> bool:
             ]
             if not _run_compiler(cmd, timeout_s=300.0):
                 return False
+            with open(out, "rb") as fh:
+                os.fsync(fh.fileno())
             os.replace(out, library)
         return True
     except (OSError, subprocess.SubprocessError):

@@ -130,16 +130,17 @@ class StickMotion:
 
     A stick held still, however far from centre, does not move: PX4 overrides an auto mode or
     OFFBOARD only when the pilot moves a stick faster than COM_RC_STICK_OV [%] of its travel
-    per second. Before the first reading (and after :meth:`reset`) the sticks count as
-    centred, so a pilot appearing with a stick out moves it.
+    per second. The first reading (also after :meth:`reset`) only says where the sticks are,
+    as MovingDiff leaves its difference at 0 without a last value: a joystick that connects,
+    or comes back after a loss, with a stick off centre moves nothing until that stick moves.
     """
 
     def __init__(self) -> None:
-        self._last = _axes(CENTRED)
+        self._last: tuple[float, float, float, float] | None = None
         self._rate = [0.0, 0.0, 0.0, 0.0]
 
     def reset(self) -> None:
-        """Forget the sticks (they were lost): the next reading moves from centre."""
+        """Forget the sticks (they were lost): the next reading is a first one again."""
         self.__init__()
 
     def update(self, sticks: Sticks, dt_s: float) -> float:
@@ -148,8 +149,9 @@ class StickMotion:
         written as ``r tau/(tau+dt) + d/(tau+dt)``, which also holds for dt = 0."""
         axes = _axes(sticks)
         tau = STICK_MOTION_TAU_S
-        for i, (value, last) in enumerate(zip(axes, self._last, strict=True)):
-            self._rate[i] = (self._rate[i] * tau + (value - last)) / (tau + dt_s)
+        if self._last is not None:
+            for i, (value, last) in enumerate(zip(axes, self._last, strict=True)):
+                self._rate[i] = (self._rate[i] * tau + (value - last)) / (tau + dt_s)
         self._last = axes
         return max(abs(rate) for rate in self._rate)
 

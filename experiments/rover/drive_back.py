@@ -108,8 +108,9 @@ def reverse_along(
     timeout_s: float | None = None,
     dt_s: float = 0.1,
 ) -> tuple[str, str]:
-    """Drive backwards along ``path`` from where the rover is (near its end) to its start,
-    facing the path's direction, and Hold; within ``ARRIVED_M`` of the start along the path.
+    """Drive backwards along ``path`` from where the rover is on it (its end, or partway) to its
+    start, facing the path's direction, and Hold; within ``ARRIVED_M`` of the start along the
+    path.
 
     ``timeout_s`` defaults to three times the path's length at ``speed_mps`` [m/s] plus 30 s.
     Returns and raises as :func:`drive_back`.
@@ -152,17 +153,23 @@ class _TurnDriveTurn:
 
 
 class _ReverseAlong:
-    """:func:`reverse_along`'s pure pursuit, backwards: the nearest vertex only moves towards
+    """:func:`reverse_along`'s pure pursuit, backwards: the nearest vertex is first looked for
+    along the whole path (among the vertices the rover faces the way of: a rover left partway
+    along, beside another part of the path, reverses from where it is), then only moves towards
     the start; the goal point is the lookahead behind the rover's projection on the path (past
     the start, on the line of the start's heading, so the rover arrives aligned with it)."""
 
     def __init__(self, path: TaughtPath, speed_mps: float, max_turn_radps: float) -> None:
         self.path, self.speed_mps, self.max_turn_radps = path, speed_mps, max_turn_radps
-        self.vertex = len(path) - 1
+        self.vertex: int | None = None
         self.lookahead_m = max(_LOOKAHEAD_MIN_M, _LOOKAHEAD_S * speed_mps)
 
     def __call__(self, pose: np.ndarray) -> tuple[float, float] | None:
         x, y, th = pose
+        if self.vertex is None:
+            d2 = np.sum((self.path.xy_m - (x, y)) ** 2, axis=1)
+            facing = np.cos(self.path.heading_rad - th) > 0.0
+            self.vertex = int(np.argmin(np.where(facing, d2, np.inf) if facing.any() else d2))
         lo = max(0, self.vertex - _SEARCH_VERTICES)
         d2 = np.sum((self.path.xy_m[lo : self.vertex + 1] - (x, y)) ** 2, axis=1)
         self.vertex = lo + int(np.argmin(d2))

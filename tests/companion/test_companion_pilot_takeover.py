@@ -357,9 +357,10 @@ def _pilot_takes_over_with_sticks(
     port: int, endpoint: MavlinkEndpoint, marks: dict, done: threading.Event
 ) -> None:
     """A pilot with a MAVLink joystick (QGC's virtual one) on its own link: allows the stick
-    override of OFFBOARD (COM_RC_OVERRIDE 3), waits for OFFBOARD plus a while, then pushes the
-    pitch stick forward, centres it and keeps sending centred sticks (so the manual-control-loss
-    failsafe stays quiet) until ``done``; notes every mode seen after its takeover."""
+    override of OFFBOARD (COM_RC_OVERRIDE 3), waits for OFFBOARD plus a while, connects with
+    centred sticks, then pushes the pitch stick forward, centres it and keeps sending centred
+    sticks (so the manual-control-loss failsafe stays quiet) until ``done``; notes every mode
+    seen after its takeover."""
     gcs = mavutil.mavlink_connection(f"udpout:127.0.0.1:{port}", source_system=245)
     rate_s = 0.1  # 10 Hz, as QGC's joystick
     try:
@@ -368,6 +369,9 @@ def _pilot_takes_over_with_sticks(
         deadline = time.monotonic() + 90.0
         _await_offboard(gcs, endpoint, deadline, rate_s)
         marks["before_sticks"] = endpoint.stats
+        for _ in range(3):  # the joystick connects centred (a first reading moves nothing)
+            gcs.mav.manual_control_send(1, 0, 0, 500, 0, 0)
+            time.sleep(rate_s)
         pushed_at = time.monotonic()
         modes_after: set[FlightMode] = set()
         while not done.is_set() and time.monotonic() < deadline:

@@ -9,6 +9,7 @@ loop of real-time iterations.
 from __future__ import annotations
 
 import os
+import shlex
 import shutil
 
 import casadi as ca
@@ -27,7 +28,7 @@ from planners.residual import ResidualTerm
 from planners.sqp_solver import GaussNewtonSqp, SqpOptions
 
 needs_cc = pytest.mark.skipif(
-    shutil.which(os.environ.get("CC", "cc")) is None, reason="needs a C compiler"
+    shutil.which(shlex.split(os.environ.get("CC") or "cc")[0]) is None, reason="needs a C compiler"
 )
 
 

@@ -82,10 +82,11 @@ def test_deadzone_and_expo_by_hand() -> None:
 
 
 def test_stick_motion_by_hand() -> None:
-    """PX4's MovingDiff: the rate of change low-passed with tau 0.1 s; the throttle over
-    [-1, 1]; a held stick's rate decays, however far out it is."""
+    """PX4's MovingDiff: the rate of change low-passed with tau 0.1 s, none at the first
+    reading; the throttle over [-1, 1]; a held stick's rate decays, however far out it is."""
     motion = StickMotion()
-    assert motion.update(Sticks(0.0, 0.0, 0.3, 0.0), 0.0) == pytest.approx(0.4 / 0.1)
+    assert motion.update(Sticks(0.0, 0.0, 0.3, 0.0), 0.0) == 0.0
+    assert motion.update(CENTRED, 0.0) == pytest.approx(0.4 / 0.1)
     motion = StickMotion()
     assert motion.update(CENTRED, 0.1) == 0.0
     assert motion.update(Sticks(0.2, 0.0, 0.5, 0.0), 0.1) == pytest.approx(0.2 / 0.2)
@@ -273,6 +274,21 @@ def test_moved_sticks_take_over_from_auto_modes_by_default() -> None:
     assert (6, "Pilot took over using sticks") in sim.drain_events()
 
 
+def test_a_joystick_that_connects_or_comes_back_with_a_stick_out_takes_nothing_over() -> None:
+    """PX4's MovingDiff has no rate before its second reading (it leaves its difference at 0
+    without a last value, and is reset when the sticks are lost): a joystick that connects, or
+    comes back after a loss, with a stick off centre moves nothing until the stick moves. The
+    first reading counted as a move from centre, so HOLD (or a mission) went to POSCTL."""
+    sim = _hovering(COM_RCL_EXCEPT=2)  # a loss in HOLD is only noted
+    _fly(sim, Sticks(0.3, 0.0, 0.5, 0.0), 1.0)
+    assert sim.state.mode is FlightMode.HOLD
+    sim.step(1.0)  # lost
+    _fly(sim, Sticks(0.0, -0.2, 0.6, 0.0), 1.0)  # back, held off centre
+    assert sim.state.mode is FlightMode.HOLD
+    _fly(sim, Sticks(0.4, -0.2, 0.6, 0.0), 0.05)  # the pilot moves one: takes over
+    assert sim.state.mode is FlightMode.POSCTL
+
+
 def test_a_stick_held_out_does_not_take_back_a_mode_the_pilot_chose() -> None:
     """PX4 overrides on stick motion, not position: flying POSCTL with the stick held forward,
     a switch to HOLD (or RTL, a failsafe) stays while the stick stays where it is."""
@@ -291,6 +307,7 @@ def test_sticks_take_over_from_offboard_only_with_its_override_bit(bits, taken_o
     from vehicle_sim import VelocitySetpoint
 
     sim = _in_offboard(_hovering(COM_RC_OVERRIDE=bits), VelocitySetpoint((1.0, 0.0, 0.0)))
+    sim.set_sticks(CENTRED)  # the joystick connects centred, then the pilot moves the yaw stick
     for _ in range(20):
         sim.set_velocity_setpoint(VelocitySetpoint((1.0, 0.0, 0.0)))
         sim.set_sticks(Sticks(0.0, 0.0, 0.5, -0.8))

@@ -246,6 +246,8 @@ def test_a_pilot_who_moves_the_sticks_during_the_failsafe_hold_cancels_its_actio
     sim.set_param("COM_OBL_RC_ACT", 4)  # land
     run_until(sim, lambda s: s.mode is not FlightMode.OFFBOARD, 3.0)
     assert sim.state.mode is FlightMode.HOLD
+    assert sim.set_sticks(CENTRED)  # the joystick connects centred, then the pilot moves it
+    sim.step(0.05)
     assert sim.set_sticks(Sticks(0.5, 0.0, 0.5, 0.0))
     sim.step(0.05)
     assert sim.state.mode is FlightMode.POSCTL
@@ -262,6 +264,8 @@ def test_sticks_moved_on_the_ground_take_nothing_over():
     assert sim.arm().accepted
     sim.step(0.5)
     mode = sim.state.mode
+    sim.set_sticks(CENTRED)
+    sim.step(0.05)
     for _ in range(10):
         sim.set_sticks(Sticks(1.0, 0.0, 0.5, 0.0))
         sim.step(0.05)

@@ -445,6 +445,35 @@ def test_reversing_along_the_path_brings_any_rover_to_its_start_facing_along_it(
     assert link.read_state().mode == "HOLD"
 
 
+class PosesSent(InProcessRoverLink):
+    """The in-process rover that keeps its pose (path frame) at each command sent."""
+
+    def __init__(self, sim: RoverSim) -> None:
+        super().__init__(sim)
+        self.poses: list[np.ndarray] = []
+
+    def send_velocity(self, command) -> None:
+        self.poses.append(pose_of(self))
+        super().send_velocity(command)
+
+
+def test_reversing_from_partway_along_the_path_stays_on_it() -> None:
+    """A run stopped partway along an out-and-back path (Ctrl-C, a pilot, a lost link) leaves
+    the rover 3 m from the start, beside the path's way back: it reverses the 3 m along the
+    path. The nearest vertex was looked for only among the last 20, so it took the way back
+    beside it for where it was, crossed 1.6 m of ground it had never driven to reach it, and
+    reversed along all 18.7 m of the path."""
+    path = TaughtPath.from_segments([(8.0, 0.0), (math.pi * 1.5, 1 / 1.5), (6.0, 0.0)])
+    link = PosesSent(RoverSim(rover_preset("husky_50kg"), seed=2, pose=path.pose(12)))
+    assert reverse_along(link, path, 0.5) == ("", "")
+    dist, dhead = start_offset(link, path)
+    assert dist < 0.08 and abs(dhead) < 0.05
+    poses = np.array(link.poses)
+    off_path_m = np.sqrt(np.sum((poses[:, None, :2] - path.xy_m[None]) ** 2, axis=2)).min(axis=1)
+    assert off_path_m.max() < 0.2
+    assert np.max(poses[:, 0]) < path.xy_m[12, 0] + 0.2  # never further out than it was
+
+
 def test_the_turn_way_cannot_bring_an_ackermann_rover_back_and_says_to_reverse() -> None:
     path = _open_ackermann_path()
     link = _at_the_end(path, "dmrv_600kg")
