@@ -92,6 +92,8 @@ class NmpcPlanner:
             f.x_min - tol,
             f.x_max + tol,
         )
+        # (a finite plan meets infinite state bounds: checked only when one is finite)
+        self._state_bounded = bool(np.isfinite(f.x_min).any() or np.isfinite(f.x_max).any())
         self._warm: tuple[float, np.ndarray, np.ndarray] | None = None
         self.late_plan: PlanResult | None = None
 
@@ -133,13 +135,14 @@ class NmpcPlanner:
             x_now[i] = x_ref[0, i] + np.angle(np.exp(1j * (x_now[i] - x_ref[0, i])))
         cold_start = self._warm is None
         w0, guess = self._warm_start(grid, x_now, x_ref, u_ref[:-1])
-        if self.world is not None and cfg.n_obstacles:
-            if self.world.clearance_m(self._positions(x_now[None, :]))[0] < 0.0:
+        if self.world is not None and cfg.n_obstacles and self.world.obstacles:
+            # guess row 0 is x_now: one distance table for the start check and the slots
+            distances = self.world.surface_distance_m(self._positions(guess))
+            if np.min(distances[0]) < 0.0:
                 self._warm = None
                 return self._safe("start inside an obstacle", start)
             # each node's N_o obstacles nearest to where it is expected to be (eq. 4)
-            near = self._positions(guess[1:])
-            slots = self.world.slots(near, cfg.n_obstacles, cfg.safe_distance_m)
+            slots = self.world.slots_at(distances[1:], cfg.n_obstacles, cfg.safe_distance_m)
         else:
             slots = np.tile(UNUSED_SLOT, (cfg.horizon_steps, cfg.n_obstacles, 1))
         p = f.pack_parameters(x_now, x_ref, u_ref[:-1], slots)
@@ -191,7 +194,7 @@ class NmpcPlanner:
         if (inputs < u_lo).any() or (inputs > u_hi).any():
             return "plan violates input bounds"
         later = predicted[1:]
-        if (later < x_lo).any() or (later > x_hi).any():
+        if self._state_bounded and ((later < x_lo).any() or (later > x_hi).any()):
             return "plan violates state bounds"
         if slots.size:  # node i against its own slots (N, N_o, 7)
             worst = float(np.min(slot_clearance_m(self._positions(later)[:, None, :], slots)))
