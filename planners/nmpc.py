@@ -94,6 +94,7 @@ class NmpcPlanner:
         )
         # (a finite plan meets infinite state bounds: checked only when one is finite)
         self._state_bounded = bool(np.isfinite(f.x_min).any() or np.isfinite(f.x_max).any())
+        self._node_times = cfg.dt_s * np.arange(cfg.horizon_steps + 1)  # [s] after t_s
         self._warm: tuple[float, np.ndarray, np.ndarray] | None = None
         self.late_plan: PlanResult | None = None
 
@@ -116,6 +117,9 @@ class NmpcPlanner:
         return safe_result(m.nu, m.nx, reason, time.perf_counter() - start)
 
     def _positions(self, states: np.ndarray) -> np.ndarray:
+        """NED positions (n, 3) [m] of states (n, nx): a view when they are its first three."""
+        if self._pos_index == [0, 1, 2]:
+            return states[:, :3]
         pos = np.zeros((states.shape[0], 3))
         pos[:, : len(self._pos_index)] = states[:, self._pos_index]
         return pos
@@ -128,7 +132,7 @@ class NmpcPlanner:
         if not (state.is_finite() and np.isfinite(t_s)):
             self._warm = None
             return self._safe("non-finite state or time", start)
-        grid = t_s + cfg.dt_s * np.arange(cfg.horizon_steps + 1)
+        grid = t_s + self._node_times
         x_ref, u_ref = reference_vectors(f.model, reference.sample(grid), f.config.feedforward)
         x_now = state_vector(f.model, state)
         for i in self._angles:  # express angles on the reference's branch
