@@ -93,6 +93,16 @@ def test_bounds_hold():
     assert states[:, 2].max() <= -1.5 + 1e-6  # and the reference wanted -0.5
 
 
+def test_plan_check_rejects_a_state_bound_violation_when_a_bound_is_finite():
+    """The check skips the state bounds only when all are infinite (nothing to violate)."""
+    inf = np.inf
+    bounded = planner(NmpcConfig(state_min=(-inf,) * 4, state_max=(inf, inf, -1.5, inf)))
+    predicted = np.tile([0.0, 0.0, -1.0, 0.0], (21, 1))  # 0.5 m above the ceiling
+    inputs, no_slots = np.zeros((20, 4)), np.zeros((20, 0, 7))
+    assert bounded._check(predicted, inputs, no_slots) == "plan violates state bounds"
+    assert planner()._check(predicted, inputs, no_slots) == ""
+
+
 @pytest.mark.parametrize("solver", ["fast", pytest.param("ipopt", marks=pytest.mark.slow)])
 def test_no_predicted_node_within_safe_distance(solver):
     world = ObstacleWorld([Cylinder((4.0, 0.1), 0.4), Sphere((7.0, -0.2, -2.0), 0.3)])
