@@ -139,14 +139,23 @@ class NmpcPlanner:
             x_now[i] = x_ref[0, i] + np.angle(np.exp(1j * (x_now[i] - x_ref[0, i])))
         cold_start = self._warm is None
         w0, guess = self._warm_start(grid, x_now, x_ref, u_ref[:-1])
-        if self.world is not None and cfg.n_obstacles and self.world.obstacles:
-            # guess row 0 is x_now: one distance table for the start check and the slots
-            distances = self.world.surface_distance_m(self._positions(guess))
-            if np.min(distances[0]) < 0.0:
+        if self.world is not None and cfg.n_obstacles:
+            positions = self._positions(guess)  # row 0: x_now
+            # an ObstacleWorld's distance table serves the start check and the slots at once
+            table = None
+            if isinstance(self.world, ObstacleWorld) and self.world.obstacles:
+                table = self.world.surface_distance_m(positions)
+            start_clearance = (
+                np.min(table[0]) if table is not None else self.world.clearance_m(positions[:1])[0]
+            )
+            if start_clearance < 0.0:
                 self._warm = None
                 return self._safe("start inside an obstacle", start)
             # each node's N_o obstacles nearest to where it is expected to be (eq. 4)
-            slots = self.world.slots_at(distances[1:], cfg.n_obstacles, cfg.safe_distance_m)
+            if table is not None:
+                slots = self.world.slots_at(table[1:], cfg.n_obstacles, cfg.safe_distance_m)
+            else:
+                slots = self.world.slots(positions[1:], cfg.n_obstacles, cfg.safe_distance_m)
         else:
             slots = np.tile(UNUSED_SLOT, (cfg.horizon_steps, cfg.n_obstacles, 1))
         p = f.pack_parameters(x_now, x_ref, u_ref[:-1], slots)

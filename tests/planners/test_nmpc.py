@@ -9,6 +9,7 @@ from planners.bspline import BSplineReference
 from planners.nmpc import NmpcPlanner
 from planners.nmpc_formulation import NmpcConfig
 from planners.nominal_models import first_order_lag, kinematic_4dof
+from planners.obstacle_map import PointObstacleMap
 from planners.obstacles import Cylinder, ObstacleWorld, Sphere
 from planners.reference import PlannerState
 from planners.residual import ResidualTerm
@@ -153,6 +154,25 @@ def test_start_inside_obstacle_gives_safe_command():
         PlannerState(np.array([1.2, 0.0, -2.0]), np.zeros(3), 0.0), STRAIGHT, 0.0
     )
     assert_safe(res, "inside an obstacle")
+
+
+def test_a_point_map_world_gives_the_same_plans_as_the_same_cylinders():
+    """A world other than an ObstacleWorld (a map of points learnt from scans, duck-typed:
+    clearance_m and slots) is checked and sliced through its own methods; its points as
+    cylinders in an ObstacleWorld give the same plans, and a start inside one is refused."""
+    points = np.array([[3.0, 0.3, -2.0], [5.0, -0.4, -2.0]])
+    point_map = PointObstacleMap(point_radius_m=0.2)
+    point_map.add_points(points)
+    cylinders = ObstacleWorld([Cylinder((p[0], p[1]), 0.2) for p in points])
+    cfg = NmpcConfig(n_obstacles=2)
+    by_map, by_world = planner(cfg, world=point_map), planner(cfg, world=cylinders)
+    state = PlannerState(np.array([0.0, 0.0, -2.0]), np.zeros(3), 0.0)
+    for t in (0.0, 0.1, 0.2):
+        a, b = by_map.plan(state, STRAIGHT, t), by_world.plan(state, STRAIGHT, t)
+        assert a.ok and b.ok
+        np.testing.assert_allclose(a.predicted_trajectory, b.predicted_trajectory, atol=1e-9)
+    inside = PlannerState(np.array([3.0, 0.35, -2.0]), np.zeros(3), 0.0)
+    assert_safe(by_map.plan(inside, STRAIGHT, 0.3), "inside an obstacle")
 
 
 def test_infeasible_qp_gives_safe_command():
