@@ -174,8 +174,11 @@ class BSplineReference(SampledReference):
         else:
             u = np.minimum(np.maximum(t / self.segment_duration_s, 0.0), self._n_seg)
             pos, d1, d2 = self._param_derivatives(u)
-        vel = np.where(inside[:, None], d1 / self.segment_duration_s, 0.0)
-        acc = np.where(inside[:, None], d2 / self.segment_duration_s**2, 0.0)
+        if inside.all():  # (np.where's result without its two temporaries)
+            vel, acc = d1 / self.segment_duration_s, d2 / self.segment_duration_s**2
+        else:
+            vel = np.where(inside[:, None], d1 / self.segment_duration_s, 0.0)
+            acc = np.where(inside[:, None], d2 / self.segment_duration_s**2, 0.0)
         yaw = np.full(t.shape, self.yaw_rad)
         return ReferenceSample(pos, vel, acc, yaw, np.zeros(t.shape))
 

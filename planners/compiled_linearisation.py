@@ -54,9 +54,10 @@ class CompiledLinearisation:
         # 1-D views of the vector outputs (the matrices are used as they are)
         self._outputs = [out[:, 0] if out.shape[1] == 1 else out for out in self._fn.outputs]
         n_x, n_u = q_all.size, r_all.size
-        self._q, self._r, self._r_diag = q_all[:, None], r_all, np.diag(r_all)
+        self._q, self._r = q_all[:, None], r_all
         self._qs = np.zeros((n_x, n_u))
         self._hess, self._grad = np.zeros((n_u, n_u)), np.zeros(n_u)
+        self._hess_diag = self._hess.reshape(-1)[:: n_u + 1]  # a view: H's diagonal
 
     def __call__(self, w: np.ndarray, p: np.ndarray) -> list[np.ndarray]:
         """The linearisation's fields in planners.sqp_solver._Linearisation's order."""
@@ -67,7 +68,7 @@ class CompiledLinearisation:
         n_x = self._qs.shape[0]
         np.multiply(self._q, sens, out=self._qs)
         np.matmul(sens.T, self._qs, out=self._hess)
-        self._hess += self._r_diag
+        self._hess_diag += self._r
         np.matmul(err[:n_x], self._qs, out=self._grad)
         self._grad += self._r * err[n_x:]
         return [self._hess, self._grad, a_x, lba_x, uba_x, g_h, lba_h, lbx, ubx, x_lin, sens]

@@ -48,6 +48,9 @@ class CondensedQp:
         self._lbz[n_u] = 0.0
         self._ubz[n_u] = np.inf
         self._x = self._qp.outputs[qp.index_out("x")].reshape(-1, order="F")
+        self._az = np.zeros(n_a)  # A z, then the rows' violations
+        self._zv = np.zeros(n_u + 1)  # the bounds' violations
+        self._nan = np.full(n_u, np.nan)
 
     def solve(
         self,
@@ -77,19 +80,19 @@ class CondensedQp:
         self._ubz[:n_u] = ubx
         # DAQP leaves x unwritten when it cannot factor H (not positive definite): NaN then,
         # not the previous call's answer
-        self._x.fill(np.nan)
+        z = self._x
+        z.fill(np.nan)
         try:
             self._qp.evaluate()
         except RuntimeError:  # CasADi refuses ill-posed bounds (NaN, lower > upper, lower inf)
-            return np.full(n_u, np.nan), float("nan")
-        z = self._x.copy()
-        az = self._a @ z
-        violation = np.max(  # >= 0 (the initial values); NaN propagates
-            [
-                np.max(self._lba - az, initial=0.0),
-                np.max(az - self._uba, initial=0.0),
-                np.max(self._lbz - z),
-                np.max(z - self._ubz),
-            ]
-        )
-        return z[:n_u], float(violation)
+            return self._nan.copy(), float("nan")
+        # the largest of lba - A z, A z - uba, lbz - z, z - ubz and 0; NaN propagates
+        az, zv = self._az, self._zv
+        np.matmul(self._a, z, out=az)
+        np.subtract(self._lbz, z, out=zv)
+        np.maximum(zv, z - self._ubz, out=zv)
+        violation = zv.max()
+        if az.size:
+            np.maximum(self._lba - az, np.subtract(az, self._uba, out=az), out=az)
+            violation = np.maximum(violation, az.max())
+        return z[:n_u].copy(), float(np.maximum(violation, 0.0))

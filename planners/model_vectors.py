@@ -71,12 +71,12 @@ def reference_vectors(
     a previous velocity's the reference velocity (their default cost weight is 0: the model's
     ``untracked_states``)."""
     args = (sample.pos_ned_m, sample.vel_ned_mps, sample.yaw_rad, sample.yaw_rate_radps)
-    x_ref = np.column_stack([_element(n, *args) for n in model.state_names])
+    x_ref = np.stack([_element(n, *args) for n in model.state_names], axis=1)
     vel = np.asarray(sample.vel_ned_mps, dtype=float)
     if feedforward and model.velocity_lead_s:
         vel = vel + np.asarray(model.velocity_lead_s) * np.asarray(sample.acc_ned_mps2, float)
     args = (sample.pos_ned_m, vel, sample.yaw_rad, sample.yaw_rate_radps)
-    u_ref = np.column_stack([_element(n, *args) for n in model.input_names])
+    u_ref = np.stack([_element(n, *args) for n in model.input_names], axis=1)
     return x_ref, u_ref
 
 

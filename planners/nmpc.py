@@ -92,6 +92,9 @@ class NmpcPlanner:
             f.x_min - tol,
             f.x_max + tol,
         )
+        # (a finite plan meets infinite state bounds: checked only when one is finite)
+        self._state_bounded = bool(np.isfinite(f.x_min).any() or np.isfinite(f.x_max).any())
+        self._node_times = cfg.dt_s * np.arange(cfg.horizon_steps + 1)  # [s] after t_s
         self._warm: tuple[float, np.ndarray, np.ndarray] | None = None
         self.late_plan: PlanResult | None = None
 
@@ -114,6 +117,9 @@ class NmpcPlanner:
         return safe_result(m.nu, m.nx, reason, time.perf_counter() - start)
 
     def _positions(self, states: np.ndarray) -> np.ndarray:
+        """NED positions (n, 3) [m] of states (n, nx): a view when they are its first three."""
+        if self._pos_index == [0, 1, 2]:
+            return states[:, :3]
         pos = np.zeros((states.shape[0], 3))
         pos[:, : len(self._pos_index)] = states[:, self._pos_index]
         return pos
@@ -126,7 +132,7 @@ class NmpcPlanner:
         if not (state.is_finite() and np.isfinite(t_s)):
             self._warm = None
             return self._safe("non-finite state or time", start)
-        grid = t_s + cfg.dt_s * np.arange(cfg.horizon_steps + 1)
+        grid = t_s + self._node_times
         x_ref, u_ref = reference_vectors(f.model, reference.sample(grid), f.config.feedforward)
         x_now = state_vector(f.model, state)
         for i in self._angles:  # express angles on the reference's branch
@@ -134,12 +140,22 @@ class NmpcPlanner:
         cold_start = self._warm is None
         w0, guess = self._warm_start(grid, x_now, x_ref, u_ref[:-1])
         if self.world is not None and cfg.n_obstacles:
-            if self.world.clearance_m(self._positions(x_now[None, :]))[0] < 0.0:
+            positions = self._positions(guess)  # row 0: x_now
+            # an ObstacleWorld's distance table serves the start check and the slots at once
+            table = None
+            if isinstance(self.world, ObstacleWorld) and self.world.obstacles:
+                table = self.world.surface_distance_m(positions)
+            start_clearance = (
+                np.min(table[0]) if table is not None else self.world.clearance_m(positions[:1])[0]
+            )
+            if start_clearance < 0.0:
                 self._warm = None
                 return self._safe("start inside an obstacle", start)
             # each node's N_o obstacles nearest to where it is expected to be (eq. 4)
-            near = self._positions(guess[1:])
-            slots = self.world.slots(near, cfg.n_obstacles, cfg.safe_distance_m)
+            if table is not None:
+                slots = self.world.slots_at(table[1:], cfg.n_obstacles, cfg.safe_distance_m)
+            else:
+                slots = self.world.slots(positions[1:], cfg.n_obstacles, cfg.safe_distance_m)
         else:
             slots = np.tile(UNUSED_SLOT, (cfg.horizon_steps, cfg.n_obstacles, 1))
         p = f.pack_parameters(x_now, x_ref, u_ref[:-1], slots)
@@ -191,7 +207,7 @@ class NmpcPlanner:
         if (inputs < u_lo).any() or (inputs > u_hi).any():
             return "plan violates input bounds"
         later = predicted[1:]
-        if (later < x_lo).any() or (later > x_hi).any():
+        if self._state_bounded and ((later < x_lo).any() or (later > x_hi).any()):
             return "plan violates state bounds"
         if slots.size:  # node i against its own slots (N, N_o, 7)
             worst = float(np.min(slot_clearance_m(self._positions(later)[:, None, :], slots)))

@@ -211,7 +211,7 @@ class NmpcFormulation:
         by_obstacle = np.transpose(np.asarray(slots, dtype=float), (1, 0, 2))
         return np.concatenate(
             [np.ravel(x_now), np.ravel(x_ref), np.ravel(u_ref), np.ravel(by_obstacle)]
-        ).astype(float)
+        ).astype(float, copy=False)
 
     def split_w(self, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """w -> (X (N+1, nx), U (N, nu))."""

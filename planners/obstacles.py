@@ -125,12 +125,19 @@ class ObstacleWorld:
         pts = np.atleast_2d(np.asarray(points_ned_m, dtype=float))
         if not self.obstacles or count == 0:
             return np.tile(UNUSED_SLOT, (pts.shape[0], count, 1))
-        order = np.argsort(self.surface_distance_m(pts), axis=1, kind="stable")[:, :count]
+        return self.slots_at(self.surface_distance_m(pts), count, safe_distance_m)
+
+    def slots_at(self, distances_m: np.ndarray, count: int, safe_distance_m: float) -> np.ndarray:
+        """:meth:`slots` from the points' :meth:`surface_distance_m` (n, n_obs) [m], for a
+        caller that needs those distances too: (n, count, 7)."""
+        if not self.obstacles or count == 0:
+            return np.tile(UNUSED_SLOT, (distances_m.shape[0], count, 1))
+        order = np.argsort(distances_m, axis=1, kind="stable")[:, :count]
         nearest = self._slots[order]  # a new array
         nearest[:, :, 6] += safe_distance_m
         if order.shape[1] == count:
             return nearest
-        out = np.tile(UNUSED_SLOT, (pts.shape[0], count, 1))
+        out = np.tile(UNUSED_SLOT, (distances_m.shape[0], count, 1))
         out[:, : order.shape[1]] = nearest
         return out
 

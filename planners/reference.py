@@ -89,8 +89,8 @@ class PlannerState:
     def is_finite(self) -> bool:
         """True when every element is finite (no NaN or inf)."""
         return bool(
-            np.all(np.isfinite(self.pos_ned_m))
-            and np.all(np.isfinite(self.vel_ned_mps))
+            np.isfinite(self.pos_ned_m).all()
+            and np.isfinite(self.vel_ned_mps).all()
             and np.isfinite(self.yaw_rad)
         )
 

@@ -159,6 +159,9 @@ class GaussNewtonSqp:
             )
             for b in self._buckets
         }
+        # each count of near rows' bucket, and each bucket's row indices (filled per iteration)
+        self._bucket_of = [next(b for b in self._buckets if b >= k) for k in range(cap + 1)]
+        self._rows = {b: np.zeros(b, dtype=np.intp) for b in self._buckets}
         self._pad_row = n * cfg.n_obstacles  # index of the all-zero row lin appends
         # Each obstacle row's node's rows of sens (the padding row's: node 1's, times zero).
         node = np.append(np.tile(np.arange(n), cfg.n_obstacles), 0)
@@ -288,14 +291,14 @@ class GaussNewtonSqp:
         for it in range(1, iterations + 1):
             iteration_start = time.perf_counter()
             lin = _Linearisation(*self._lin(w, p))
-            # Only obstacle rows whose linearised clearance is small can become active.
-            clearance = -lin.lba_h[: self._pad_row]
-            near = np.flatnonzero(clearance < opts.screen_distance_m)
+            # Only obstacle rows whose linearised clearance (-lba_h) is small can become active.
+            near = np.flatnonzero(lin.lba_h[: self._pad_row] > -opts.screen_distance_m)
             if near.size > self._buckets[-1]:
-                near = near[np.argsort(clearance[near])[: self._buckets[-1]]]
-            bucket = next(b for b in self._buckets if b >= near.size)
-            rows = np.full(bucket, self._pad_row)
+                near = near[np.argsort(-lin.lba_h[near])[: self._buckets[-1]]]
+            bucket = self._bucket_of[near.size]
+            rows = self._rows[bucket]
             rows[: near.size] = near
+            rows[near.size :] = self._pad_row
             a_h = np.matmul(lin.g_h[rows, None, :], lin.sens[self._row_states[rows]])[:, 0, :]
             du, violation = self._qps[bucket].solve(
                 lin.hess,
@@ -308,8 +311,8 @@ class GaussNewtonSqp:
                 lin.lbx,
                 lin.ubx,
             )
-            gap = np.max(np.abs(lin.x_lin - w[nx:split]))
-            step = float(np.maximum(np.max(np.abs(du)), gap))  # NaN in either stays NaN
+            gap = np.abs(lin.x_lin - w[nx:split]).max()
+            step = float(np.maximum(np.abs(du).max(), gap))  # NaN in either stays NaN
             if not violation <= opts.qp_feasibility_tol:
                 reason = f"QP failed (constraint violation {violation:.3g})"
                 return SolverOutput(w, False, reason, it)

@@ -9,6 +9,7 @@ from planners.bspline import BSplineReference
 from planners.nmpc import NmpcPlanner
 from planners.nmpc_formulation import NmpcConfig
 from planners.nominal_models import first_order_lag, kinematic_4dof
+from planners.obstacle_map import PointObstacleMap
 from planners.obstacles import Cylinder, ObstacleWorld, Sphere
 from planners.reference import PlannerState
 from planners.residual import ResidualTerm
@@ -93,6 +94,16 @@ def test_bounds_hold():
     assert states[:, 2].max() <= -1.5 + 1e-6  # and the reference wanted -0.5
 
 
+def test_plan_check_rejects_a_state_bound_violation_when_a_bound_is_finite():
+    """The check skips the state bounds only when all are infinite (nothing to violate)."""
+    inf = np.inf
+    bounded = planner(NmpcConfig(state_min=(-inf,) * 4, state_max=(inf, inf, -1.5, inf)))
+    predicted = np.tile([0.0, 0.0, -1.0, 0.0], (21, 1))  # 0.5 m above the ceiling
+    inputs, no_slots = np.zeros((20, 4)), np.zeros((20, 0, 7))
+    assert bounded._check(predicted, inputs, no_slots) == "plan violates state bounds"
+    assert planner()._check(predicted, inputs, no_slots) == ""
+
+
 @pytest.mark.parametrize("solver", ["fast", pytest.param("ipopt", marks=pytest.mark.slow)])
 def test_no_predicted_node_within_safe_distance(solver):
     world = ObstacleWorld([Cylinder((4.0, 0.1), 0.4), Sphere((7.0, -0.2, -2.0), 0.3)])
@@ -143,6 +154,25 @@ def test_start_inside_obstacle_gives_safe_command():
         PlannerState(np.array([1.2, 0.0, -2.0]), np.zeros(3), 0.0), STRAIGHT, 0.0
     )
     assert_safe(res, "inside an obstacle")
+
+
+def test_a_point_map_world_gives_the_same_plans_as_the_same_cylinders():
+    """A world other than an ObstacleWorld (a map of points learnt from scans, duck-typed:
+    clearance_m and slots) is checked and sliced through its own methods; its points as
+    cylinders in an ObstacleWorld give the same plans, and a start inside one is refused."""
+    points = np.array([[3.0, 0.3, -2.0], [5.0, -0.4, -2.0]])
+    point_map = PointObstacleMap(point_radius_m=0.2)
+    point_map.add_points(points)
+    cylinders = ObstacleWorld([Cylinder((p[0], p[1]), 0.2) for p in points])
+    cfg = NmpcConfig(n_obstacles=2)
+    by_map, by_world = planner(cfg, world=point_map), planner(cfg, world=cylinders)
+    state = PlannerState(np.array([0.0, 0.0, -2.0]), np.zeros(3), 0.0)
+    for t in (0.0, 0.1, 0.2):
+        a, b = by_map.plan(state, STRAIGHT, t), by_world.plan(state, STRAIGHT, t)
+        assert a.ok and b.ok
+        np.testing.assert_allclose(a.predicted_trajectory, b.predicted_trajectory, atol=1e-9)
+    inside = PlannerState(np.array([3.0, 0.35, -2.0]), np.zeros(3), 0.0)
+    assert_safe(by_map.plan(inside, STRAIGHT, 0.3), "inside an obstacle")
 
 
 def test_infeasible_qp_gives_safe_command():

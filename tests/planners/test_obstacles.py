@@ -27,6 +27,20 @@ def test_slots_pick_each_nodes_nearest_and_pad_unused():
     assert world.slots(nodes[:1], count=2, safe_distance_m=0.5).shape == (1, 2, 7)
 
 
+def test_slots_from_a_distance_table_equal_slots_from_the_points():
+    world = ObstacleWorld(
+        [Sphere((2.0, 0.0, -1.0), 0.5), Cylinder((0.0, 3.0), 0.4), Cylinder((-1.0, -1.0), 0.2)]
+    )
+    points = np.random.default_rng(3).uniform(-4.0, 4.0, (6, 3))
+    table = world.surface_distance_m(points)
+    for count in (0, 2, 5):
+        assert np.array_equal(world.slots_at(table, count, 0.3), world.slots(points, count, 0.3))
+    empty = ObstacleWorld([])
+    assert np.array_equal(
+        empty.slots_at(empty.surface_distance_m(points), 2, 0.3), empty.slots(points, 2, 0.3)
+    )
+
+
 def test_random_forest_keeps_path_free():
     path = np.column_stack([np.linspace(0, 30, 100), np.zeros(100), np.full(100, -2.0)])
     world = random_forest(path, n_trees=40, seed=3, keep_out_m=1.0)
