@@ -7,7 +7,9 @@ flight, rotor speeds, yaw setpoint) builds up as the measured vehicle's did, fro
 integral the vehicle had at the start of each airborne run, fitted to the run's first
 ``LEAD_IN_S`` (the warm-up, :mod:`.warm_up`); windows start after that. At each window's anchor
 row a copy of it flies free for ``window_s`` on the logged setpoints; the error is simulated
-minus measured velocity.
+minus measured velocity, after the part that an error in the run's start integral and in each
+anchor's measured velocity explain (:mod:`.window_nuisance`: neither is the config's to
+answer for).
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ import numpy as np
 
 from diagnosis import sim_anchor
 from diagnosis.warm_up import LEAD_IN_S, start_integral
+from diagnosis.window_nuisance import without_nuisance
 from flightlog.schema import FlightLog
 from vehicle_sim import AnchorState, SimConfig, VelocitySetpoint
 
@@ -153,7 +156,8 @@ def _flown_windows(
     sim_config: SimConfig, logs: Sequence[FlightLog], wins: Sequence[Window]
 ) -> Iterator[_Flown]:
     """Each of ``wins`` flown free from its anchor row, log by log and in row order (the
-    anchored follower running along each airborne run, as the module docstring says)."""
+    anchored follower running along each airborne run, as the module docstring says), a run's
+    windows together once the run is flown (their nuisance is fitted jointly)."""
     template = sim_anchor.hovering_template(sim_config)
     for i, log in enumerate(logs):
         a = LogArrays.of(log)
@@ -174,6 +178,7 @@ def _flown_windows(
                 )
             )  # fmt: skip
             last = max(w.stop for w in wins if w.log_index == i and w.anchor < run_stop)
+            flown = []  # (window index, compared rows, simulated velocity)
             for j in range(run_start, last):
                 follower.set_velocity_setpoint(a.setpoint[j])
                 follower.anchor(a.anchor(j, lead=j < lead_stop), integral="keep")
@@ -186,9 +191,16 @@ def _flown_windows(
                             free.set_velocity_setpoint(a.setpoint[r])
                         free.advance(a.t[r + 1] - a.t[r])
                         sim.append(free.vel_ned_mps)
-                    rows = slice(w.anchor + 1, w.stop + 1)
-                    yield _Flown(k, a.t[rows], np.array(sim), a.state[rows, 3:6])
+                    flown.append((k, slice(w.anchor + 1, w.stop + 1), np.array(sim)))
                 follower.advance(a.t[j + 1] - a.t[j])
+            fitted = without_nuisance(
+                sim_config,
+                [a.t[rows] - a.t[rows.start - 1] for _, rows, _ in flown],
+                [sim for _, _, sim in flown],
+                [a.state[rows, 3:6] for _, rows, _ in flown],
+            )
+            for (k, rows, _), sim in zip(flown, fitted, strict=True):
+                yield _Flown(k, a.t[rows], sim, a.state[rows, 3:6])
 
 
 class LogArrays:

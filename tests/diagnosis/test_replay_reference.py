@@ -10,8 +10,9 @@ OFFBOARD with a command delay, LAND and the disarm after it, and another through
 (``tests/fixtures/replay_reference.npz``) was recorded with the same code before its per-step
 Python was cut down, and the change kept the numbers bit for bit on the machine that recorded
 it; the replay's figures were recorded again when its warm-up began to read the integral past
-the attitude lag, and again when it began to fit the run's start integral by output error
-(diagnosis.warm_up), and the mission's flight when LAND took PX4's descent
+the attitude lag, again when it began to fit the run's start integral by output error
+(diagnosis.warm_up), and again when windows began to be scored after their nuisance
+(diagnosis.window_nuisance), and the mission's flight when LAND took PX4's descent
 profile (MPC_Z_V_AUTO_DN above MPC_LAND_ALT1, MPC_LAND_SPEED below MPC_LAND_ALT2), the rest
 unchanged. The test allows a relative 1e-9
 (RTOL): NumPy picks its vectorised maths by the CPU's features, so another machine may differ

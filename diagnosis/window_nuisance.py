@@ -1,0 +1,104 @@
+"""What a replay cannot know at its windows' anchors, removed from their error by least squares.
+
+A window flies free from a measured state. Two things there are not the config's to answer for:
+
+- the velocity-loop integral the follower carried to the anchor. It is fitted at the airborne
+  run's start (:mod:`.warm_up`) and then integrated row by row like the vehicle's own, so an
+  error in that start stays, the same, for the whole run: on a clean NMPC flight's log thinned
+  to 25-50 Hz the setpoint step that opened OFFBOARD fell between two kept rows, and the start
+  came out 0.04-0.09 m/s^2 off. One offset (3,) per run, shared by all its windows.
+- the measured velocity's own error at each anchor row (sensor noise: a stiffer velocity loop
+  forgets it sooner, so left in, it favours stiffer gains). One (3,) per window.
+
+Both leave a known trace: the config's own response to an integral offset and to a start
+velocity error, flown once per config from hover (:func:`responses`). The run's windows are
+taken after the least-squares combination of them. A per-window integral would also take up
+a third of a command delay's error around a setpoint step (its rise and fall look alike); one
+per run cannot follow the steps, and a start-velocity error takes up 1-3 % of it.
+
+Measured on a clean NMPC flight's onboard log with realistic sensor noise
+(`vehicle_sim.sensor_noise`), diagnosed against the config that flew it: without the removal
+`flight_control` was named on several seeds (gains 1.1-1.5x: a vertical velocity P gain of 6-7
+for the true 4); BENCHMARKS.md has the counts.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from functools import lru_cache
+
+import numpy as np
+
+from diagnosis import sim_anchor
+from vehicle_sim import AnchorState, SimConfig, VelocitySetpoint
+
+HORIZON_S = 3.0  # longer than any window (2 s, rows jittered)
+GRID_S = 0.01  # the responses' time step; rows are 20-40 ms apart
+_STEP_MPS2 = 0.1  # integral perturbation of the finite differences [m/s^2]
+_STEP_MPS = 0.1  # start-velocity perturbation of the finite differences [m/s]
+_HOVER = VelocitySetpoint((0.0, 0.0, 0.0))
+
+
+@lru_cache(maxsize=sim_anchor.TEMPLATES_KEPT)
+def responses(config: SimConfig) -> np.ndarray:
+    """(k, 3, 6) the velocity NED [m/s] at times ``GRID_S * i`` after the start per unit of
+    each nuisance: the velocity-loop integral offset NED [m/s^2] (columns 0-2) and the start
+    velocity error NED [m/s] (3-5); by finite differences about hover, the setpoint streamed."""
+    template = sim_anchor.hovering_template(config)
+    hover = template.state
+    steps = int(round(HORIZON_S / GRID_S))
+
+    def fly(integral: np.ndarray, dv0: np.ndarray) -> np.ndarray:
+        sim = sim_anchor.fresh_copy(template)
+        if dv0.any():
+            sim.anchor(
+                AnchorState(hover.pos_ned_m, hover.vel_ned_mps + dv0, hover.q_wxyz,
+                            hover.rates_frd_radps)
+            )  # fmt: skip
+        sim.set_velocity_integral(sim.velocity_integral_mps2 + integral)
+        out = [sim.vel_ned_mps]
+        for _ in range(steps):
+            sim.set_velocity_setpoint(_HOVER)  # streamed, as a log's are: no OFFBOARD loss
+            sim.advance(GRID_S)
+            out.append(sim.vel_ned_mps)
+        return np.array(out)
+
+    zero = np.zeros(3)
+    nominal = fly(zero, zero)
+    columns = [(fly(_STEP_MPS2 * e, zero) - nominal) / _STEP_MPS2 for e in np.eye(3)]
+    columns += [(fly(zero, _STEP_MPS * e) - nominal) / _STEP_MPS for e in np.eye(3)]
+    return np.stack(columns, axis=-1)
+
+
+def without_nuisance(
+    config: SimConfig,
+    tau_s: Sequence[np.ndarray],
+    sim_vel_ned_mps: Sequence[np.ndarray],
+    meas_vel_ned_mps: Sequence[np.ndarray],
+) -> list[np.ndarray]:
+    """One airborne run's windows' simulated velocity NED [m/s], each (m_w, 3), plus the
+    nuisance (one integral offset for the run, one start-velocity error per window) that best
+    explains what they miss of the measured ``meas_vel_ned_mps``; ``tau_s`` (m_w,) are each
+    window's compared rows' times since its anchor [s]."""
+    curves = responses(config)
+    grid = np.arange(len(curves)) * GRID_S
+    parts = []  # per window: integral columns, start-velocity columns, error, all projected
+    normal, rhs = np.zeros((3, 3)), np.zeros(3)
+    for tau, sim, meas in zip(tau_s, sim_vel_ned_mps, meas_vel_ned_mps, strict=True):
+        k = np.clip(np.searchsorted(grid, tau) - 1, 0, len(grid) - 2)
+        w = ((tau - grid[k]) / GRID_S)[:, None, None]
+        jac = ((1.0 - w) * curves[k] + w * curves[k + 1]).reshape(-1, 6)
+        integral, start = jac[:, :3], jac[:, 3:]
+        error = (meas - sim).reshape(-1)
+        q, _ = np.linalg.qr(start)  # the window's own start error is projected out first
+        integral_left = integral - q @ (q.T @ integral)
+        normal += integral_left.T @ integral_left
+        rhs += integral_left.T @ (error - q @ (q.T @ error))
+        parts.append((integral, q, error))
+    offset = np.linalg.lstsq(normal, rhs, rcond=None)[0]
+    out = []
+    for (integral, q, error), sim in zip(parts, sim_vel_ned_mps, strict=True):
+        explained = integral @ offset
+        explained += q @ (q.T @ (error - explained))
+        out.append(sim + explained.reshape(-1, 3))
+    return out
