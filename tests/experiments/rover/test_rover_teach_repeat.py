@@ -541,3 +541,24 @@ def test_reversing_a_long_path_gets_a_deadline_to_match_its_length() -> None:
     link.connect(1.0)
     assert reverse_along(link, path, 0.5) == ("", "")
     assert start_offset(link, path)[0] < 0.08
+
+
+def test_a_drive_back_whose_position_turns_nan_stops_the_rover_and_says_so() -> None:
+    """The rover's position estimate fails (NaN) mid-drive: no command is computed from it;
+    the rover is stopped in Hold and the reason names the non-finite pose."""
+
+    class LostPosition(InProcessRoverLink):
+        reads = 0
+
+        def read_state(self):
+            st = super().read_state()
+            self.reads += 1
+            if self.reads > 30:
+                return replace(st, pos_ned_m=np.full(3, np.nan))
+            return st
+
+    link = LostPosition(RoverSim(rover_preset("husky_50kg")), {"rover_preset": "husky_50kg"})
+    link.connect(1.0)
+    left_for, stopped_for = drive_back(link, (3.0, 1.0, math.pi / 2), 0.5, timeout_s=60.0)
+    assert left_for == "" and stopped_for.startswith("the rover's pose is not finite")
+    assert link.read_state().mode == "HOLD"
