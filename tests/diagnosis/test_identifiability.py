@@ -8,10 +8,10 @@ import pytest
 from diagnosis.diagnosis import diagnose
 from diagnosis.excitation import schedule_from_mapping
 from diagnosis.fly_schedule import fly_schedule
-from diagnosis.identifiability import check_identifiability
+from diagnosis.identifiability import FLIGHT_FOR, check_identifiability
 from diagnosis.replay import windows
 from experiments.hidden_effects import fly_hidden
-from flightlog.schema import FlightLog
+from flightlog.schema import REQUIRED_COLUMNS, FlightLog
 from vehicle_sim import load_sim_config
 
 HOVER = schedule_from_mapping({"segment": [{"kind": "hover", "duration_s": 30.0}]})
@@ -93,3 +93,86 @@ def test_several_logs_are_diagnosed_together_and_non_offboard_rows_are_not_repla
     anchors = [w.t_anchor_s for w in windows([first, second]) if w.log_index == 1]
     assert min(anchors) >= 5.0 + 1.0  # OFFBOARD from 5 s, then the lead-in
     assert result.gain >= 3.0
+
+
+def synthetic(n: int = 100, **cols: np.ndarray) -> FlightLog:
+    """A log of ``n`` rows: hovering at 2 m with thrust and a steady battery, except ``cols``."""
+    columns = {name: np.zeros(n) for name in REQUIRED_COLUMNS}
+    columns.update(t_s=np.arange(n) * 0.05, q_w=np.ones(n), pos_d_m=np.full(n, -2.0))
+    columns.update(thrust_n=np.full(n, 15.0), battery_v=np.full(n, 16.0))
+    columns.update(cols)
+    return FlightLog(columns)
+
+
+def unidentifiable(logs: list[FlightLog], known: tuple[str, ...] = ()) -> dict[str, object]:
+    return {n.name: n for n in check_identifiability(logs, known)}
+
+
+def test_a_speed_sweep_of_exactly_the_least_span_identifies_drag():
+    assert "rotor_drag" not in unidentifiable([synthetic(vel_n_mps=np.linspace(0.0, 3.0, 100))])
+    short = unidentifiable([synthetic(vel_n_mps=np.linspace(0.0, 2.0, 100))])
+    assert short["rotor_drag"].reason == "horizontal speed spans only 2.0 m/s"
+
+
+def test_wind_needs_two_crossing_headings_flown_faster_than_a_drift():
+    """North at 2 m/s and a 0.5 m/s drift east: one heading. North and east at 2 m/s: two."""
+    north = np.r_[np.full(50, 2.0), np.zeros(50)]
+    east_drift = np.r_[np.zeros(50), np.full(50, 0.5)]
+    one = unidentifiable([synthetic(vel_n_mps=north, vel_e_mps=east_drift)], known=("rotor_drag",))
+    assert one["wind"].reason == "flight directions do not cover two crossing headings"
+    assert "wind" not in unidentifiable(
+        [synthetic(vel_n_mps=north, vel_e_mps=4.0 * east_drift)], known=("rotor_drag",)
+    )
+
+
+def test_sitting_on_the_ground_is_no_altitude_change_near_it():
+    """Altitude noise around 0 m while landed (down to -6 cm) is not a hold within two rotor
+    radii; holds from 5 to 25 cm are."""
+    landed = np.r_[np.zeros(20), np.full(20, 0.06), np.full(60, -2.0)]  # pos_d: alt 0, -6 cm
+    assert "ground_effect" in unidentifiable([synthetic(pos_d_m=landed)])
+    low = np.r_[-np.linspace(0.05, 0.25, 40), np.full(60, -2.0)]
+    assert "ground_effect" not in unidentifiable([synthetic(pos_d_m=low)])
+
+
+def test_battery_sag_says_whether_the_voltage_is_missing_or_flat():
+    no_column = synthetic()
+    no_column = FlightLog({k: v for k, v in no_column.columns.items() if k != "battery_v"})
+    assert unidentifiable([no_column])["battery_sag"].reason == "no battery_v column"
+    flat = unidentifiable([synthetic()])["battery_sag"]
+    assert flat.reason == "battery voltage does not change"
+    sagging = synthetic(battery_v=np.linspace(16.0, 15.9, 100))
+    assert "battery_sag" not in unidentifiable([sagging])
+
+
+def test_setpoint_steps_are_counted_over_every_log():
+    """Two logs with two 1 m/s steps each: four steps, the least that identifies the command
+    path."""
+    steps = np.r_[np.zeros(25), np.ones(25), np.zeros(50)]
+    missing = unidentifiable([synthetic(cmd_vel_n_mps=steps), synthetic(cmd_vel_e_mps=steps)])
+    assert not {"command_delay", "flight_control"} & set(missing)
+    one = unidentifiable([synthetic(cmd_vel_n_mps=steps)])["command_delay"]
+    assert one.reason == "only 2 setpoint steps larger than 0.5 m/s"
+
+
+def test_one_log_without_thrust_leaves_force_causes_unidentifiable():
+    thrustless = FlightLog({k: v for k, v in synthetic().columns.items() if k != "thrust_n"})
+    missing = unidentifiable([synthetic(), thrustless])
+    assert missing["payload"].reason.startswith("no thrust_n column")
+
+
+def test_a_cause_is_listed_with_the_first_requirement_it_misses():
+    """No thrust and no speed span: drag is reported for the thrust, which is checked first."""
+    thrustless = FlightLog({k: v for k, v in synthetic().columns.items() if k != "thrust_n"})
+    assert unidentifiable([thrustless])["rotor_drag"].reason.startswith("no thrust_n column")
+
+
+def test_wind_without_identifiable_drag_is_listed_unless_a_drag_is_known():
+    """Crossing headings at one speed (2 m/s north, then east): no speed span for drag, so
+    wind would carry the drag fit, and both flights are asked for; a configured drag lifts it."""
+    north = np.r_[np.full(50, 2.0), np.zeros(50)]
+    east = np.r_[np.zeros(50), np.full(50, 2.0)]
+    log = synthetic(vel_n_mps=north, vel_e_mps=east)
+    wind = unidentifiable([log])["wind"]
+    assert wind.reason == "wind acts through drag, which this flight cannot identify"
+    assert wind.flight == f"{FLIGHT_FOR['rotor_drag']}; {FLIGHT_FOR['wind']}"
+    assert "wind" not in unidentifiable([log], known=("body_drag",))

@@ -5,10 +5,12 @@ run as an acceleration bias."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
-from diagnosis.replay import replay, windows
+from diagnosis.replay import replay, replay_sse, windows
 from flightlog.schema import FlightLog
 from tests.vehicle_sim.sim_flying import hovering, record_offboard
 from vehicle_sim import VelocitySetpoint, load_sim_config
@@ -77,3 +79,16 @@ def test_attitude_noise_leaves_no_drift_in_hover_windows():
     # the integral of the warm-up's last row alone: 0.044, 0.105, 0.061, 0.156 m/s (mean 0.092)
     # for these draws; the rest is each window's own start attitude
     assert np.mean(drift) < 0.05, drift
+
+
+def test_a_search_stops_a_replay_only_when_its_error_exceeds_the_bound():
+    """replay_sse is the replay's summed squared error; a bound equal to it is not exceeded
+    (a config exactly as good as the best so far is replayed to the end), one just under it is."""
+    log = hover_log()
+    config, wins = load_sim_config("iris"), windows([log])
+    result = replay(config, [log], wins)
+    err = result.sim_vel_ned_mps - result.meas_vel_ned_mps
+    sse = replay_sse(config, [log], wins, math.inf)
+    assert sse > 0.0 and np.isclose(sse, np.sum(err * err), rtol=1e-12)
+    assert replay_sse(config, [log], wins, sse) == sse
+    assert replay_sse(config, [log], wins, 0.999 * sse) == math.inf

@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 import pytest
 
 from diagnosis.candidates import FORCE_CAUSES
 from diagnosis.force_model import predicted_residual
 from diagnosis.forces import ForceData
-from diagnosis.selection import select_causes, train_test_masks
+from diagnosis.selection import ForceSelection, select_causes, train_test_masks
 from tests.diagnosis.test_force_math import BATTERY, synthetic, with_residual
 
 
@@ -130,3 +132,49 @@ def test_an_explained_fraction_is_of_the_part_above_the_floor_else_of_the_whole(
     assert explained_fraction(0.5, total=10.0, noise=10.5, least=0.1) == 0.05
     assert explained_fraction(0.5, total=10.0, noise=9.95, least=0.1) == 0.05
     assert explained_fraction(0.5, total=0.0, noise=0.0, least=0.0) == 0.0
+
+
+def test_a_cause_too_weak_to_matter_is_not_named_however_clear():
+    """A payload of 0.2 % of the weight under 1 mN of noise stands far out of the noise, but
+    its RMS force (0.2 % / sqrt(3) per component) is under the 0.3 % of the weight a cause must
+    explain to be named."""
+    data = with_residual(synthetic(n=1200), {"payload": {"mass_ratio": 1.002}}, noise_n=0.001)
+    result = select_causes(data, {}, BATTERY, FORCE_CAUSES)
+    assert result.accepted == ()
+    assert result.scores[0].name == "payload" and result.scores[0].explained_fraction > 0.9
+
+
+def test_a_step_gain_is_the_share_of_the_then_remaining_residual():
+    """Each score's step gain is 1 - (after / before)^2 of its RMS residuals (same rows)."""
+    truth = {"payload": {"mass_ratio": 1.4}, "body_drag": {"c_n_per_mps2": (0.03, 0.03, 0.05)}}
+    data = with_residual(synthetic(n=1200), truth, noise_n=0.05)
+    for s in select_causes(data, {}, BATTERY, FORCE_CAUSES).scores:
+        assert s.step_gain_fraction == pytest.approx(1.0 - (s.after_rms_n / s.before_rms_n) ** 2)
+
+
+def test_a_second_logs_first_block_is_held_out():
+    """Blocks alternate within each log, and the parity flips from one log to the next, so
+    two logs that start alike are not both trained on their first seconds."""
+    data = synthetic(n=160)  # 8 s at 20 Hz: blocks of 2 s
+    two_logs = ForceData(
+        **{**data.__dict__, "t_s": np.tile(data.t_s[:80], 2), "segment": np.repeat([0, 1], 80)}
+    )
+    train, test = train_test_masks(two_logs, block_s=2.0)
+    assert train[:40].all() and test[40:80].all()  # first log: train, test
+    assert test[80:120].all() and train[120:].all()  # second log: test, train
+
+
+def test_explained_of_explainable_is_a_share_of_the_residual_above_the_noise_floor():
+    """Held-out residual 10 N^2 over 2 rows with noise std (1, 0, 0) N: floor 2 N^2, 8 above
+    it. Down to 6 N^2 explains half of that; below the floor all of it (not more); a residual
+    at the floor leaves nothing to explain (all of it explained)."""
+    left_at = partial(ForceSelection, (), {}, 10.0, n_test=2, noise_std_n=(1.0, 0.0, 0.0))
+    assert left_at(final_sse_n2=6.0).explained_of_explainable() == 0.5
+    assert left_at(final_sse_n2=0.0).explained_of_explainable() == 1.0
+    at_floor = ForceSelection((), {}, 2.0, 2.0, 2, (1.0, 0.0, 0.0))
+    assert at_floor.explained_of_explainable() == 1.0
+
+
+def test_remaining_rms_is_per_component():
+    """12 N^2 left over 2 rows of 3 components: sqrt(12 / 6) N."""
+    assert ForceSelection((), {}, 20.0, 12.0, 2).remaining_rms_n() == pytest.approx(np.sqrt(2.0))

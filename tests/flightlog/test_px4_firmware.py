@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from flightlog import px4
@@ -53,3 +54,34 @@ def test_the_nav_state_tables_follow_the_version_whatever_the_type():
 )
 def test_real_logs_name_their_release_type(name, firmware):
     assert summarise_ulog(FIXTURES / name)["firmware"] == firmware
+
+
+def test_an_unreadable_firmware_string_has_no_version():
+    assert px4.firmware_tuple("custom") is None
+    assert px4.firmware_tuple(None) is None
+
+
+def test_position_controlled_modes_are_those_with_a_velocity_setpoint():
+    """By name: POSCTL, the AUTO modes, OFFBOARD, ORBIT, DESCEND (and POSITION_SLOW from
+    v1.15); not MANUAL, ALTCTL, STAB, ACRO, nor the external modes."""
+    auto = {"MISSION", "HOLD", "RTL", "AUTO_LANDENGFAIL", "AUTO_LANDGPSFAIL", "TAKEOFF", "LAND"}
+    auto |= {"FOLLOW_TARGET", "PRECLAND", "VTOL_TAKEOFF"}
+    expected = {"POSCTL", "OFFBOARD", "ORBIT", "DESCEND"} | auto
+    for firmware, more in (("v1.14.0", set()), ("v1.15.0", {"POSITION_SLOW"})):
+        names = px4.nav_state_names(firmware)
+        states = px4.position_controlled_nav_states(firmware)
+        assert {names[s] for s in states} == expected | more
+
+
+def test_motor_commands_outside_zero_to_one_are_no_thrust_and_full_thrust():
+    """PX4's motor outputs saturate: a command under 0 is no thrust, over 1 the maximum;
+    in between T = fac u^2 + (1 - fac) u, e.g. 0.5 * 0.25 + 0.5 * 0.5 = 0.375 at u = 0.5."""
+    np.testing.assert_allclose(
+        px4.motor_thrust_fraction(np.array([-0.2, 0.5, 1.3]), 0.5), [0.0, 0.375, 1.0]
+    )
+
+
+def test_external_modes_are_named_from_v1_15_and_unknown_before():
+    """nav_state 23-30 are EXTERNAL1-8 from v1.15; an older log's 23 is an unknown value."""
+    assert list(px4.mode_names(np.array([23, 30]), "v1.15.0")) == ["EXTERNAL1", "EXTERNAL8"]
+    assert list(px4.mode_names(np.array([23]), "v1.14.0")) == ["NAV_STATE_23"]

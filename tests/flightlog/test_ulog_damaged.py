@@ -81,3 +81,92 @@ def test_an_appended_offset_past_the_end_is_corrupt(tmp_path):
     path.write_bytes(bytes(data))
     damage = find_damage(path)
     assert damage is not None and damage.kind == "corrupt" and "appended-data" in damage.detail
+
+
+# Hand-built ULogs: a 16-byte file header, then messages of (uint16 size, type, payload).
+HEADER = b"ULog\x01\x12\x35\x01" + bytes(8)
+
+
+def message(kind: bytes, payload: bytes) -> bytes:
+    return len(payload).to_bytes(2, "little") + kind + payload
+
+
+def flag_bits(compat0: int = 0, incompat0: int = 0, offsets: tuple[int, ...] = ()) -> bytes:
+    """The flag-bits message: compat[8], incompat[8], appended_offsets uint64[3]."""
+    appended = b"".join(o.to_bytes(8, "little") for o in (*offsets, 0, 0, 0)[:3])
+    return message(b"B", bytes([compat0]) + bytes(7) + bytes([incompat0]) + bytes(7) + appended)
+
+
+SUBSCRIBE = message(b"A", bytes([0]) + (7).to_bytes(2, "little") + b"topic")  # msg_id 7
+SAMPLE = message(b"D", (7).to_bytes(2, "little") + bytes(8))  # msg_id 7, 8 data bytes
+
+
+def damage_of(tmp_path: Path, data: bytes):
+    path = tmp_path / "hand.ulg"
+    path.write_bytes(data)
+    return find_damage(path)
+
+
+def test_a_hand_built_ulog_is_whole(tmp_path) -> None:
+    assert damage_of(tmp_path, HEADER + flag_bits() + SUBSCRIBE + SAMPLE + SAMPLE) is None
+    assert damage_of(tmp_path, HEADER) is None  # header alone: nothing cut
+
+
+def test_a_file_shorter_than_the_ulog_header_is_truncated(tmp_path) -> None:
+    damage = damage_of(tmp_path, HEADER[:15])
+    assert damage is not None and (damage.kind, damage.at_byte) == ("truncated", 15)
+
+
+def test_a_last_message_one_byte_short_is_truncated_at_its_start(tmp_path) -> None:
+    start = len(HEADER + flag_bits() + SUBSCRIBE + SAMPLE)
+    damage = damage_of(tmp_path, (HEADER + flag_bits() + SUBSCRIBE + SAMPLE + SAMPLE)[:-1])
+    assert damage is not None and (damage.kind, damage.at_byte) == ("truncated", start)
+
+
+@pytest.mark.parametrize(
+    ("bad", "detail"),
+    [
+        (message(b"I", b""), "empty 'I' message"),
+        (message(b"O", b"\x01"), "'O' message of 1 bytes (it has 2)"),
+        (message(b"R", b"\x07\x00\x00"), "'R' message of 3 bytes (it has 2)"),
+        (
+            message(b"D", (7).to_bytes(2, "little") + bytes(7)),
+            "data message of msg_id 7 of 9 bytes (its others: 10)",
+        ),
+    ],
+    ids=["empty", "short-dropout", "long-unsubscribe", "short-sample"],
+)
+def test_an_impossible_message_header_is_corrupt_where_it_stands(tmp_path, bad, detail) -> None:
+    start = len(HEADER + flag_bits() + SUBSCRIBE + SAMPLE)
+    damage = damage_of(tmp_path, HEADER + flag_bits() + SUBSCRIBE + SAMPLE + bad + SAMPLE)
+    assert damage is not None and (damage.kind, damage.at_byte, damage.detail) == (
+        "corrupt", start, detail,
+    )  # fmt: skip
+
+
+def test_an_empty_message_ending_the_file_is_corrupt_not_cut(tmp_path) -> None:
+    """Its header is whole and says 0 bytes: no cut explains it."""
+    start = len(HEADER + flag_bits() + SUBSCRIBE)
+    damage = damage_of(tmp_path, HEADER + flag_bits() + SUBSCRIBE + message(b"D", b""))
+    assert damage is not None and (damage.kind, damage.at_byte) == ("corrupt", start)
+
+
+def test_appended_data_may_be_empty_but_its_offsets_must_be_in_order(tmp_path) -> None:
+    body = SUBSCRIBE + SAMPLE + SAMPLE
+    size = len(HEADER + flag_bits() + body)
+    at_end = HEADER + flag_bits(incompat0=1, offsets=(size,)) + body
+    assert damage_of(tmp_path, at_end) is None  # the crash report was never written
+    first, second = len(HEADER + flag_bits() + SUBSCRIBE), size - len(SAMPLE)
+    swapped = HEADER + flag_bits(incompat0=1, offsets=(second, first)) + body
+    damage = damage_of(tmp_path, swapped)
+    assert damage is not None and damage.kind == "corrupt" and "out of order" in damage.detail
+
+
+def test_appended_offsets_count_only_with_the_incompat_data_appended_bit(tmp_path) -> None:
+    """The same bit in the compat flags, or a flag-bits message too short to hold offsets,
+    says nothing about appended data: bytes where offsets would be are not read as such."""
+    body = SUBSCRIBE + SAMPLE
+    compat_only = HEADER + flag_bits(compat0=1, offsets=(1 << 40,)) + body
+    assert damage_of(tmp_path, compat_only) is None
+    short_flags = message(b"B", bytes(8) + b"\x01" + bytes(7))  # no appended_offsets field
+    assert damage_of(tmp_path, HEADER + short_flags + message(b"I", b"\xff" * 30)) is None

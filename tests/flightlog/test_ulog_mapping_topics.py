@@ -216,3 +216,96 @@ def test_info_says_a_log_recorded_disarmed_on_the_ground_gives_the_commands_noth
     lines = describe_log(flight_log_from_topics(topics))
     assert "diagnose: cannot use this log: no airborne row (armed on the ground only)" in lines
     assert "fit-gp: rates sufficient" in lines
+
+
+def test_commanded_thrust_is_the_upward_thrust_setpoint(flight):
+    """vehicle_thrust_setpoint's z points down (NED): -xyz[2] is the thrust fraction."""
+    log = flight_log_from_topics(topics_of(flight))
+    np.testing.assert_allclose(log["thrust_norm"], flight["thrust_n"] / 28.27)
+    assert np.all(log["thrust_norm"] > 0.0)
+
+
+def test_pwm_limits_prefer_the_main_outputs_and_must_be_a_range(flight):
+    topics = topics_of(flight)
+    t = topics["vehicle_local_position"]["timestamp"]
+    topics["actuator_outputs"] = {
+        "timestamp": t,
+        **{f"output[{i}]": 1600 + 0 * t for i in range(4)},
+    }
+    both = {"MAV_TYPE": 2, "PWM_MIN": 1100, "PWM_MAX": 1900, "PWM_MAIN_MIN": 1000}
+    log = flight_log_from_topics(topics, params={**both, "PWM_MAIN_MAX": 2000})
+    np.testing.assert_allclose(log["thrust_norm"], 0.6)  # (1600 - 1000) / (2000 - 1000)
+    swapped = {"MAV_TYPE": 2, "PWM_MAIN_MIN": 2000, "PWM_MAIN_MAX": 1000}
+    log = flight_log_from_topics(topics, params=swapped)
+    assert log.metadata["thrust_source"]["topic"] == "vehicle_thrust_setpoint"
+
+
+def test_motor_controls_with_gaps_give_way_to_the_next_thrust_source(flight):
+    topics = topics_of(flight)
+    t = topics["vehicle_local_position"]["timestamp"]
+    controls = {f"control[{i}]": 0.5 + 0 * t for i in range(4)}
+    controls["control[3]"] = np.full(len(t), np.nan)  # a motor that does not report
+    topics["actuator_motors"] = {"timestamp": t, **controls}
+    log = flight_log_from_topics(topics, params={"CA_ROTOR_COUNT": 4})
+    assert log.metadata["thrust_source"]["topic"] == "vehicle_thrust_setpoint"
+
+
+def test_a_vtol_by_mav_type_is_read_though_its_status_does_not_say_vtol(flight):
+    log = flight_log_from_topics(topics_of(flight), params={"MAV_TYPE": 22})
+    assert log.metadata["vehicle"]["is_vtol"] is True
+
+
+def test_vtol_transitions_are_not_multicopter_phase(flight):
+    topics = topics_of(flight)
+    t = topics["vehicle_local_position"]["timestamp"]
+    third = t[len(t) // 3]
+    topics["vehicle_status"] = {
+        "timestamp": np.array([t[0], third]), "nav_state": np.array([3, 3]),
+        "arming_state": np.array([2, 2]), "is_vtol": np.array([1, 1]),
+        "vehicle_type": np.array([1, 1]), "in_transition_mode": np.array([0, 1]),
+    }  # fmt: skip
+    log = flight_log_from_topics(topics, params={"MAV_TYPE": 22})
+    assert log.metadata["dropped_rows"]["not_multicopter_phase"] == int(np.sum(t >= third))
+
+
+def test_rows_are_dropped_for_their_first_reason_only(flight):
+    """Estimator invalid in rows 0-9, mode unknown until row 20: 10 rows each."""
+    topics = topics_of(flight)
+    pos = topics["vehicle_local_position"]
+    pos["v_xy_valid"] = pos["v_xy_valid"].copy()
+    pos["v_xy_valid"][:10] = 0
+    topics["vehicle_status"] = {**topics["vehicle_status"], "timestamp": pos["timestamp"][20:21]}
+    dropped = flight_log_from_topics(topics).metadata["dropped_rows"]
+    assert dropped["estimator_invalid"] == 10 and dropped["mode_unknown"] == 10
+
+
+def test_a_single_usable_row_is_no_valid_motion(flight):
+    topics = topics_of(flight)
+    pos = topics["vehicle_local_position"]
+    pos["v_xy_valid"] = np.zeros(len(pos["timestamp"]))
+    pos["v_xy_valid"][5] = 1
+    with pytest.raises(FlightLogError, match="no valid motion"):
+        flight_log_from_topics(topics)
+
+
+def test_rows_start_once_the_velocity_command_is_logged(flight):
+    topics = topics_of(flight)
+    sp = topics["vehicle_local_position_setpoint"]
+    topics["vehicle_local_position_setpoint"] = {k: v[20:] for k, v in sp.items()}
+    log = flight_log_from_topics(topics)
+    assert log.metadata["rows_in_log"] == len(topics["vehicle_local_position"]["timestamp"]) - 20
+
+
+def test_attitude_is_a_unit_quaternion_and_a_missing_yaw_rate_is_zero(flight):
+    """PX4 logs NaN for a yaw rate it was not given, and a quaternion only nearly unit."""
+    topics = topics_of(flight)
+    att = topics["vehicle_attitude"]
+    topics["vehicle_attitude"] = {
+        k: v * (1.0 if k == "timestamp" else 1.01) for k, v in att.items()
+    }
+    sp = topics["vehicle_local_position_setpoint"]
+    sp["yawspeed"] = np.full(len(sp["timestamp"]), np.nan)
+    log = flight_log_from_topics(topics)
+    q = log.stack("q_w", "q_x", "q_y", "q_z")
+    np.testing.assert_allclose(np.linalg.norm(q, axis=1), 1.0)
+    assert np.all(log["cmd_yaw_rate_radps"] == 0.0)

@@ -115,3 +115,11 @@ def test_a_graph_calling_another_function_keeps_its_constants():
     kept, theta = constants_as_input(outer)
     assert theta.size == 0
     np.testing.assert_array_equal(np.asarray(kept([0.3, -1.0], theta)), outer([0.3, -1.0]))
+
+
+def test_a_graph_calling_another_function_keeps_its_inputs_in_order():
+    x, u = ca.SX.sym("x"), ca.SX.sym("u")
+    inner = ca.Function("inner", [x], [3.0 * x], {"never_inline": True})
+    outer = ca.Function("outer", [x, u], [inner(x) - u])
+    kept, theta = constants_as_input(outer)
+    assert float(kept(2.0, 0.5, theta)) == 3.0 * 2.0 - 0.5

@@ -125,3 +125,14 @@ def test_every_console_script_reaches_its_command(command, monkeypatch, capsys):
         code = exc.code
     assert code in (0, None)
     assert capsys.readouterr().out.startswith(f"usage: {command}")
+
+
+def test_a_console_script_returns_its_commands_failure_code(tmp_path, monkeypatch, capsys):
+    """A command that fails (here: no such log) exits non-zero through its console script, so
+    a shell or batch job sees the failure."""
+    from scripts import launch
+    from scripts.flightlog_cli import EXIT_BAD_INPUT
+
+    monkeypatch.setattr(sys, "argv", ["flightlog", "info", str(tmp_path / "missing.ulg")])
+    assert launch.flightlog() == EXIT_BAD_INPUT
+    assert "no such flight log" in capsys.readouterr().err

@@ -197,3 +197,13 @@ def test_a_vehicle_that_is_no_quadrotor_is_said_to_fly_as_the_presets_rotors(tmp
     assert said in capsys.readouterr().err and said in out.read_text()
     assert vehicle_sim_cli.main(["config-from-log", str(AUTO), "--out", str(out)]) == 0
     assert "rotors: the log's vehicle" not in capsys.readouterr().err  # a quadrotor's
+
+
+def test_a_config_from_parameters_needs_a_multirotor_and_its_hover_thrust():
+    """From parameters alone the mass follows from MPC_THR_HOVER: without it, no config."""
+    from flightlog.ulog import parameters_give_a_config
+
+    hover = {"MPC_THR_HOVER": 0.4}
+    assert parameters_give_a_config({"mav_type": 2, "px4_params": hover})
+    assert not parameters_give_a_config({"mav_type": 2, "px4_params": {"MAV_TYPE": 2.0}})
+    assert not parameters_give_a_config({"mav_type": 1, "px4_params": hover})  # fixed wing

@@ -3,9 +3,12 @@ time, with the acceleration and thrust MAVLink does not carry, and the command a
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
+from flightlog.schema import read_flight_log
 from vehicle_sim import FlightMode, Simulator, VelocitySetpoint, load_sim_config
 from vehicle_sim.onboard_log import OnboardLogger
 
@@ -97,3 +100,33 @@ def test_each_rows_command_is_the_one_flown_from_that_row_on():
 def test_a_bad_rate_is_refused():
     with pytest.raises(ValueError, match="onboard log rate"):
         OnboardLogger(Simulator(load_sim_config("iris")), rate_hz=0.0)
+
+
+def test_an_infinite_rate_is_refused():
+    with pytest.raises(ValueError, match="onboard log rate"):
+        OnboardLogger(Simulator(load_sim_config("iris")), rate_hz=math.inf)
+
+
+def test_the_log_keeps_its_rate_when_the_steps_do_not_divide_its_period():
+    """Steps of 30 ms and a 25 Hz log (40 ms): rows fall on the first step at or past each
+    40 ms mark, so 3 s hold 75 rows (not one per 60 ms, 50 rows), and the log says its rate."""
+    sim = Simulator(load_sim_config("iris"), seed=0)
+    logger = OnboardLogger(sim, rate_hz=25.0)
+    for _ in range(100):
+        logger.step(0.03)
+    log = logger.to_log()
+    assert log.n_rows == pytest.approx(75, abs=1)
+    assert log.metadata["rate_hz"] == 25.0
+
+
+def test_streamed_rows_are_on_disk_as_they_are_logged_and_a_copy_leaves_the_stream(tmp_path):
+    stream = tmp_path / "live.csv"
+    logger = OnboardLogger(Simulator(load_sim_config("iris"), seed=0), 25.0, stream_path=stream)
+    for _ in range(50):
+        logger.step(0.02)
+    rows = logger.to_log().n_rows
+    assert len(stream.read_text().splitlines()) == 1 + rows  # header, then every row so far
+    copy = tmp_path / "copy.csv"
+    assert logger.write(copy) == copy
+    assert read_flight_log(copy).n_rows == rows
+    assert logger.write(stream) == stream and read_flight_log(stream).n_rows == rows

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from companion.inprocess_rover_link import InProcessRoverLink
+from companion.link import CommandOutcome, LinkError
 from companion.pymavlink_link import PymavlinkLink
 from companion.runner import Terminated
 from experiments.rover import learner
@@ -501,3 +502,92 @@ def test_a_drive_back_says_what_it_cannot_be() -> None:
         DriveBack("sideways", 0.5)
     with pytest.raises(ValueError, match="must be > 0"):
         DriveBack("reverse", 0.0)
+
+
+class FailingAfter(InProcessRoverLink):
+    """The in-process rover whose link fails with ``error`` at the 20th command of a drive."""
+
+    error: BaseException = LinkError("link lost")
+    sent = 0
+
+    def send_velocity(self, command) -> None:
+        self.sent += 1
+        if self.sent == 20:
+            raise self.error
+        super().send_velocity(command)
+
+
+def test_a_link_lost_during_the_drive_back_stops_the_rover_and_says_why() -> None:
+    link = FailingAfter(RoverSim(rover_preset("husky_50kg")), {"rover_preset": "husky_50kg"})
+    link.connect(1.0)
+    assert drive_back(link, (3.0, 1.0, math.pi / 2), 0.5, timeout_s=60.0) == ("", "link lost")
+    assert link.read_state().mode == "HOLD"
+
+
+def test_ctrl_c_during_the_drive_back_stops_the_rover_and_is_raised_on() -> None:
+    link = FailingAfter(RoverSim(rover_preset("husky_50kg")), {"rover_preset": "husky_50kg"})
+    link.error = KeyboardInterrupt()
+    link.connect(1.0)
+    with pytest.raises(KeyboardInterrupt):
+        drive_back(link, (3.0, 1.0, math.pi / 2), 0.5, timeout_s=60.0)
+    assert link.read_state().mode == "HOLD"
+
+
+def test_a_drive_back_the_rover_refuses_to_arm_for_is_a_link_error() -> None:
+    class NoArming(InProcessRoverLink):
+        def arm(self):
+            return CommandOutcome(False, "safety switch")
+
+    link = NoArming(RoverSim(rover_preset("husky_50kg")), {"rover_preset": "husky_50kg"})
+    link.connect(1.0)
+    with pytest.raises(LinkError, match="rover refused arm: safety switch"):
+        drive_back(link, (3.0, 1.0, math.pi / 2), 0.5, timeout_s=60.0)
+
+
+def test_drive_back_turns_in_place_then_drives_the_straight_line() -> None:
+    """To (3, 3) m, 45 degrees off its heading: it faces the target before moving, so its
+    track stays on the line from the origin (within a few centimetres), not an arc."""
+    track: list[np.ndarray] = []
+
+    class Tracking(InProcessRoverLink):
+        def send_velocity(self, command) -> None:
+            track.append(pose_of(self)[:2])
+            super().send_velocity(command)
+
+    link = Tracking(RoverSim(rover_preset("husky_50kg")), {"rover_preset": "husky_50kg"})
+    link.connect(1.0)
+    assert drive_back(link, (3.0, 3.0, 0.0), 0.5, timeout_s=60.0) == ("", "")
+    xy = np.array(track)
+    off_line = np.abs(xy[:, 0] - xy[:, 1]) / math.sqrt(2.0)  # distance from the line y = x
+    assert np.max(off_line) < 0.05
+
+
+def test_reversing_a_long_path_gets_a_deadline_to_match_its_length() -> None:
+    """40 m straight back at 0.5 m/s takes 80 s: the default deadline (3 x 80 s + 30 s)
+    lets it get there."""
+    path = TaughtPath.from_segments([(40.0, 0.0)], start=(0.0, 0.0, 0.0))
+    link = _at_the_end(path, "husky_50kg")
+    link.connect(1.0)
+    assert reverse_along(link, path, 0.5) == ("", "")
+    assert start_offset(link, path)[0] < 0.08
+
+
+def test_a_drive_back_whose_position_turns_nan_stops_the_rover_and_says_so() -> None:
+    """The rover's position estimate fails (NaN) mid-drive: no command is computed from it;
+    the rover is stopped in Hold and the reason names the non-finite pose."""
+
+    class LostPosition(InProcessRoverLink):
+        reads = 0
+
+        def read_state(self):
+            st = super().read_state()
+            self.reads += 1
+            if self.reads > 30:
+                return replace(st, pos_ned_m=np.full(3, np.nan))
+            return st
+
+    link = LostPosition(RoverSim(rover_preset("husky_50kg")), {"rover_preset": "husky_50kg"})
+    link.connect(1.0)
+    left_for, stopped_for = drive_back(link, (3.0, 1.0, math.pi / 2), 0.5, timeout_s=60.0)
+    assert left_for == "" and stopped_for.startswith("the rover's pose is not finite")
+    assert link.read_state().mode == "HOLD"
