@@ -29,11 +29,10 @@ from dataclasses import replace
 
 import numpy as np
 
+from diagnosis.window_nuisance import finite_differences
 from vehicle_sim import AnchorState, Simulator, VelocitySetpoint
 
 LEAD_IN_S = 1.0
-_STEP_MPS2 = 0.1  # integral perturbation of the finite differences [m/s^2]
-_STEP_MPS = 0.1  # start-velocity perturbation of the finite differences [m/s]
 
 
 def start_integral(
@@ -71,10 +70,7 @@ def start_integral(
             out.append(free.vel_ned_mps)
         return np.array(out)
 
-    zero = np.zeros(3)
-    nominal = fly(zero, zero)
-    columns = [(fly(_STEP_MPS2 * e, zero) - nominal) / _STEP_MPS2 for e in np.eye(3)]
-    columns += [(fly(zero, _STEP_MPS * e) - nominal) / _STEP_MPS for e in np.eye(3)]
-    jac = np.stack(columns, axis=-1).reshape(-1, 6)
+    nominal, responses = finite_differences(fly)
+    jac = responses.reshape(-1, 6)
     solution, *_ = np.linalg.lstsq(jac, (meas_vel_ned_mps - nominal).reshape(-1), rcond=None)
     return solution[:3]

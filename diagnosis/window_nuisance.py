@@ -24,7 +24,7 @@ for the true 4); BENCHMARKS.md has the counts.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from functools import lru_cache
 
 import numpy as np
@@ -63,11 +63,21 @@ def responses(config: SimConfig) -> np.ndarray:
             out.append(sim.vel_ned_mps)
         return np.array(out)
 
+    return finite_differences(fly)[1]
+
+
+def finite_differences(
+    fly: Callable[[np.ndarray, np.ndarray], np.ndarray],
+) -> tuple[np.ndarray, np.ndarray]:
+    """``fly(integral, dv0)`` (velocity NED [m/s], (m, 3), of a flight from an integral offset
+    [m/s^2] and a start-velocity error [m/s], both (3,)) unperturbed, and (m, 3, 6) its change
+    per unit of each (integral offset in columns 0-2, start velocity 3-5), by one-sided finite
+    differences: seven flights."""
     zero = np.zeros(3)
     nominal = fly(zero, zero)
     columns = [(fly(_STEP_MPS2 * e, zero) - nominal) / _STEP_MPS2 for e in np.eye(3)]
     columns += [(fly(zero, _STEP_MPS * e) - nominal) / _STEP_MPS for e in np.eye(3)]
-    return np.stack(columns, axis=-1)
+    return nominal, np.stack(columns, axis=-1)
 
 
 def without_nuisance(

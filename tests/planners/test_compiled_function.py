@@ -15,17 +15,22 @@ def small_function() -> ca.Function:
     return ca.Function("small_fn", [x, y], [ca.sin(x) * y[0], ca.sumsqr(x) + y[1]])
 
 
+def assert_compiled_matches(fn: ca.Function) -> None:
+    """``compiled(fn)`` is a loaded library that gives ``fn``'s outputs (1e-14)."""
+    fast = compiled(fn)
+    assert fast.is_a("External")
+    x, y = np.array([0.1, -2.0, 3.0]), np.array([1.5, -0.5])
+    for a, b in zip(fn(x, y), fast(x, y), strict=True):
+        np.testing.assert_allclose(np.asarray(a), np.asarray(b), rtol=1e-14)
+
+
 @pytest.mark.skipif(
     shutil.which(shlex.split(os.environ.get("CC") or "cc")[0]) is None, reason="needs a C compiler"
 )
 def test_compiled_matches_and_is_cached(tmp_path, monkeypatch):
     monkeypatch.setenv("RESIDUAL_COMPANION_CACHE", str(tmp_path))
     fn = small_function()
-    fast = compiled(fn)
-    assert fast.is_a("External")
-    x, y = np.array([0.1, -2.0, 3.0]), np.array([1.5, -0.5])
-    for a, b in zip(fn(x, y), fast(x, y), strict=True):
-        np.testing.assert_allclose(np.asarray(a), np.asarray(b), rtol=1e-14)
+    assert_compiled_matches(fn)
     libs = list(tmp_path.glob("*.so"))
     assert len(libs) == 1
     stamp = libs[0].stat().st_mtime_ns
@@ -52,11 +57,7 @@ def test_a_damaged_cached_library_is_built_again(tmp_path, monkeypatch):
     (library,) = tmp_path.glob("*.so")
     library.write_bytes(b"")
     fn = small_function()
-    fast = compiled(fn)
-    assert fast.is_a("External")
-    x, y = np.array([0.1, -2.0, 3.0]), np.array([1.5, -0.5])
-    for a, b in zip(fn(x, y), fast(x, y), strict=True):
-        np.testing.assert_allclose(np.asarray(a), np.asarray(b), rtol=1e-14)
+    assert_compiled_matches(fn)
     assert library.stat().st_size > 0
 
 
