@@ -6,7 +6,12 @@ plugins' polling getters (newest values), commands block until the autopilot ans
 
 MAVSDK's NED velocity setpoint carries an absolute yaw, not a yaw rate, so the commanded yaw
 rate is integrated here into a yaw target (starting from the vehicle's heading when streaming
-starts); with zero yaw rate the vehicle keeps its heading.
+starts); with zero yaw rate the vehicle keeps its heading. The target stays within
+``YAW_LEAD_S`` of the commanded rate (at most ``MAX_YAW_LEAD_RAD``) ahead of the vehicle's
+heading on the side it is to turn to, and ``YAW_HOLD_RAD`` on either side: a vehicle turning
+slower than commanded (a rover at its turn-rate limit) would otherwise see the target run
+away from it, past half a turn, and turn the short way round to it, the other way, or go on
+turning long after the command turned the other way.
 """
 
 from __future__ import annotations
@@ -44,6 +49,9 @@ from companion.link import (
 )
 
 _MODE_ALIASES = {"RETURN_TO_LAUNCH": "RTL"}
+YAW_LEAD_S = 1.0  # [s]: a heading loop of P gain >= 1/s turns at the commanded rate
+YAW_HOLD_RAD = 0.2  # [rad]: a heading pushed off by up to this is turned back
+MAX_YAW_LEAD_RAD = 1.0  # [rad]: well short of half a turn, so the short way is the commanded way
 _Plugin = TypeVar("_Plugin")
 
 
@@ -145,11 +153,17 @@ class MavsdkLink:
     def send_velocity(self, command: VelocityCommand) -> None:
         offboard = self._require(self._offboard)
         now_s = self._clock.now_s()
+        yaw_rad = self.read_state().yaw_rad
         if self._yaw_target_rad is None:
-            self._yaw_target_rad = self.read_state().yaw_rad
+            self._yaw_target_rad = yaw_rad
         else:
             dt_s = min(now_s - self._yaw_updated_s, 0.5)
             self._yaw_target_rad += command.yaw_rate_radps * dt_s
+            lead_rad = math.remainder(self._yaw_target_rad - yaw_rad, 2.0 * math.pi)
+            reach_rad = command.yaw_rate_radps * YAW_LEAD_S
+            lo_rad = max(min(0.0, reach_rad) - YAW_HOLD_RAD, -MAX_YAW_LEAD_RAD)
+            hi_rad = min(max(0.0, reach_rad) + YAW_HOLD_RAD, MAX_YAW_LEAD_RAD)
+            self._yaw_target_rad = yaw_rad + min(max(lead_rad, lo_rad), hi_rad)
         self._yaw_updated_s = now_s
         vn, ve, vd = command.vel_ned_mps
         yaw_deg = math.degrees(math.remainder(self._yaw_target_rad, 2.0 * math.pi))
