@@ -472,3 +472,18 @@ def test_a_drive_back_says_what_it_cannot_be() -> None:
         DriveBack("sideways", 0.5)
     with pytest.raises(ValueError, match="must be > 0"):
         DriveBack("reverse", 0.0)
+
+
+def test_a_drive_back_that_ends_away_from_the_start_drives_no_trial() -> None:
+    """Reversing along the path ends once the rover is back at the start's arc length; a rover
+    beside the start (2 m to its left, half a metre behind it) is there along the path at once,
+    yet 2.1 m from the start: the run stops before the trial, saying where the rover is, rather
+    than drive the trial from 2 m off the path."""
+    path = TaughtPath.from_segments([(5.0, 0.0)])
+    link = InProcessRoverLink(RoverSim(rover_preset("husky_50kg"), pose=(-0.5, 2.0, 0.0)))
+    link.connect(1.0)
+    out = repeat_path(link, path, 1, learner.make_history_gp(), np.full(len(path), 0.5),
+                      drive_back=DriveBack("reverse", 0.5))  # fmt: skip
+    assert out.status == "not_at_start" and out.trials == [], out.detail
+    assert "driving back ended 2.1 m from the path's start" in out.detail
+    assert link.read_state().mode == "HOLD"
