@@ -105,8 +105,8 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     for p in (teach, repeat):
         p.add_argument("--link", choices=LINKS, default="pymavlink", help="how to reach it")
         p.add_argument("--url", default=DEFAULT_URL, help=f"MAVLink URL (default {DEFAULT_URL})")
-        p.add_argument("--vehicle", default="husky_50kg", help="rover preset (--link inprocess)")
-        p.add_argument("--seed", type=int, default=0, help="simulator seed (--link inprocess)")
+        p.add_argument("--vehicle", help="rover preset (--link inprocess; default husky_50kg)")
+        p.add_argument("--seed", type=int, help="simulator seed (--link inprocess; default 0)")
         p.add_argument("--spacing", type=_positive, default=0.25, help="vertex spacing [m]")
     teach.add_argument("--out", required=True, type=output_path, help="path CSV to write")
     teach.add_argument("--max-distance", type=_positive, default=math.inf, help="stop after [m]")
@@ -142,6 +142,14 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     args = parser.parse_args(argv)
     if args.command == "repeat" and args.trials < 1:
         parser.error(f"argument --trials: must be >= 1, got {args.trials}")
+    for option, given in (("--vehicle", args.vehicle), ("--seed", args.seed)):
+        if args.link != "inprocess" and given is not None:
+            parser.error(
+                f"{option} is for --link inprocess; over {args.link} the rover is whatever "
+                f"answers at --url (start `vehicle-sim --vehicle PRESET` for a simulated one)"
+            )
+    args.vehicle = args.vehicle or "husky_50kg"
+    args.seed = 0 if args.seed is None else args.seed
     return args
 
 

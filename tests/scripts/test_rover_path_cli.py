@@ -74,6 +74,8 @@ def files(tmp_path: Path) -> dict[str, Path]:
         (["teach", "--out", "{tmp}/p.csv", "--drive", "3"], "is not LENGTH_M:CURVATURE_1PM"),
         (["teach", "--out", "{tmp}/p.csv", "--drive=-3:0"], "need a length > 0"),
         (["teach", "--out", "{tmp}"], "--out"),
+        (["teach", "--out", "{tmp}/p.csv", "--vehicle", "dmrv_600kg"], "--vehicle is for --link"),
+        (["repeat", "--path", "{loop}", "--seed", "3"], "--seed is for --link inprocess"),
     ],
 )
 def test_bad_input_is_one_line_and_exit_2(
