@@ -100,8 +100,14 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         "3 handed over to a pilot (nothing sent), 130 Ctrl-C, 143 SIGTERM.",
     )
     sub = parser.add_subparsers(dest="command", required=True)
-    teach = sub.add_parser("teach", help="record the path the rover is driven along")
-    repeat = sub.add_parser("repeat", help="drive a taught path trial after trial, learning")
+    # No abbreviations: repeat's --drive would be taken as --drive-back (teach's --drive given
+    # to repeat said "--drive-back: invalid choice: '3:0'").
+    teach = sub.add_parser(
+        "teach", help="record the path the rover is driven along", allow_abbrev=False
+    )
+    repeat = sub.add_parser(
+        "repeat", help="drive a taught path trial after trial, learning", allow_abbrev=False
+    )
     for p in (teach, repeat):
         p.add_argument("--link", choices=LINKS, default="pymavlink", help="how to reach it")
         p.add_argument("--url", default=DEFAULT_URL, help=f"MAVLink URL (default {DEFAULT_URL})")
