@@ -250,9 +250,12 @@ def _repeat_inputs(args: argparse.Namespace):  # noqa: ANN202 (a tuple of what r
     try:
         check_writable_file(experience)
         check_not_an_input(experience, [args.path])
+    except OutputError as exc:
+        raise BadInput(f"--experience {exc}") from None
+    try:
         check_writable_dir(out_dir)
     except OutputError as exc:
-        raise BadInput(str(exc)) from None
+        raise BadInput(f"--out {exc}") from None
     scheduler = None
     if args.scheduler is not None:
         if args.scheduler not in TABLE_I:

@@ -77,6 +77,9 @@ def files(tmp_path: Path) -> dict[str, Path]:
         (["teach", "--out", "{tmp}/p.csv", "--vehicle", "dmrv_600kg"], "--vehicle is for --link"),
         (["repeat", "--path", "{loop}", "--seed", "3"], "--seed is for --link inprocess"),
         (["repeat", "--path", "{open}", "--drive", "3:0"], "unrecognized arguments: --drive"),
+        (["repeat", "--path", "{loop}", "--out", "{open}"], "error: --out "),
+        (["repeat", "--path", "{loop}", "--experience", "{loop}"], "error: --experience "),
+        (["repeat", "--path", "{loop}", "--experience", "{open}/e.npz"], "error: --experience "),
     ],
 )
 def test_bad_input_is_one_line_and_exit_2(
