@@ -110,6 +110,22 @@ def _json(folder: Path) -> dict:
     return json.loads((folder / "repeat.json").read_text())
 
 
+def test_a_speed_above_the_rovers_is_reported_as_driven_not_as_asked(
+    tmp_path: Path, files: dict[str, Path], capsys
+) -> None:
+    """The Husky drives at most 1 m/s: asked for 5 m/s on the 6 m open path, its trial line
+    and repeat.json say the speed it drove (the path over the travel time) beside the one
+    scheduled; the line said "at 5.00 m/s mean" of a trial driven at 0.9 m/s."""
+    rep = tmp_path / "rep"
+    argv = ["repeat", "--link", "inprocess", "--path", str(files["open"]), "--trials", "1",
+            "--speed", "5", "--experience", str(tmp_path / "e.npz"), "--out", str(rep)]  # fmt: skip
+    assert main(argv) == 0
+    line = capsys.readouterr().out.strip()
+    driven = _json(rep)["driven_speed_mps"][0]
+    assert 0.7 < driven <= 1.0
+    assert f"at {driven:.2f} m/s mean (5.00 m/s scheduled)" in line, line
+
+
 @pytest.mark.slow
 def test_teach_and_repeat_in_process_go_on_learning_across_runs(tmp_path: Path, capsys) -> None:
     path, exp, rep = tmp_path / "loop.csv", tmp_path / "loop.npz", tmp_path / "rep"
