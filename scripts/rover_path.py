@@ -308,7 +308,7 @@ def repeat(args: argparse.Namespace) -> int:
     back = None
     if args.drive_back:
         back = DriveBack(args.drive_back, min(args.speed or DEFAULT_SPEED_MPS, DEFAULT_SPEED_MPS))
-    outcome = RepeatOutcome("interrupted", "interrupted by Ctrl-C; the rover was sent Hold")
+    outcome = RepeatOutcome("interrupted", "Ctrl-C; the rover was sent Hold")
     code = EXIT_INTERRUPTED
     try:
         link.connect(timeout_s=30.0)
@@ -331,7 +331,7 @@ def repeat(args: argparse.Namespace) -> int:
         code = EXIT_FAILED
     except KeyboardInterrupt as exc:
         if isinstance(exc, Terminated):
-            outcome = RepeatOutcome("terminated", "terminated (SIGTERM); the rover was sent Hold")
+            outcome = RepeatOutcome("terminated", "SIGTERM; the rover was sent Hold")
             code = EXIT_TERMINATED
     finally:
         link.close()

@@ -260,9 +260,12 @@ def _wait_for(proc: subprocess.Popen, text: str, timeout_s: float = 60.0) -> Non
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize(("sig", "code"), [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+@pytest.mark.parametrize(
+    ("sig", "code", "said"),
+    [(signal.SIGINT, 130, "interrupted: Ctrl-C"), (signal.SIGTERM, 143, "terminated: SIGTERM")],
+)
 def test_ctrl_c_or_sigterm_mid_repeat_sends_hold(
-    files: dict[str, Path], tmp_path: Path, sig: signal.Signals, code: int
+    files: dict[str, Path], tmp_path: Path, sig: signal.Signals, code: int, said: str
 ) -> None:
     port = _free_port()
     endpoint = _endpoint(port)
@@ -281,6 +284,8 @@ def test_ctrl_c_or_sigterm_mid_repeat_sends_hold(
         time.sleep(1.0)  # driving
         proc.send_signal(sig)
         assert proc.wait(30.0) == code, proc.stderr.read()
+        last = proc.stderr.read().strip().splitlines()[-1]  # not "interrupted: interrupted ..."
+        assert last == f"rover-path: {said}; the rover was sent Hold", last
     finally:
         if proc.poll() is None:
             proc.kill()
