@@ -60,6 +60,9 @@ def files(tmp_path: Path) -> dict[str, Path]:
         (["repeat", "--path", "{tmp}/nan.csv"], "nan.csv: path line 3"),
         (["repeat", "--path", "{tmp}/cols.csv"], "line 2 has 3 columns, expected 2"),
         (["repeat", "--path", "{tmp}/header.csv"], "expected the header 'x_m,y_m'"),
+        (["repeat", "--path", "{tmp}/short.csv"], "short.csv: 1 row under its header; a path"),
+        (["repeat", "--path", "{tmp}/empty.csv"], "empty.csv: 0 rows under its header; a path"),
+        (["repeat", "--path", "{tmp}/one.csv"], "line 3 has 1 column, expected 2"),
         (["repeat", "--path", "{tmp}/binary.csv"], "cannot read it as a CSV text file"),
         (["repeat", "--path", "{loop}", "--experience", "{open_exp}"], "learned on another path"),
         (["repeat", "--path", "{loop}", "--experience", "{tmp}/junk.npz"], "not a readable"),
@@ -88,6 +91,9 @@ def test_bad_input_is_one_line_and_exit_2(
     (tmp_path / "nan.csv").write_text("x_m,y_m\n0,0\n1,nan\n2,0\n3,0\n")
     (tmp_path / "cols.csv").write_text("x_m,y_m\n0,0,1\n1,0\n2,0\n")
     (tmp_path / "header.csv").write_text("north,east\n0,0\n1,0\n2,0\n")
+    (tmp_path / "short.csv").write_text("x_m,y_m\n0,0\n")
+    (tmp_path / "empty.csv").write_text("x_m,y_m\n")
+    (tmp_path / "one.csv").write_text("x_m,y_m\n0,0\n1\n2,0\n")
     (tmp_path / "binary.csv").write_bytes(b"\xff\xfe\x00\x89")
     (tmp_path / "junk.npz").write_text("not numpy")
     names = {"tmp": tmp_path, **files}

@@ -130,7 +130,7 @@ def test_the_path_file_round_trips_and_bad_files_are_one_line(tmp_path: Path) ->
         "columns.csv": ("x_m,y_m\n0,0\n1,0,5\n2,0\n", "line 3 has 3 columns"),
         "nan.csv": ("x_m,y_m\n0,0\n1,nan\n2,0\n3,0\n", "path line 3"),
         "word.csv": ("x_m,y_m\n0,0\n1,zero\n2,0\n", "path line 3"),
-        "short.csv": ("x_m,y_m\n0,0\n1,0\n", "a path needs >= 3"),
+        "short.csv": ("x_m,y_m\n0,0\n1,0\n", "2 rows under its header; a path needs at least 3"),
         "empty.csv": ("", "the file is empty"),
     }
     for name, (content, message) in cases.items():
