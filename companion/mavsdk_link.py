@@ -31,6 +31,7 @@ from mavsdk import (
     Mavsdk,
     MavsdkError,
     System,
+    Vehicle,
     log_subscribe,
 )
 from mavsdk.plugins.action import Action, ActionError
@@ -45,10 +46,17 @@ from companion.link import (
     LandedPhase,
     LinkError,
     LinkState,
+    VehicleKind,
     VelocityCommand,
 )
 
 _MODE_ALIASES = {"RETURN_TO_LAUNCH": "RTL"}
+# MAVSDK's reading of the HEARTBEAT's MAV_TYPE; its FIXED_WING may be a VTOL, and GENERIC or
+# UNKNOWN say nothing, so those are left unknown (None) as a link that says nothing is.
+_KINDS_OF_VEHICLE: dict[Vehicle, VehicleKind] = {
+    Vehicle.MULTICOPTER: "multirotor",
+    Vehicle.ROVER: "rover",
+}
 YAW_LEAD_S = 1.0  # [s]: a heading loop of P gain >= 1/s turns at the commanded rate
 YAW_HOLD_RAD = 0.2  # [rad]: a heading pushed off by up to this is turned back
 MAX_YAW_LEAD_RAD = 1.0  # [rad]: well short of half a turn, so the short way is the commanded way
@@ -140,6 +148,7 @@ class MavsdkLink:
             mode=mode if mode in FLIGHT_MODE_NAMES else "UNKNOWN",
             landed=LandedPhase.of(int(telemetry.landed_state())),
             battery_v=battery_v if math.isfinite(battery_v) and battery_v > 0.0 else None,
+            vehicle_kind=_KINDS_OF_VEHICLE.get(self._require(self._system).vehicle_type()),
         )
 
     def arm(self) -> CommandOutcome:

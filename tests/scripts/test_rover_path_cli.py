@@ -332,8 +332,9 @@ def test_ctrl_c_ends_a_pilot_driven_teach_and_writes_the_path(tmp_path: Path) ->
     assert out.read_text().startswith("x_m,y_m\n")
 
 
+@pytest.mark.parametrize("link", ["pymavlink", "mavsdk"])
 @pytest.mark.parametrize("command", ["teach", "repeat"])
-def test_a_multicopter_on_the_link_is_refused_and_sent_nothing(tmp_path, capsys, command):
+def test_a_multicopter_on_the_link_is_refused_and_sent_nothing(tmp_path, capsys, command, link):
     """Another vehicle answering on the port is a quadrotor (PX4 SITL, a wrong --url): neither
     the teach pass nor the repeat arms it or switches its mode."""
     from tests.companion.test_companion_mission_on_every_link import Vehicle, free_udp_port
@@ -343,7 +344,7 @@ def test_a_multicopter_on_the_link_is_refused_and_sent_nothing(tmp_path, capsys,
     port = free_udp_port()
     quad = Vehicle(port)
     try:
-        url = ["--link", "pymavlink", "--url", f"udpin://127.0.0.1:{port}"]
+        url = ["--link", link, "--url", f"udpin://127.0.0.1:{port}"]
         if command == "teach":
             argv = ["teach", *url, "--drive", "3:0", "--out", str(tmp_path / "p.csv")]
         else:
