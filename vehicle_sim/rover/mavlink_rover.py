@@ -6,7 +6,8 @@ MAV_CMD_COMPONENT_ARM_DISARM and MAV_CMD_DO_SET_MODE (acknowledged; MANUAL, Hold
 and OFFBOARD; the other AUTO modes, RTL, mission, land and takeoff, are denied),
 AUTOPILOT_VERSION on request (MAV_CMD_REQUEST_MESSAGE 148, or 520), SET_MODE, and offboard
 SET_POSITION_TARGET_LOCAL_NED with velocity + yaw rate: in MAV_FRAME_BODY_NED vx is the forward
-speed; in MAV_FRAME_LOCAL_NED the speed is (vx, vy) projected on the heading. Telemetry at
+speed; in MAV_FRAME_LOCAL_NED the speed is (vx, vy) projected on the heading; another frame is
+refused, as the multirotor endpoint refuses it. Telemetry at
 ``telemetry_hz``: HEARTBEAT, LOCAL_POSITION_NED, ATTITUDE, ATTITUDE_QUATERNION, and at 1 Hz what
 MAVSDK's health check wants (SYS_STATUS with healthy sensors and the pre-arm bit, GPS_RAW_INT,
 GLOBAL_POSITION_INT with the ground velocity and HOME_POSITION about a fixed origin,
@@ -187,6 +188,10 @@ class RoverMavlinkEndpoint:
         elif kind == "SET_POSITION_TARGET_LOCAL_NED":
             if msg.type_mask & _IGNORE_VELOCITY == _IGNORE_VELOCITY:
                 self._refuse_setpoint(b"Offboard: rover flies velocity setpoints only")
+                return
+            if msg.coordinate_frame not in (_MAV.MAV_FRAME_LOCAL_NED, _MAV.MAV_FRAME_BODY_NED):
+                text = f"Offboard: frame {msg.coordinate_frame} unsupported, use 1 or 8"
+                self._refuse_setpoint(text.encode())
                 return
             heading = self.sim.state.heading_rad
             if msg.coordinate_frame == _MAV.MAV_FRAME_BODY_NED:

@@ -67,9 +67,11 @@ def test_pymavlink_arm_offboard_velocity_and_yaw_rate() -> None:
 
 @pytest.mark.slow
 def test_malformed_messages_get_an_answer_and_never_stop_the_rover() -> None:
-    """A mode that is not a number is DENIED, NaN / position-only setpoints are refused with a
-    STATUSTEXT (no proof of life: OFFBOARD is refused), an unknown command is UNSUPPORTED; the
-    rover keeps answering and then drives a good setpoint stream."""
+    """A mode that is not a number is DENIED, NaN / position-only setpoints and those in a
+    frame other than LOCAL_NED or BODY_NED (as the multirotor endpoint: BODY_FRD's forward speed
+    was read as a north one) are refused with a STATUSTEXT (no proof of life: OFFBOARD is
+    refused), an unknown command is UNSUPPORTED; the rover keeps answering and then drives a
+    good setpoint stream."""
     port = _free_port()
     ep = RoverMavlinkEndpoint(RoverSim(rover_preset("husky_50kg")), port)
     ep.start()
@@ -82,9 +84,9 @@ def test_malformed_messages_get_an_answer_and_never_stop_the_rover() -> None:
         assert ack is not None and ack.command == cmd
         return ack.result
 
-    def setpoint(mask: int, vx: float) -> None:
+    def setpoint(mask: int, vx: float, frame: int = _MAV.MAV_FRAME_BODY_NED) -> None:
         gcs.mav.set_position_target_local_ned_send(
-            0, 1, 1, _MAV.MAV_FRAME_BODY_NED, mask, 1, 0, 0, vx, 0, 0, 0, 0, 0, 0, 0.0
+            0, 1, 1, frame, mask, 1, 0, 0, vx, 0, 0, 0, 0, 0, 0, 0.0
         )
 
     try:
@@ -94,14 +96,19 @@ def test_malformed_messages_get_an_answer_and_never_stop_the_rover() -> None:
         assert command(_MAV.MAV_CMD_DO_SET_MODE, 1, nan, 0, 0, 0, 0, 0) == (_MAV.MAV_RESULT_DENIED)
         assert command(_MAV.MAV_CMD_DO_ORBIT, 0, 0, 0, 0, 0, 0, 0) == (_MAV.MAV_RESULT_UNSUPPORTED)
         texts = set()
-        for mask, vx in ((0b0000_0101_1100_0111, nan), (0b0000_1101_1111_1000, 0.0)):
-            setpoint(mask, vx)
+        for mask, vx, frame in (
+            (0b0000_0101_1100_0111, nan, _MAV.MAV_FRAME_BODY_NED),
+            (0b0000_1101_1111_1000, 0.0, _MAV.MAV_FRAME_BODY_NED),
+            (0b0000_0101_1100_0111, 0.5, _MAV.MAV_FRAME_BODY_FRD),
+        ):
+            setpoint(mask, vx, frame)
             text = gcs.recv_match(type="STATUSTEXT", blocking=True, timeout=20)
             assert text is not None
             texts.add(text.text)
         assert texts == {
             "Offboard: setpoint refused: not finite",
             "Offboard: rover flies velocity setpoints only",
+            "Offboard: frame 12 unsupported, use 1 or 8",
         }
         assert command(_MAV.MAV_CMD_DO_SET_MODE, 1, 6, 0, 0, 0, 0, 0) == (
             _MAV.MAV_RESULT_DENIED
