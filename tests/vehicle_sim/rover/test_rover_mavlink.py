@@ -195,3 +195,28 @@ def test_modes_hold_is_reported_other_auto_modes_refused_bad_setpoints_ignored()
     finally:
         gcs.close()
         ep.close()
+
+
+@pytest.mark.slow
+def test_the_global_position_comes_as_often_as_the_local_one() -> None:
+    """GLOBAL_POSITION_INT (MAVSDK's position, heading and velocity_ned) at the telemetry rate
+    with LOCAL_POSITION_NED, as PX4 streams both, not once a second: a MAVSDK client reading
+    the rover's heading while it turns got values up to a second old."""
+    port = _free_port()
+    ep = RoverMavlinkEndpoint(RoverSim(rover_preset("husky_50kg")), port, telemetry_hz=10.0)
+    ep.start()
+    gcs = mavutil.mavlink_connection(f"udpout:127.0.0.1:{port}", source_system=255)
+    try:
+        gcs.mav.heartbeat_send(_MAV.MAV_TYPE_GCS, _MAV.MAV_AUTOPILOT_INVALID, 0, 0, 0)
+        assert gcs.recv_match(type="HEARTBEAT", blocking=True, timeout=20) is not None
+        counts = {"GLOBAL_POSITION_INT": 0, "LOCAL_POSITION_NED": 0}
+        t_end = time.monotonic() + 2.0
+        while time.monotonic() < t_end:
+            m = gcs.recv_match(type=list(counts), blocking=True, timeout=0.2)
+            if m is not None:
+                counts[m.get_type()] += 1
+    finally:
+        gcs.close()
+        ep.close()
+    assert counts["LOCAL_POSITION_NED"] >= 10
+    assert counts["GLOBAL_POSITION_INT"] >= 0.8 * counts["LOCAL_POSITION_NED"], counts
