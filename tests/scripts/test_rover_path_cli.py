@@ -112,6 +112,19 @@ def test_a_teach_pass_with_too_little_motion_is_one_line_exit_1(tmp_path: Path, 
     assert not out.exists()
 
 
+def test_a_vertex_spacing_longer_than_the_drive_says_to_choose_a_smaller_one(
+    tmp_path: Path, capsys
+) -> None:
+    """3 m driven at --spacing 100: the pass is too short for 3 vertices, and the line says it
+    is the spacing, not "a path needs at least 300 m: drive it along the path" alone."""
+    out = tmp_path / "p.csv"
+    argv = ["teach", "--link", "inprocess", "--drive", "3:0", "--spacing", "100", "--out", str(out)]
+    assert main(argv) == 1
+    last = capsys.readouterr().err.strip().splitlines()[-1]
+    assert "at least 300 m (3 vertices 100 m apart)" in last and "smaller --spacing" in last, last
+    assert not out.exists()
+
+
 def _json(folder: Path) -> dict:
     return json.loads((folder / "repeat.json").read_text())
 
