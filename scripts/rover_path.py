@@ -308,10 +308,11 @@ def repeat(args: argparse.Namespace) -> int:
     back = None
     if args.drive_back:
         back = DriveBack(args.drive_back, min(args.speed or DEFAULT_SPEED_MPS, DEFAULT_SPEED_MPS))
-    outcome = RepeatOutcome("interrupted", "Ctrl-C; the rover was sent Hold")
+    outcome = RepeatOutcome("interrupted", "Ctrl-C before any vehicle answered; nothing sent")
     code = EXIT_INTERRUPTED
     try:
         link.connect(timeout_s=30.0)
+        outcome = RepeatOutcome("interrupted", "Ctrl-C; the rover was sent Hold")
         require_a_rover(link)
         outcome = repeat_path(
             link, path, args.trials, gp, schedule, scheduler, memory.trials_done + 1, back,
@@ -331,7 +332,7 @@ def repeat(args: argparse.Namespace) -> int:
         code = EXIT_FAILED
     except KeyboardInterrupt as exc:
         if isinstance(exc, Terminated):
-            outcome = RepeatOutcome("terminated", "SIGTERM; the rover was sent Hold")
+            outcome = RepeatOutcome("terminated", outcome.detail.replace("Ctrl-C", "SIGTERM"))
             code = EXIT_TERMINATED
     finally:
         link.close()

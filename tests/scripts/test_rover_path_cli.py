@@ -313,6 +313,30 @@ def test_ctrl_c_or_sigterm_mid_repeat_sends_hold(
     assert endpoint.holding and not endpoint.offboard  # the rover was sent Hold
 
 
+def test_ctrl_c_before_any_vehicle_answered_says_nothing_was_sent(
+    files: dict[str, Path], tmp_path: Path
+) -> None:
+    """Ctrl-C while repeat still waits for a vehicle (none on the port): the last line does
+    not claim the rover was sent Hold."""
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "scripts.rover_path", "repeat", "--path", str(files["loop"]),
+         "--url", f"udpin://127.0.0.1:{_free_port()}", "--experience", str(tmp_path / "e.npz"),
+         "--out", str(tmp_path / "rep")],
+        cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        _wait_for(proc, "no experience yet")
+        time.sleep(0.5)
+        proc.send_signal(signal.SIGINT)
+        assert proc.wait(30.0) == 130
+        last = proc.stderr.read().strip().splitlines()[-1]
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(5.0)
+    assert last == "rover-path: interrupted: Ctrl-C before any vehicle answered; nothing sent", last
+
+
 @pytest.mark.slow
 def test_ctrl_c_ends_a_pilot_driven_teach_and_writes_the_path(tmp_path: Path) -> None:
     """A pilot drives in MANUAL; Ctrl-C on the companion ends the recording and the path so
