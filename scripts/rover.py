@@ -51,7 +51,9 @@ def main(argv: list[str] | None = None) -> int:
         prog="rover", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     ap.add_argument("--regime", required=True, help=f"one of {', '.join(REGIMES)}")
-    ap.add_argument("--out", type=output_path, default="rover_out", help="output folder")
+    ap.add_argument(
+        "--out", type=output_path, default="out/rover", help="output folder (default out/rover)"
+    )
     ap.add_argument("--trials", type=int, default=None, help="override the number of trials")
     ap.add_argument(
         "--quick", action="store_true", help=f"{QUICK_TRIALS} trials (unless --trials is given)"
@@ -77,7 +79,7 @@ def main(argv: list[str] | None = None) -> int:
     try:  # before any trial: a folder that cannot be made is found now (made when written)
         check_writable_dir(args.out)
     except OutputError as exc:
-        print(f"rover: --out {exc}", file=sys.stderr)
+        print(f"rover: error: --out {exc}", file=sys.stderr)
         return 2
     start = time.process_time()
 
@@ -90,7 +92,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"rover: interrupted; nothing written to {args.out}", file=sys.stderr)
         return 130
     except OutputError as exc:  # the folder checked above failed later (full, removed)
-        print(f"rover: --out {exc}", file=sys.stderr)
+        print(f"rover: error: --out {exc}", file=sys.stderr)
         return 2
     print(f"rover: wrote {' and '.join(written)}", file=sys.stderr)
     print(json.dumps(result, indent=1))

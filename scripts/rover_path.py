@@ -100,13 +100,19 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         "3 handed over to a pilot (nothing sent), 130 Ctrl-C, 143 SIGTERM.",
     )
     sub = parser.add_subparsers(dest="command", required=True)
-    teach = sub.add_parser("teach", help="record the path the rover is driven along")
-    repeat = sub.add_parser("repeat", help="drive a taught path trial after trial, learning")
+    # No abbreviations: repeat's --drive would be taken as --drive-back (teach's --drive given
+    # to repeat said "--drive-back: invalid choice: '3:0'").
+    teach = sub.add_parser(
+        "teach", help="record the path the rover is driven along", allow_abbrev=False
+    )
+    repeat = sub.add_parser(
+        "repeat", help="drive a taught path trial after trial, learning", allow_abbrev=False
+    )
     for p in (teach, repeat):
         p.add_argument("--link", choices=LINKS, default="pymavlink", help="how to reach it")
         p.add_argument("--url", default=DEFAULT_URL, help=f"MAVLink URL (default {DEFAULT_URL})")
-        p.add_argument("--vehicle", default="husky_50kg", help="rover preset (--link inprocess)")
-        p.add_argument("--seed", type=int, default=0, help="simulator seed (--link inprocess)")
+        p.add_argument("--vehicle", help="rover preset (--link inprocess; default husky_50kg)")
+        p.add_argument("--seed", type=int, help="simulator seed (--link inprocess; default 0)")
         p.add_argument("--spacing", type=_positive, default=0.25, help="vertex spacing [m]")
     teach.add_argument("--out", required=True, type=output_path, help="path CSV to write")
     teach.add_argument("--max-distance", type=_positive, default=math.inf, help="stop after [m]")
@@ -142,6 +148,14 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     args = parser.parse_args(argv)
     if args.command == "repeat" and args.trials < 1:
         parser.error(f"argument --trials: must be >= 1, got {args.trials}")
+    for option, given in (("--vehicle", args.vehicle), ("--seed", args.seed)):
+        if args.link != "inprocess" and given is not None:
+            parser.error(
+                f"{option} is for --link inprocess; over {args.link} the rover is whatever "
+                f"answers at --url (start `vehicle-sim --vehicle PRESET` for a simulated one)"
+            )
+    args.vehicle = args.vehicle or "husky_50kg"
+    args.seed = 0 if args.seed is None else args.seed
     return args
 
 
@@ -236,9 +250,12 @@ def _repeat_inputs(args: argparse.Namespace):  # noqa: ANN202 (a tuple of what r
     try:
         check_writable_file(experience)
         check_not_an_input(experience, [args.path])
+    except OutputError as exc:
+        raise BadInput(f"--experience {exc}") from None
+    try:
         check_writable_dir(out_dir)
     except OutputError as exc:
-        raise BadInput(str(exc)) from None
+        raise BadInput(f"--out {exc}") from None
     scheduler = None
     if args.scheduler is not None:
         if args.scheduler not in TABLE_I:
@@ -291,10 +308,11 @@ def repeat(args: argparse.Namespace) -> int:
     back = None
     if args.drive_back:
         back = DriveBack(args.drive_back, min(args.speed or DEFAULT_SPEED_MPS, DEFAULT_SPEED_MPS))
-    outcome = RepeatOutcome("interrupted", "interrupted by Ctrl-C; the rover was sent Hold")
+    outcome = RepeatOutcome("interrupted", "Ctrl-C before any vehicle answered; nothing sent")
     code = EXIT_INTERRUPTED
     try:
         link.connect(timeout_s=30.0)
+        outcome = RepeatOutcome("interrupted", "Ctrl-C; the rover was sent Hold")
         require_a_rover(link)
         outcome = repeat_path(
             link, path, args.trials, gp, schedule, scheduler, memory.trials_done + 1, back,
@@ -314,7 +332,7 @@ def repeat(args: argparse.Namespace) -> int:
         code = EXIT_FAILED
     except KeyboardInterrupt as exc:
         if isinstance(exc, Terminated):
-            outcome = RepeatOutcome("terminated", "terminated (SIGTERM); the rover was sent Hold")
+            outcome = RepeatOutcome("terminated", outcome.detail.replace("Ctrl-C", "SIGTERM"))
             code = EXIT_TERMINATED
     finally:
         link.close()

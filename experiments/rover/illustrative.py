@@ -104,9 +104,10 @@ def figure(c: ExampleConfig = ExampleConfig()) -> tuple[Figure, dict[str, dict]]
     t = np.arange(c.steps) * c.dt_s
     fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
     ax1.plot(t, runs["mpc"]["z_d"], "g", label="desired z_d")
-    for name, style in (("feedback", "r"), ("mpc", "b"), ("lbnmpc", "k")):
+    for name, shown, style in (("feedback", "feedback", "r"), ("mpc", "MPC", "b"),
+                               ("lbnmpc", "LB-NMPC", "k")):  # fmt: skip
         rms = tracking_rms(runs[name])
-        ax1.plot(t, runs[name]["z"], style, label=f"{name} (RMS error {rms:.3f})")
+        ax1.plot(t, runs[name]["z"], style, label=f"{shown} (RMS error {rms:.3f})")
     ax1.set_ylabel("state z [-]")
     ax1.legend(loc="upper right", fontsize="small")
     ax2.plot(t, runs["mpc"]["d"], "m", label="disturbance d_k")

@@ -7,7 +7,8 @@ the experience bins of a LocalGP: trial j drives on the experience of the trials
 where the path starts: the rover must be within ``START_TOLERANCE_M`` and
 ``START_TOLERANCE_RAD`` of the first vertex's pose. A loop ends there; after an open path the
 rover is driven back (experiments.rover.drive_back) when ``drive_back`` says how, and
-otherwise the run stops with a line saying where the rover is. Whatever ends a trial early
+otherwise, or when the drive back ends outside those tolerances, the run stops with a line
+saying where the rover is. Whatever ends a trial early
 ends the run: a pilot taking the rover out of OFFBOARD (nothing more is sent), a lost link, a
 non-finite pose, a failed solve (zero velocity and Hold), or not reaching the end in time.
 """
@@ -71,8 +72,8 @@ class RepeatOutcome:
             the rover out of OFFBOARD; nothing more sent), "stopped" (lost link, non-finite
             pose, failed solve, drive back failed: zero velocity and Hold), "incomplete" (a
             trial did not reach the end in time), "not_at_start" (the rover is not at the
-            path's start and is not to be driven back), "refused" (the vehicle is no rover;
-            nothing sent to it).
+            path's start and is not to be driven back, or a drive back ended away from it),
+            "refused" (the vehicle is no rover; nothing sent to it).
         detail: one line for the user.
         trials: the trials driven in this run.
         schedule_mps: the speeds the next trial would drive (N,) [m/s].
@@ -126,6 +127,15 @@ def repeat_path(
                     f"the rover left OFFBOARD for {left_for} while driving back; nothing more sent"
                     if left_for
                     else f"driving back stopped: {stopped_for}; the rover was sent Hold"
+                )
+                return out
+            dist, dhead = start_offset(link, path)
+            if dist > START_TOLERANCE_M or abs(dhead) > START_TOLERANCE_RAD:
+                out.status = "not_at_start"
+                out.detail = (
+                    f"driving back ended {dist:.1f} m from the path's start and {dhead:+.2f} "
+                    f"rad off its heading, before trial {number}; the rover holds there: drive "
+                    "it to the start and run again"
                 )
                 return out
         schedule = out.schedule_mps

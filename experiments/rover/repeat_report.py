@@ -9,11 +9,13 @@ history rows, experiments.rover.experience_file.HISTORY_COLUMNS).
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from experiments.rover.experience_file import HISTORY_COLUMNS
+from experiments.rover.link_drive import LinkDrive
 from experiments.rover.repeat import RepeatOutcome, Trial
 
 if TYPE_CHECKING:
@@ -28,20 +30,28 @@ def _rms(a: np.ndarray) -> float:
     return float(np.sqrt(np.mean(a**2))) if len(a) else float("nan")
 
 
+def _driven_mps(d: LinkDrive) -> float:
+    """The speed the rover drove [m/s]: arc length covered over the travel time (NaN without
+    steps); a rover slower than its schedule (at its speed limit) drives less than asked."""
+    return float((d.s_m[-1] - d.s_m[0]) / d.travel_time_s) if d.travel_time_s > 0 else math.nan
+
+
 def _json_numbers(values: list) -> list:
     """Floats as JSON has them: NaN (a trial that never got to drive) becomes null."""
     return [None if isinstance(v, float) and not np.isfinite(v) else v for v in values]
 
 
 def trial_line(trial: Trial) -> str:
-    """One line: max / RMS e_L and e_H, travel time, mean speed, experiences stored."""
+    """One line: max / RMS e_L and e_H, travel time, mean speed driven and scheduled,
+    experiences stored."""
     d = trial.drive
     end = "" if d.reached_end else ", did not reach the end"
     return (
         f"trial {trial.number}: max |e_L| {_max(d.e_lat_m):.3f} m, RMS e_L {_rms(d.e_lat_m):.3f} "
         f"m, max |e_H| {_max(d.e_head_rad):.3f} rad, RMS e_H {_rms(d.e_head_rad):.3f} rad, "
-        f"travel time {d.travel_time_s:.1f} s at {float(np.mean(trial.schedule_mps)):.2f} m/s "
-        f"mean, {trial.experiences} experiences{end}"
+        f"travel time {d.travel_time_s:.1f} s at {_driven_mps(d):.2f} m/s mean "
+        f"({float(np.mean(trial.schedule_mps)):.2f} m/s scheduled), {trial.experiences} "
+        f"experiences{end}"
     )
 
 
@@ -63,6 +73,7 @@ def summary(outcome: RepeatOutcome, about: dict, history: np.ndarray) -> dict:
         "rms_e_head_rad": [_rms(t.drive.e_head_rad) for t in ts],
         "travel_time_s": [t.drive.travel_time_s for t in ts],
         "mean_speed_mps": [float(np.mean(t.schedule_mps)) for t in ts],
+        "driven_speed_mps": [_driven_mps(t.drive) for t in ts],
     }
     return {
         **about,

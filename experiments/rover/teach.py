@@ -157,9 +157,15 @@ def record_teach(
     if drive is not None:
         stop_rover(link)
     if driven < max(MIN_TEACH_M, 3 * spacing_m) or len(points) < 3:
+        need = f"{MIN_TEACH_M:g} m: drive it along the path"
+        if 3 * spacing_m > MIN_TEACH_M:
+            need = (
+                f"{3 * spacing_m:g} m (3 vertices {spacing_m:g} m apart): drive it further or "
+                "pass a smaller --spacing"
+            )
         raise TeachError(
             f"the rover drove {driven:.2f} m while recording ({ended}); a path needs at least "
-            f"{max(MIN_TEACH_M, 3 * spacing_m):g} m: drive it along the path and teach again"
+            f"{need} and teach again"
         )
     try:
         path = TaughtPath.from_drive(np.array(points), spacing_m)

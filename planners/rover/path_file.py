@@ -29,7 +29,8 @@ def read_path_file(file: Path, spacing_m: float = 0.25) -> TaughtPath:
 
     Raises:
         PathFileError: missing or unreadable file, a header other than ``x_m,y_m``, a row with
-            other columns, a non-number or non-finite row, or too few distinct rows.
+            other columns, fewer than 3 rows, a non-number or non-finite row, or too few
+            distinct rows.
     """
     fix = "teach it again with `rover-path teach --out FILE`"
     try:
@@ -48,10 +49,17 @@ def read_path_file(file: Path, spacing_m: float = 0.25) -> TaughtPath:
         )
     for n, line in lines[1:]:
         if line.count(",") != 1:
+            columns = line.count(",") + 1
             raise PathFileError(
-                f"{file}: line {n} has {line.count(',') + 1} columns, expected 2 ({HEADER}); "
-                f"fix that row or {fix}"
+                f"{file}: line {n} has {columns} column{'s' if columns > 1 else ''}, expected 2 "
+                f"({HEADER}); fix that row or {fix}"
             )
+    if len(lines) - 1 < 3:
+        rows = len(lines) - 1
+        raise PathFileError(
+            f"{file}: {rows} row{'' if rows == 1 else 's'} under its header; a path needs at "
+            f"least 3; {fix}"
+        )
     try:
         return TaughtPath.from_csv_text(text, spacing_m)
     except ValueError as exc:

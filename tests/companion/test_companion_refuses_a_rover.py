@@ -29,15 +29,16 @@ def test_a_rover_is_not_a_multicopter_in_process():
     assert "is a rover" in problem and "rover-path" in problem
 
 
+@pytest.mark.parametrize("link", ["pymavlink", "mavsdk"])
 def test_the_companion_refuses_a_ground_rover_on_its_mavlink_link_and_never_arms_it(
-    tmp_path, capsys
+    tmp_path, capsys, link
 ):
     port = free_udp_port()
     rover = RoverMavlinkEndpoint(RoverSim(rover_preset("husky_50kg")), port, mode="udpout")
     rover.start()
     try:
         code = main(
-            ["missions/line_20m.toml", "--link", "pymavlink", "--url", f"udpin://127.0.0.1:{port}"]
+            ["missions/line_20m.toml", "--link", link, "--url", f"udpin://127.0.0.1:{port}"]
             + ["--planner", "pd", "--log", str(tmp_path / "flight.csv")]
         )
         armed = rover.sim.armed
@@ -45,5 +46,5 @@ def test_the_companion_refuses_a_ground_rover_on_its_mavlink_link_and_never_arms
         rover.close()
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2
-    assert err[-1].startswith("companion: error: the vehicle on the pymavlink link is a rover")
+    assert err[-1].startswith(f"companion: error: the vehicle on the {link} link is a rover")
     assert not armed

@@ -43,7 +43,20 @@ def test_an_out_folder_that_cannot_be_made_is_one_line_exit_2(tmp_path: Path, ca
     for regime in ("example", "rover_exp1"):
         assert rover.main(["--regime", regime, "--out", str(blocker / "out")]) == 2
         err = capsys.readouterr().err.strip().splitlines()
-        assert len(err) == 1 and err[0].startswith(f"rover: --out {blocker}"), err
+        assert len(err) == 1 and err[0].startswith(f"rover: error: --out {blocker}"), err
+
+
+def test_without_out_the_files_go_under_out_as_every_command_s_do(
+    tmp_path: Path, monkeypatch, capsys
+) -> None:
+    """Not into a rover_out/ beside the sources, which nothing ignores; --help says where."""
+    monkeypatch.chdir(tmp_path)
+    assert rover.main(["--regime", "example"]) == 0
+    assert [p.name for p in tmp_path.iterdir()] == ["out"]
+    assert (tmp_path / "out" / "rover" / "fig4_illustrative.png").is_file()
+    capsys.readouterr()
+    assert rover.main(["--help"]) == 0
+    assert "output folder (default out/rover)" in capsys.readouterr().out
 
 
 def test_a_negative_seed_is_one_line_exit_2(tmp_path: Path, capsys) -> None:

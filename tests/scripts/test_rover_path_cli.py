@@ -60,6 +60,9 @@ def files(tmp_path: Path) -> dict[str, Path]:
         (["repeat", "--path", "{tmp}/nan.csv"], "nan.csv: path line 3"),
         (["repeat", "--path", "{tmp}/cols.csv"], "line 2 has 3 columns, expected 2"),
         (["repeat", "--path", "{tmp}/header.csv"], "expected the header 'x_m,y_m'"),
+        (["repeat", "--path", "{tmp}/short.csv"], "short.csv: 1 row under its header; a path"),
+        (["repeat", "--path", "{tmp}/empty.csv"], "empty.csv: 0 rows under its header; a path"),
+        (["repeat", "--path", "{tmp}/one.csv"], "line 3 has 1 column, expected 2"),
         (["repeat", "--path", "{tmp}/binary.csv"], "cannot read it as a CSV text file"),
         (["repeat", "--path", "{loop}", "--experience", "{open_exp}"], "learned on another path"),
         (["repeat", "--path", "{loop}", "--experience", "{tmp}/junk.npz"], "not a readable"),
@@ -74,6 +77,12 @@ def files(tmp_path: Path) -> dict[str, Path]:
         (["teach", "--out", "{tmp}/p.csv", "--drive", "3"], "is not LENGTH_M:CURVATURE_1PM"),
         (["teach", "--out", "{tmp}/p.csv", "--drive=-3:0"], "need a length > 0"),
         (["teach", "--out", "{tmp}"], "--out"),
+        (["teach", "--out", "{tmp}/p.csv", "--vehicle", "dmrv_600kg"], "--vehicle is for --link"),
+        (["repeat", "--path", "{loop}", "--seed", "3"], "--seed is for --link inprocess"),
+        (["repeat", "--path", "{open}", "--drive", "3:0"], "unrecognized arguments: --drive"),
+        (["repeat", "--path", "{loop}", "--out", "{open}"], "error: --out "),
+        (["repeat", "--path", "{loop}", "--experience", "{loop}"], "error: --experience "),
+        (["repeat", "--path", "{loop}", "--experience", "{open}/e.npz"], "error: --experience "),
     ],
 )
 def test_bad_input_is_one_line_and_exit_2(
@@ -82,6 +91,9 @@ def test_bad_input_is_one_line_and_exit_2(
     (tmp_path / "nan.csv").write_text("x_m,y_m\n0,0\n1,nan\n2,0\n3,0\n")
     (tmp_path / "cols.csv").write_text("x_m,y_m\n0,0,1\n1,0\n2,0\n")
     (tmp_path / "header.csv").write_text("north,east\n0,0\n1,0\n2,0\n")
+    (tmp_path / "short.csv").write_text("x_m,y_m\n0,0\n")
+    (tmp_path / "empty.csv").write_text("x_m,y_m\n")
+    (tmp_path / "one.csv").write_text("x_m,y_m\n0,0\n1\n2,0\n")
     (tmp_path / "binary.csv").write_bytes(b"\xff\xfe\x00\x89")
     (tmp_path / "junk.npz").write_text("not numpy")
     names = {"tmp": tmp_path, **files}
@@ -100,8 +112,37 @@ def test_a_teach_pass_with_too_little_motion_is_one_line_exit_1(tmp_path: Path, 
     assert not out.exists()
 
 
+def test_a_vertex_spacing_longer_than_the_drive_says_to_choose_a_smaller_one(
+    tmp_path: Path, capsys
+) -> None:
+    """3 m driven at --spacing 100: the pass is too short for 3 vertices, and the line says it
+    is the spacing, not "a path needs at least 300 m: drive it along the path" alone."""
+    out = tmp_path / "p.csv"
+    argv = ["teach", "--link", "inprocess", "--drive", "3:0", "--spacing", "100", "--out", str(out)]
+    assert main(argv) == 1
+    last = capsys.readouterr().err.strip().splitlines()[-1]
+    assert "at least 300 m (3 vertices 100 m apart)" in last and "smaller --spacing" in last, last
+    assert not out.exists()
+
+
 def _json(folder: Path) -> dict:
     return json.loads((folder / "repeat.json").read_text())
+
+
+def test_a_speed_above_the_rovers_is_reported_as_driven_not_as_asked(
+    tmp_path: Path, files: dict[str, Path], capsys
+) -> None:
+    """The Husky drives at most 1 m/s: asked for 5 m/s on the 6 m open path, its trial line
+    and repeat.json say the speed it drove (the path over the travel time) beside the one
+    scheduled; the line said "at 5.00 m/s mean" of a trial driven at 0.9 m/s."""
+    rep = tmp_path / "rep"
+    argv = ["repeat", "--link", "inprocess", "--path", str(files["open"]), "--trials", "1",
+            "--speed", "5", "--experience", str(tmp_path / "e.npz"), "--out", str(rep)]  # fmt: skip
+    assert main(argv) == 0
+    line = capsys.readouterr().out.strip()
+    driven = _json(rep)["driven_speed_mps"][0]
+    assert 0.7 < driven <= 1.0
+    assert f"at {driven:.2f} m/s mean (5.00 m/s scheduled)" in line, line
 
 
 @pytest.mark.slow
@@ -238,9 +279,12 @@ def _wait_for(proc: subprocess.Popen, text: str, timeout_s: float = 60.0) -> Non
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize(("sig", "code"), [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+@pytest.mark.parametrize(
+    ("sig", "code", "said"),
+    [(signal.SIGINT, 130, "interrupted: Ctrl-C"), (signal.SIGTERM, 143, "terminated: SIGTERM")],
+)
 def test_ctrl_c_or_sigterm_mid_repeat_sends_hold(
-    files: dict[str, Path], tmp_path: Path, sig: signal.Signals, code: int
+    files: dict[str, Path], tmp_path: Path, sig: signal.Signals, code: int, said: str
 ) -> None:
     port = _free_port()
     endpoint = _endpoint(port)
@@ -259,12 +303,38 @@ def test_ctrl_c_or_sigterm_mid_repeat_sends_hold(
         time.sleep(1.0)  # driving
         proc.send_signal(sig)
         assert proc.wait(30.0) == code, proc.stderr.read()
+        last = proc.stderr.read().strip().splitlines()[-1]  # not "interrupted: interrupted ..."
+        assert last == f"rover-path: {said}; the rover was sent Hold", last
     finally:
         if proc.poll() is None:
             proc.kill()
             proc.wait(5.0)
         endpoint.close()
     assert endpoint.holding and not endpoint.offboard  # the rover was sent Hold
+
+
+def test_ctrl_c_before_any_vehicle_answered_says_nothing_was_sent(
+    files: dict[str, Path], tmp_path: Path
+) -> None:
+    """Ctrl-C while repeat still waits for a vehicle (none on the port): the last line does
+    not claim the rover was sent Hold."""
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "scripts.rover_path", "repeat", "--path", str(files["loop"]),
+         "--url", f"udpin://127.0.0.1:{_free_port()}", "--experience", str(tmp_path / "e.npz"),
+         "--out", str(tmp_path / "rep")],
+        cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        _wait_for(proc, "no experience yet")
+        time.sleep(0.5)
+        proc.send_signal(signal.SIGINT)
+        assert proc.wait(30.0) == 130
+        last = proc.stderr.read().strip().splitlines()[-1]
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(5.0)
+    assert last == "rover-path: interrupted: Ctrl-C before any vehicle answered; nothing sent", last
 
 
 @pytest.mark.slow
@@ -299,8 +369,9 @@ def test_ctrl_c_ends_a_pilot_driven_teach_and_writes_the_path(tmp_path: Path) ->
     assert out.read_text().startswith("x_m,y_m\n")
 
 
+@pytest.mark.parametrize("link", ["pymavlink", "mavsdk"])
 @pytest.mark.parametrize("command", ["teach", "repeat"])
-def test_a_multicopter_on_the_link_is_refused_and_sent_nothing(tmp_path, capsys, command):
+def test_a_multicopter_on_the_link_is_refused_and_sent_nothing(tmp_path, capsys, command, link):
     """Another vehicle answering on the port is a quadrotor (PX4 SITL, a wrong --url): neither
     the teach pass nor the repeat arms it or switches its mode."""
     from tests.companion.test_companion_mission_on_every_link import Vehicle, free_udp_port
@@ -310,7 +381,7 @@ def test_a_multicopter_on_the_link_is_refused_and_sent_nothing(tmp_path, capsys,
     port = free_udp_port()
     quad = Vehicle(port)
     try:
-        url = ["--link", "pymavlink", "--url", f"udpin://127.0.0.1:{port}"]
+        url = ["--link", link, "--url", f"udpin://127.0.0.1:{port}"]
         if command == "teach":
             argv = ["teach", *url, "--drive", "3:0", "--out", str(tmp_path / "p.csv")]
         else:

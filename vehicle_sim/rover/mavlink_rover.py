@@ -6,12 +6,13 @@ MAV_CMD_COMPONENT_ARM_DISARM and MAV_CMD_DO_SET_MODE (acknowledged; MANUAL, Hold
 and OFFBOARD; the other AUTO modes, RTL, mission, land and takeoff, are denied),
 AUTOPILOT_VERSION on request (MAV_CMD_REQUEST_MESSAGE 148, or 520), SET_MODE, and offboard
 SET_POSITION_TARGET_LOCAL_NED with velocity + yaw rate: in MAV_FRAME_BODY_NED vx is the forward
-speed; in MAV_FRAME_LOCAL_NED the speed is (vx, vy) projected on the heading. Telemetry at
-``telemetry_hz``: HEARTBEAT, LOCAL_POSITION_NED, ATTITUDE, ATTITUDE_QUATERNION, and at 1 Hz what
-MAVSDK's health check wants (SYS_STATUS with healthy sensors and the pre-arm bit, GPS_RAW_INT,
-GLOBAL_POSITION_INT with the ground velocity and HOME_POSITION about a fixed origin,
-flat-earth). Offboard without a setpoint for ``setpoint_timeout_s`` stops the rover and switches
-to Hold (PX4's offboard loss failsafe).
+speed; in MAV_FRAME_LOCAL_NED the speed is (vx, vy) projected on the heading; another frame is
+refused, as the multirotor endpoint refuses it. Telemetry at
+``telemetry_hz``: HEARTBEAT, LOCAL_POSITION_NED, ATTITUDE, ATTITUDE_QUATERNION and
+GLOBAL_POSITION_INT (with the ground velocity, about a fixed origin, flat-earth), and at 1 Hz
+what else MAVSDK's health check wants (SYS_STATUS with healthy sensors and the pre-arm bit,
+GPS_RAW_INT and HOME_POSITION). Offboard without a setpoint for ``setpoint_timeout_s`` stops
+the rover and switches to Hold (PX4's offboard loss failsafe).
 A malformed message never stops the endpoint: a mode that is not a number is DENIED, a setpoint
 with a non-finite speed or yaw rate, or without a velocity (a position setpoint, which this
 rover does not fly), is refused with a STATUSTEXT (and is no proof of life), an
@@ -188,6 +189,10 @@ class RoverMavlinkEndpoint:
             if msg.type_mask & _IGNORE_VELOCITY == _IGNORE_VELOCITY:
                 self._refuse_setpoint(b"Offboard: rover flies velocity setpoints only")
                 return
+            if msg.coordinate_frame not in (_MAV.MAV_FRAME_LOCAL_NED, _MAV.MAV_FRAME_BODY_NED):
+                text = f"Offboard: frame {msg.coordinate_frame} unsupported, use 1 or 8"
+                self._refuse_setpoint(text.encode())
+                return
             heading = self.sim.state.heading_rad
             if msg.coordinate_frame == _MAV.MAV_FRAME_BODY_NED:
                 speed = msg.vx
@@ -242,6 +247,12 @@ class RoverMavlinkEndpoint:
         mav.attitude_quaternion_send(
             t_ms, math.cos(half), 0.0, 0.0, math.sin(half), 0.0, 0.0, -st.yaw_rate_radps
         )
+        if all(math.isfinite(v) for v in (st.x_m, st.y_m, st.heading_rad)):
+            lat, lon = _lat_lon_e7(st.x_m, -st.y_m)
+            hdg = int(round(math.degrees(-st.heading_rad) * 100.0)) % 36000
+            vx_cms, vy_cms = (int(round(v * 100.0)) for v in (v_north, v_east))
+            alt_mm = int(_ORIGIN_ALT_M * 1000)
+            mav.global_position_int_send(t_ms, lat, lon, alt_mm, 0, vx_cms, vy_cms, 0, hdg)
 
     def _ground_velocity_ne_mps(self) -> tuple[float, float]:
         """The rover's ground velocity (north, east) [m/s], side slip included."""
@@ -256,10 +267,6 @@ class RoverMavlinkEndpoint:
             return  # no fix to give (LOCAL_POSITION_NED still says NaN); the loop lives on
         lat, lon = _lat_lon_e7(st.x_m, -st.y_m)
         alt_mm = int(_ORIGIN_ALT_M * 1000)
-        t_ms = int(st.t_s * 1000)
         mav.gps_raw_int_send(int(st.t_s * 1e6), 3, lat, lon, alt_mm, 80, 120, 65535, 65535, 12)
-        hdg = int(round(math.degrees(-st.heading_rad) * 100.0)) % 36000
-        vx_cms, vy_cms = (int(round(v * 100.0)) for v in self._ground_velocity_ne_mps())
-        mav.global_position_int_send(t_ms, lat, lon, alt_mm, 0, vx_cms, vy_cms, 0, hdg)
         lat0, lon0 = _lat_lon_e7(0.0, 0.0)
         mav.home_position_send(lat0, lon0, alt_mm, 0.0, 0.0, 0.0, (1.0, 0.0, 0.0, 0.0), 0, 0, 0)

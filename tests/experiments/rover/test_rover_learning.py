@@ -90,6 +90,20 @@ def test_illustrative_example_ranks_feedback_mpc_lbnmpc() -> None:
     assert rms["lbnmpc"] < 0.6 * rms["mpc"] < 0.6 * rms["feedback"]
 
 
+@pytest.mark.slow
+def test_the_example_figure_names_the_controllers_as_its_title_does() -> None:
+    """The legend says feedback, MPC and LB-NMPC, as the title and the paper, not the code's
+    "mpc" and "lbnmpc"."""
+    from experiments.rover.illustrative import figure
+
+    fig, _runs = figure()
+    labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert [label.split(" (")[0] for label in labels] == [
+        "desired z_d", "feedback", "MPC", "LB-NMPC",
+    ]  # fmt: skip
+    assert "feedback vs MPC vs LB-NMPC" in fig.texts[0].get_text()
+
+
 def test_local_gp_mean_and_jacobian_match_the_gp_and_finite_differences() -> None:
     rng = np.random.default_rng(5)
     gp = learner.make_history_gp()

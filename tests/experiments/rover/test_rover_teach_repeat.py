@@ -131,7 +131,7 @@ def test_the_path_file_round_trips_and_bad_files_are_one_line(tmp_path: Path) ->
         "columns.csv": ("x_m,y_m\n0,0\n1,0,5\n2,0\n", "line 3 has 3 columns"),
         "nan.csv": ("x_m,y_m\n0,0\n1,nan\n2,0\n3,0\n", "path line 3"),
         "word.csv": ("x_m,y_m\n0,0\n1,zero\n2,0\n", "path line 3"),
-        "short.csv": ("x_m,y_m\n0,0\n1,0\n", "a path needs >= 3"),
+        "short.csv": ("x_m,y_m\n0,0\n1,0\n", "2 rows under its header; a path needs at least 3"),
         "empty.csv": ("", "the file is empty"),
     }
     for name, (content, message) in cases.items():
@@ -590,4 +590,19 @@ def test_a_drive_back_whose_position_turns_nan_stops_the_rover_and_says_so() -> 
     link.connect(1.0)
     left_for, stopped_for = drive_back(link, (3.0, 1.0, math.pi / 2), 0.5, timeout_s=60.0)
     assert left_for == "" and stopped_for.startswith("the rover's pose is not finite")
+    assert link.read_state().mode == "HOLD"
+
+
+def test_a_drive_back_that_ends_away_from_the_start_drives_no_trial() -> None:
+    """Reversing along the path ends once the rover is back at the start's arc length; a rover
+    beside the start (2 m to its left, half a metre behind it) is there along the path at once,
+    yet 2.1 m from the start: the run stops before the trial, saying where the rover is, rather
+    than drive the trial from 2 m off the path."""
+    path = TaughtPath.from_segments([(5.0, 0.0)])
+    link = InProcessRoverLink(RoverSim(rover_preset("husky_50kg"), pose=(-0.5, 2.0, 0.0)))
+    link.connect(1.0)
+    out = repeat_path(link, path, 1, learner.make_history_gp(), np.full(len(path), 0.5),
+                      drive_back=DriveBack("reverse", 0.5))  # fmt: skip
+    assert out.status == "not_at_start" and out.trials == [], out.detail
+    assert "driving back ended 2.1 m from the path's start" in out.detail
     assert link.read_state().mode == "HOLD"

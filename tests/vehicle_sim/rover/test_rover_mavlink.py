@@ -67,9 +67,11 @@ def test_pymavlink_arm_offboard_velocity_and_yaw_rate() -> None:
 
 @pytest.mark.slow
 def test_malformed_messages_get_an_answer_and_never_stop_the_rover() -> None:
-    """A mode that is not a number is DENIED, NaN / position-only setpoints are refused with a
-    STATUSTEXT (no proof of life: OFFBOARD is refused), an unknown command is UNSUPPORTED; the
-    rover keeps answering and then drives a good setpoint stream."""
+    """A mode that is not a number is DENIED, NaN / position-only setpoints and those in a
+    frame other than LOCAL_NED or BODY_NED (as the multirotor endpoint: BODY_FRD's forward speed
+    was read as a north one) are refused with a STATUSTEXT (no proof of life: OFFBOARD is
+    refused), an unknown command is UNSUPPORTED; the rover keeps answering and then drives a
+    good setpoint stream."""
     port = _free_port()
     ep = RoverMavlinkEndpoint(RoverSim(rover_preset("husky_50kg")), port)
     ep.start()
@@ -82,9 +84,9 @@ def test_malformed_messages_get_an_answer_and_never_stop_the_rover() -> None:
         assert ack is not None and ack.command == cmd
         return ack.result
 
-    def setpoint(mask: int, vx: float) -> None:
+    def setpoint(mask: int, vx: float, frame: int = _MAV.MAV_FRAME_BODY_NED) -> None:
         gcs.mav.set_position_target_local_ned_send(
-            0, 1, 1, _MAV.MAV_FRAME_BODY_NED, mask, 1, 0, 0, vx, 0, 0, 0, 0, 0, 0, 0.0
+            0, 1, 1, frame, mask, 1, 0, 0, vx, 0, 0, 0, 0, 0, 0, 0.0
         )
 
     try:
@@ -94,14 +96,19 @@ def test_malformed_messages_get_an_answer_and_never_stop_the_rover() -> None:
         assert command(_MAV.MAV_CMD_DO_SET_MODE, 1, nan, 0, 0, 0, 0, 0) == (_MAV.MAV_RESULT_DENIED)
         assert command(_MAV.MAV_CMD_DO_ORBIT, 0, 0, 0, 0, 0, 0, 0) == (_MAV.MAV_RESULT_UNSUPPORTED)
         texts = set()
-        for mask, vx in ((0b0000_0101_1100_0111, nan), (0b0000_1101_1111_1000, 0.0)):
-            setpoint(mask, vx)
+        for mask, vx, frame in (
+            (0b0000_0101_1100_0111, nan, _MAV.MAV_FRAME_BODY_NED),
+            (0b0000_1101_1111_1000, 0.0, _MAV.MAV_FRAME_BODY_NED),
+            (0b0000_0101_1100_0111, 0.5, _MAV.MAV_FRAME_BODY_FRD),
+        ):
+            setpoint(mask, vx, frame)
             text = gcs.recv_match(type="STATUSTEXT", blocking=True, timeout=20)
             assert text is not None
             texts.add(text.text)
         assert texts == {
             "Offboard: setpoint refused: not finite",
             "Offboard: rover flies velocity setpoints only",
+            "Offboard: frame 12 unsupported, use 1 or 8",
         }
         assert command(_MAV.MAV_CMD_DO_SET_MODE, 1, 6, 0, 0, 0, 0, 0) == (
             _MAV.MAV_RESULT_DENIED
@@ -188,3 +195,28 @@ def test_modes_hold_is_reported_other_auto_modes_refused_bad_setpoints_ignored()
     finally:
         gcs.close()
         ep.close()
+
+
+@pytest.mark.slow
+def test_the_global_position_comes_as_often_as_the_local_one() -> None:
+    """GLOBAL_POSITION_INT (MAVSDK's position, heading and velocity_ned) at the telemetry rate
+    with LOCAL_POSITION_NED, as PX4 streams both, not once a second: a MAVSDK client reading
+    the rover's heading while it turns got values up to a second old."""
+    port = _free_port()
+    ep = RoverMavlinkEndpoint(RoverSim(rover_preset("husky_50kg")), port, telemetry_hz=10.0)
+    ep.start()
+    gcs = mavutil.mavlink_connection(f"udpout:127.0.0.1:{port}", source_system=255)
+    try:
+        gcs.mav.heartbeat_send(_MAV.MAV_TYPE_GCS, _MAV.MAV_AUTOPILOT_INVALID, 0, 0, 0)
+        assert gcs.recv_match(type="HEARTBEAT", blocking=True, timeout=20) is not None
+        counts = {"GLOBAL_POSITION_INT": 0, "LOCAL_POSITION_NED": 0}
+        t_end = time.monotonic() + 2.0
+        while time.monotonic() < t_end:
+            m = gcs.recv_match(type=list(counts), blocking=True, timeout=0.2)
+            if m is not None:
+                counts[m.get_type()] += 1
+    finally:
+        gcs.close()
+        ep.close()
+    assert counts["LOCAL_POSITION_NED"] >= 10
+    assert counts["GLOBAL_POSITION_INT"] >= 0.8 * counts["LOCAL_POSITION_NED"], counts
