@@ -92,6 +92,8 @@ def _pattern(text: str) -> list[tuple[float, float]]:
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
+    from experiments.rover.scenarios import NMPC_TUNING
+
     parser = OneLineParser(
         prog=PROG,
         description=__doc__,
@@ -143,6 +145,11 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         help="after an open path, drive back to its start: turn (the default: turn in place, "
         "the straight line, turn; skid steer) or reverse (backwards along the path; any rover)",
     )  # fmt: skip
+    repeat.add_argument(
+        "--tuning", choices=sorted(NMPC_TUNING), default=None,
+        help="the NMPC weights of the paper's experiment on this rover (default: --vehicle's "
+        "in process; over MAVLink the planner's defaults, which do not suit an Ackermann rover)",
+    )  # fmt: skip
     repeat.add_argument("--out", type=output_path, default=Path("out/rover_path"),
                         help="folder for repeat.json and repeat.png")  # fmt: skip
     args = parser.parse_args(argv)
@@ -155,6 +162,8 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
                 f"answers at --url (start `vehicle-sim --vehicle PRESET` for a simulated one)"
             )
     args.vehicle = args.vehicle or "husky_50kg"
+    if args.command == "repeat" and args.tuning is None and args.link == "inprocess":
+        args.tuning = args.vehicle
     args.seed = 0 if args.seed is None else args.seed
     return args
 
@@ -288,6 +297,7 @@ def repeat(args: argparse.Namespace) -> int:
     from experiments.rover.link_drive import NotARover, require_a_rover
     from experiments.rover.repeat import RepeatOutcome, Trial, repeat_path
     from experiments.rover.repeat_report import figure, history_row, summary, trial_line
+    from experiments.rover.scenarios import tuning_for
 
     path, experience, scheduler, gp, memory, schedule = _repeat_inputs(args)
     link = open_link(args)
@@ -316,7 +326,7 @@ def repeat(args: argparse.Namespace) -> int:
         require_a_rover(link)
         outcome = repeat_path(
             link, path, args.trials, gp, schedule, scheduler, memory.trials_done + 1, back,
-            trial_done, _say,
+            trial_done, _say, tuning_for(args.tuning or ""),
         )  # fmt: skip
         code = {"completed": EXIT_OK, "handed_over": EXIT_HANDED_OVER}.get(
             outcome.status, EXIT_FAILED

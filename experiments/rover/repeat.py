@@ -27,6 +27,7 @@ from experiments.rover.link_drive import LinkDrive, drive_path, pose_of
 from gp.local_gp import LocalGP
 from planners.rover.path import TaughtPath, wrap_angle
 from planners.rover.speed_scheduler import SpeedSchedulerConfig, next_schedule
+from planners.rover.unicycle_nmpc import UnicycleNmpcConfig
 
 START_TOLERANCE_M = 1.0
 START_TOLERANCE_RAD = 0.5
@@ -96,8 +97,10 @@ def repeat_path(
     drive_back: DriveBack | None = None,
     on_trial: Callable[[Trial, np.ndarray], None] = lambda _t, _s: None,
     progress: Callable[[str], None] = lambda _m: None,
+    nmpc: UnicycleNmpcConfig = UnicycleNmpcConfig(),  # noqa: B008 (frozen)
 ) -> RepeatOutcome:
-    """Drive ``trials`` trials from ``schedule_mps`` (N,) [m/s] on the connected ``link``.
+    """Drive ``trials`` trials from ``schedule_mps`` (N,) [m/s] on the connected ``link``,
+    its NMPC tuned by ``nmpc`` (experiments.rover.scenarios.tuning_for the rover).
 
     ``on_trial(trial, next_schedule)`` is called as each trial ends (e.g. to save the
     experience). With ``scheduler`` each trial's records set the next trial's speeds.
@@ -140,7 +143,7 @@ def repeat_path(
                 return out
         schedule = out.schedule_mps
         timeout_s = 4.0 * path.length_m / float(np.min(schedule)) + 30.0
-        drive = drive_path(link, path, schedule, timeout_s=timeout_s, gp=gp, connect=False)
+        drive = drive_path(link, path, schedule, nmpc, timeout_s=timeout_s, gp=gp, connect=False)
         trial = Trial(number, drive, schedule.copy(), len(gp))
         out.trials.append(trial)
         if scheduler is not None:

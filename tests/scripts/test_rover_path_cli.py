@@ -19,7 +19,7 @@ from experiments.rover import learner
 from experiments.rover.experience_file import save_experience
 from planners.rover.path import TaughtPath
 from planners.rover.path_file import path_csv_text
-from scripts.rover_path import main
+from scripts.rover_path import main, parse_args
 from vehicle_sim.rover import RoverSim, rover_preset
 from vehicle_sim.rover.mavlink_rover import RoverMavlinkEndpoint
 
@@ -394,3 +394,16 @@ def test_a_multicopter_on_the_link_is_refused_and_sent_nothing(tmp_path, capsys,
     last = capsys.readouterr().err.strip().splitlines()[-1]
     assert "is a multirotor" in last and "rover-path drives only rovers" in last
     assert not state.armed and state.mode.name != "OFFBOARD"
+
+
+@pytest.mark.parametrize(
+    ("options", "tuning"),
+    [
+        (["--link", "inprocess", "--vehicle", "dmrv_600kg"], "dmrv_600kg"),
+        (["--link", "inprocess"], "husky_50kg"),
+        (["--link", "pymavlink"], None),
+        (["--link", "pymavlink", "--tuning", "roc6_150kg"], "roc6_150kg"),
+    ],
+)
+def test_repeat_drives_with_the_rovers_own_tuning(options, tuning) -> None:
+    assert parse_args(["repeat", "--path", "p.csv", *options]).tuning == tuning
