@@ -94,9 +94,12 @@ def test_illustrative_example_ranks_feedback_mpc_lbnmpc() -> None:
 def test_the_example_figure_names_the_controllers_as_its_title_does() -> None:
     """The legend says feedback, MPC and LB-NMPC, as the title and the paper, not the code's
     "mpc" and "lbnmpc"."""
+    import matplotlib.pyplot as plt
+
     from experiments.rover.illustrative import figure
 
     fig, _runs = figure()
+    plt.close(fig)  # a pyplot figure left open is another test's leak
     labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
     assert [label.split(" (")[0] for label in labels] == [
         "desired z_d", "feedback", "MPC", "LB-NMPC",
