@@ -24,7 +24,7 @@ import numpy as np
 
 from diagnosis import sim_anchor
 from diagnosis.warm_up import LEAD_IN_S, start_integral
-from diagnosis.window_nuisance import without_nuisance
+from diagnosis.window_nuisance import RunNuisance
 from flightlog.schema import FlightLog
 from vehicle_sim import AnchorState, SimConfig, VelocitySetpoint
 
@@ -117,10 +117,14 @@ def replay(
     flown = list(_flown_windows(sim_config, logs, wins))
     if not flown:
         return ReplayResult(np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0, int))
+    runs: dict[int, RunNuisance] = {}
+    for f in flown:
+        runs.setdefault(f.run, RunNuisance(sim_config)).add(f.tau_s, f.sim_vel_ned_mps, f.meas)
+    fitted = {run: iter(nuisance.fitted()) for run, nuisance in runs.items()}
     return ReplayResult(
         np.concatenate([f.t_s for f in flown]),
-        np.vstack([f.sim_vel_ned_mps for f in flown]),
-        np.vstack([f.meas_vel_ned_mps for f in flown]),
+        np.vstack([next(fitted[f.run]) for f in flown]),
+        np.vstack([f.meas for f in flown]),
         np.concatenate([np.full(len(f.t_s), f.window) for f in flown]),
     )
 
@@ -131,34 +135,41 @@ def replay_sse(
     """Sum over rows of the squared 3-D velocity error [m^2/s^2] that :func:`replay` gives, or
     ``inf`` as soon as the windows flown so far exceed ``above``: a search that only needs the
     best of several configs stops replaying one that can no longer be it (the sum only grows
-    with each window, and every config is replayed on the same rows)."""
-    sse = 0.0
+    with each window, its run's nuisance refitted included, :class:`.RunNuisance`; every
+    config is replayed on the same rows)."""
+    done, run, nuisance = 0.0, None, None
     for flown in _flown_windows(sim_config, logs, wins):
-        err = flown.sim_vel_ned_mps - flown.meas_vel_ned_mps
-        sse += float(np.sum(err * err))
-        if sse > above:
+        if flown.run != run:
+            done += nuisance.sse() if nuisance is not None else 0.0
+            run, nuisance = flown.run, RunNuisance(sim_config)
+        nuisance.add(flown.tau_s, flown.sim_vel_ned_mps, flown.meas)
+        if done + nuisance.sse() > above:
             return math.inf
-    return sse
+    return done + (nuisance.sse() if nuisance is not None else 0.0)
 
 
 @dataclass(frozen=True)
 class _Flown:
-    """One window flown free: ``window`` (index into the windows given), and per compared row
-    (m,) its log time [s], (m, 3) simulated and measured velocity NED [m/s]."""
+    """One window flown free: ``window`` (index into the windows given), ``run`` (its airborne
+    run's number among those flown), and per compared row (m,) its log time [s] and time since
+    the anchor ``tau_s`` [s], (m, 3) simulated and measured velocity NED [m/s] (before the
+    run's nuisance is taken out)."""
 
     window: int
+    run: int
     t_s: np.ndarray
+    tau_s: np.ndarray
     sim_vel_ned_mps: np.ndarray
-    meas_vel_ned_mps: np.ndarray
+    meas: np.ndarray
 
 
 def _flown_windows(
     sim_config: SimConfig, logs: Sequence[FlightLog], wins: Sequence[Window]
 ) -> Iterator[_Flown]:
     """Each of ``wins`` flown free from its anchor row, log by log and in row order (the
-    anchored follower running along each airborne run, as the module docstring says), a run's
-    windows together once the run is flown (their nuisance is fitted jointly)."""
+    anchored follower running along each airborne run, as the module docstring says)."""
     template = sim_anchor.hovering_template(sim_config)
+    run = -1
     for i, log in enumerate(logs):
         a = LogArrays.of(log)
         mine = {w.anchor: (k, w) for k, w in enumerate(wins) if w.log_index == i}
@@ -178,7 +189,7 @@ def _flown_windows(
                 )
             )  # fmt: skip
             last = max(w.stop for w in wins if w.log_index == i and w.anchor < run_stop)
-            flown = []  # (window index, compared rows, simulated velocity)
+            run += 1
             for j in range(run_start, last):
                 follower.set_velocity_setpoint(a.setpoint[j])
                 follower.anchor(a.anchor(j, lead=j < lead_stop), integral="keep")
@@ -191,16 +202,10 @@ def _flown_windows(
                             free.set_velocity_setpoint(a.setpoint[r])
                         free.advance(a.t[r + 1] - a.t[r])
                         sim.append(free.vel_ned_mps)
-                    flown.append((k, slice(w.anchor + 1, w.stop + 1), np.array(sim)))
+                    rows = slice(w.anchor + 1, w.stop + 1)
+                    tau = a.t[rows] - a.t[w.anchor]
+                    yield _Flown(k, run, a.t[rows], tau, np.array(sim), a.state[rows, 3:6])
                 follower.advance(a.t[j + 1] - a.t[j])
-            fitted = without_nuisance(
-                sim_config,
-                [a.t[rows] - a.t[rows.start - 1] for _, rows, _ in flown],
-                [sim for _, _, sim in flown],
-                [a.state[rows, 3:6] for _, rows, _ in flown],
-            )
-            for (k, rows, _), sim in zip(flown, fitted, strict=True):
-                yield _Flown(k, a.t[rows], sim, a.state[rows, 3:6])
 
 
 class LogArrays:

@@ -24,7 +24,7 @@ for the true 4); BENCHMARKS.md has the counts.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from functools import lru_cache
 
 import numpy as np
@@ -32,8 +32,8 @@ import numpy as np
 from diagnosis import sim_anchor
 from vehicle_sim import AnchorState, SimConfig, VelocitySetpoint
 
-HORIZON_S = 3.0  # longer than any window (2 s, rows jittered)
-GRID_S = 0.01  # the responses' time step; rows are 20-40 ms apart
+HORIZON_S = 2.5  # a window's last compared row: within 2 s of its anchor plus one row gap
+GRID_S = 0.02  # the responses' time step (interpolated linearly between; rows 20-40 ms apart)
 _STEP_MPS2 = 0.1  # integral perturbation of the finite differences [m/s^2]
 _STEP_MPS = 0.1  # start-velocity perturbation of the finite differences [m/s]
 _HOVER = VelocitySetpoint((0.0, 0.0, 0.0))
@@ -80,35 +80,49 @@ def finite_differences(
     return nominal, np.stack(columns, axis=-1)
 
 
-def without_nuisance(
-    config: SimConfig,
-    tau_s: Sequence[np.ndarray],
-    sim_vel_ned_mps: Sequence[np.ndarray],
-    meas_vel_ned_mps: Sequence[np.ndarray],
-) -> list[np.ndarray]:
-    """One airborne run's windows' simulated velocity NED [m/s], each (m_w, 3), plus the
-    nuisance (one integral offset for the run, one start-velocity error per window) that best
-    explains what they miss of the measured ``meas_vel_ned_mps``; ``tau_s`` (m_w,) are each
-    window's compared rows' times since its anchor [s]."""
-    curves = responses(config)
-    grid = np.arange(len(curves)) * GRID_S
-    parts = []  # per window: integral columns, start-velocity columns, error, all projected
-    normal, rhs = np.zeros((3, 3)), np.zeros(3)
-    for tau, sim, meas in zip(tau_s, sim_vel_ned_mps, meas_vel_ned_mps, strict=True):
-        k = np.clip(np.searchsorted(grid, tau) - 1, 0, len(grid) - 2)
-        w = ((tau - grid[k]) / GRID_S)[:, None, None]
-        jac = ((1.0 - w) * curves[k] + w * curves[k + 1]).reshape(-1, 6)
+class RunNuisance:
+    """One airborne run's windows, added as they are flown: the nuisance (one integral offset
+    for the run, one start-velocity error per window) that best explains what they miss of
+    the measured velocity, and what is left. The least squared error left by the windows so
+    far never exceeds what all of them leave (more rows only add to a sum minimised over the
+    same offset), so a search may stop replaying a config on it (diagnosis.replay.replay_sse).
+    """
+
+    def __init__(self, config: SimConfig) -> None:
+        self._curves = responses(config)
+        self._parts: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = []
+        self._normal, self._rhs, self._sq = np.zeros((3, 3)), np.zeros(3), 0.0
+
+    def add(self, tau_s: np.ndarray, sim_vel_ned_mps: np.ndarray, meas: np.ndarray) -> None:
+        """A window's compared rows: times since its anchor ``tau_s`` (m,) [s], simulated and
+        measured velocity NED (m, 3) [m/s]."""
+        grid = np.arange(len(self._curves)) * GRID_S
+        k = np.clip(np.searchsorted(grid, tau_s) - 1, 0, len(grid) - 2)
+        w = ((tau_s - grid[k]) / GRID_S)[:, None, None]
+        jac = ((1.0 - w) * self._curves[k] + w * self._curves[k + 1]).reshape(-1, 6)
         integral, start = jac[:, :3], jac[:, 3:]
-        error = (meas - sim).reshape(-1)
+        error = (meas - sim_vel_ned_mps).reshape(-1)
         q, _ = np.linalg.qr(start)  # the window's own start error is projected out first
         integral_left = integral - q @ (q.T @ integral)
-        normal += integral_left.T @ integral_left
-        rhs += integral_left.T @ (error - q @ (q.T @ error))
-        parts.append((integral, q, error))
-    offset = np.linalg.lstsq(normal, rhs, rcond=None)[0]
-    out = []
-    for (integral, q, error), sim in zip(parts, sim_vel_ned_mps, strict=True):
-        explained = integral @ offset
-        explained += q @ (q.T @ (error - explained))
-        out.append(sim + explained.reshape(-1, 3))
-    return out
+        error_left = error - q @ (q.T @ error)
+        self._normal += integral_left.T @ integral_left
+        self._rhs += integral_left.T @ error_left
+        self._sq += float(error_left @ error_left)
+        self._parts.append((integral, q, error, sim_vel_ned_mps))
+
+    def _offset(self) -> np.ndarray:
+        return np.linalg.lstsq(self._normal, self._rhs, rcond=None)[0]
+
+    def sse(self) -> float:
+        """Sum over the windows' rows of the squared 3-D velocity error left [m^2/s^2]."""
+        return max(self._sq - float(self._rhs @ self._offset()), 0.0)
+
+    def fitted(self) -> list[np.ndarray]:
+        """Each window's simulated velocity plus the nuisance's part, (m_w, 3) [m/s]."""
+        offset = self._offset()
+        out = []
+        for integral, q, error, sim in self._parts:
+            explained = integral @ offset
+            explained += q @ (q.T @ (error - explained))
+            out.append(sim + explained.reshape(-1, 3))
+        return out

@@ -8,7 +8,7 @@ import pytest
 
 from diagnosis import sim_anchor
 from diagnosis.replay import replay, windows
-from diagnosis.window_nuisance import without_nuisance
+from diagnosis.window_nuisance import RunNuisance
 from tests.vehicle_sim.sim_flying import hovering, record_offboard
 from vehicle_sim import AnchorState, VelocitySetpoint, load_sim_config
 from vehicle_sim.sensor_noise import SensorNoise, add_sensor_noise
@@ -42,6 +42,13 @@ def _fly(config, tau_s, setpoint_at, dv0=None, integral=None) -> np.ndarray:
     return np.array(out)
 
 
+def _fitted(config, taus, simulated, measured) -> list[np.ndarray]:
+    nuisance = RunNuisance(config)
+    for tau, sim, meas in zip(taus, simulated, measured, strict=True):
+        nuisance.add(tau, sim, meas)
+    return nuisance.fitted()
+
+
 def _rms(parts: list[np.ndarray]) -> float:
     x = np.vstack(parts)
     return float(np.sqrt(np.mean(np.sum(x * x, axis=1))))
@@ -69,7 +76,7 @@ def test_a_runs_integral_offset_and_each_anchors_velocity_error_are_removed(seed
         taus.append(tau)
         measured.append(_fly(config, tau, ramp, dv0, integral))
         simulated.append(_fly(config, tau, ramp))
-    fitted = without_nuisance(config, taus, simulated, measured)
+    fitted = _fitted(config, taus, simulated, measured)
     raw = _rms([s - m for s, m in zip(simulated, measured, strict=True)])
     left = _rms([f - m for f, m in zip(fitted, measured, strict=True)])
     assert raw > 0.03
@@ -93,11 +100,31 @@ def test_a_command_delay_stays_in_the_runs_error(seed):
         taus.append(tau)
         measured.append(_fly(delayed, tau, step))
         simulated.append(_fly(nominal, tau, step))
-    fitted = without_nuisance(nominal, taus, simulated, measured)
+    fitted = _fitted(nominal, taus, simulated, measured)
     raw = _rms([s - m for s, m in zip(simulated, measured, strict=True)])
     left = _rms([f - m for f, m in zip(fitted, measured, strict=True)])
     assert raw > 0.02
     assert left > 0.8 * raw  # six windows: the run's one offset takes up 4-18 %, no more
+
+
+def test_the_error_left_only_grows_as_windows_are_added():
+    """What a search's early stop relies on (diagnosis.replay.replay_sse): the squared error
+    left after the run's nuisance never falls as windows are added, and at the end it is the
+    fitted windows' own."""
+    rng = np.random.default_rng(7)
+    config = load_sim_config("iris")
+    delayed = load_sim_config("iris", {"command_delay": {"delay_s": 0.1}})
+    nuisance, left, windows_added = RunNuisance(config), [], []
+    for _ in range(WINDOWS):
+        tau, ramp = _rows(rng), _ramp(float(rng.uniform(0.5, 3.0)))
+        meas, sim = _fly(delayed, tau, ramp), _fly(config, tau, ramp)
+        nuisance.add(tau, sim, meas)
+        windows_added.append(meas)
+        left.append(nuisance.sse())
+    assert np.all(np.diff(left) >= -1e-12) and left[-1] > 0.0
+    pairs = zip(nuisance.fitted(), windows_added, strict=True)
+    own = sum(float(np.sum((f - m) ** 2)) for f, m in pairs)
+    assert left[-1] == pytest.approx(own, rel=1e-9)
 
 
 @pytest.mark.parametrize(("rate_hz", "bound_mps"), [(50.0, 0.010), (25.0, 0.016)])
