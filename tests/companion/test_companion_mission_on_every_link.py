@@ -10,7 +10,6 @@ from __future__ import annotations
 import math
 import re
 import signal
-import socket
 import subprocess
 import sys
 import threading
@@ -35,18 +34,13 @@ from companion.pymavlink_link import PymavlinkLink
 from companion.runner import RunnerConfig, fly_mission
 from companion.waiting import command_until_accepted, wait_for
 from flightlog.schema import read_flight_log, write_flight_log
+from tests.free_port import free_udp_port  # noqa: F401 (imported from here too)
 from vehicle_sim import LandedState, Simulator, load_sim_config
 from vehicle_sim.mavlink import EndpointConfig, LinkConfig, MavlinkEndpoint
 
 REPO = Path(__file__).resolve().parents[2]
 LINE = REPO / "missions" / "line_20m.toml"
 GOAL_NED_M = np.array([20.0, 0.0, -2.5])
-
-
-def free_udp_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 class Vehicle:

@@ -4,7 +4,6 @@ against `vehicle-sim --vehicle husky_50kg` and in process; every refusal is one 
 import json
 import math
 import signal
-import socket
 import subprocess
 import sys
 import threading
@@ -20,18 +19,13 @@ from experiments.rover.experience_file import save_experience
 from planners.rover.path import TaughtPath
 from planners.rover.path_file import path_csv_text
 from scripts.rover_path import main, parse_args
+from tests.free_port import free_udp_port
 from vehicle_sim.rover import RoverSim, rover_preset
 from vehicle_sim.rover.mavlink_rover import RoverMavlinkEndpoint
 
 REPO = Path(__file__).resolve().parents[2]
 OPEN = "2:0,1.5:0.5,1:0"  # an open path of 4.5 m, turning left
 LOOP = "2:0,4.712:0.667,2:0,4.712:0.667"  # 13.4 m, back where it started
-
-
-def _free_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 def _one_line_error(capsys: pytest.CaptureFixture[str]) -> str:
@@ -174,7 +168,7 @@ def test_teach_and_repeat_against_vehicle_sim(tmp_path: Path) -> None:
     """The README's recipe: `vehicle-sim --vehicle husky_50kg`, a scripted teach drive of an
     open path, a trial with --drive-back, then a second run that reloads the experience and
     goes on learning (several trials in one run: the in-process tests)."""
-    port = _free_port()
+    port = free_udp_port()
     sim = subprocess.Popen(
         [sys.executable, "-m", "scripts.vehicle_sim_cli", "--vehicle", "husky_50kg",
          "--offboard-port", str(port)],
@@ -225,7 +219,7 @@ def _repeat_while(
     """`rover-path repeat` of ``path`` against a simulated rover on which ``event`` happens 4 s
     in (a pilot's mode switch, the link going); returns the endpoint, closed, and the exit
     code."""
-    port = _free_port()
+    port = free_udp_port()
     endpoint = _endpoint(port)
     timer = threading.Timer(4.0, event, args=(endpoint,))
     timer.start()
@@ -286,7 +280,7 @@ def _wait_for(proc: subprocess.Popen, text: str, timeout_s: float = 60.0) -> Non
 def test_ctrl_c_or_sigterm_mid_repeat_sends_hold(
     files: dict[str, Path], tmp_path: Path, sig: signal.Signals, code: int, said: str
 ) -> None:
-    port = _free_port()
+    port = free_udp_port()
     endpoint = _endpoint(port)
     proc = subprocess.Popen(
         [sys.executable, "-m", "scripts.rover_path", "repeat", "--path", str(files["loop"]),
@@ -320,7 +314,7 @@ def test_ctrl_c_before_any_vehicle_answered_says_nothing_was_sent(
     not claim the rover was sent Hold."""
     proc = subprocess.Popen(
         [sys.executable, "-m", "scripts.rover_path", "repeat", "--path", str(files["loop"]),
-         "--url", f"udpin://127.0.0.1:{_free_port()}", "--experience", str(tmp_path / "e.npz"),
+         "--url", f"udpin://127.0.0.1:{free_udp_port()}", "--experience", str(tmp_path / "e.npz"),
          "--out", str(tmp_path / "rep")],
         cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )  # fmt: skip
@@ -342,7 +336,7 @@ def test_ctrl_c_ends_a_pilot_driven_teach_and_writes_the_path(tmp_path: Path) ->
     """A pilot drives in MANUAL; Ctrl-C on the companion ends the recording and the path so
     far is written. Started with SIGINT ignored, as a shell's background job or nohup starts
     it (its children inherit that): the Ctrl-C still ends it."""
-    port = _free_port()
+    port = free_udp_port()
     endpoint = _endpoint(port)
     out = tmp_path / "p.csv"
     proc = subprocess.Popen(

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import os
 import queue
-import socket
 import threading
 import time
 from collections.abc import Callable
@@ -13,6 +12,7 @@ os.environ["MAVLINK20"] = "1"
 
 from pymavlink import mavutil  # noqa: E402
 
+from tests.free_port import free_udp_port  # noqa: F401 (imported from here too)
 from vehicle_sim import Simulator, load_sim_config  # noqa: E402
 from vehicle_sim.mavlink import EndpointConfig, LinkConfig, MavlinkEndpoint  # noqa: E402
 from vehicle_sim.mavlink.params import float_as_int32, int32_as_float  # noqa: E402
@@ -25,13 +25,6 @@ OFFBOARD_CUSTOM_MODE = 393216
 HOLD_CUSTOM_MODE = 50593792
 LAND_CUSTOM_MODE = 100925440
 MASK_VELOCITY_YAW_RATE = 1479
-
-
-def free_udp_port() -> int:
-    """A UDP port free right now on loopback."""
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
-        sock.bind((LOOPBACK, 0))
-        return int(sock.getsockname()[1])
 
 
 def make_endpoint(

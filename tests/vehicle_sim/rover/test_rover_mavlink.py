@@ -1,26 +1,20 @@
 """The rover speaks MAVLink like a PX4 rover: pymavlink arm, offboard velocity + yaw rate."""
 
-import socket
 import time
 
 import pytest
 from pymavlink import mavutil
 
+from tests.free_port import free_udp_port
 from vehicle_sim.rover import RoverSim, rover_preset
 from vehicle_sim.rover.mavlink_rover import RoverMavlinkEndpoint
 
 _MAV = mavutil.mavlink
 
 
-def _free_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 @pytest.mark.slow
 def test_pymavlink_arm_offboard_velocity_and_yaw_rate() -> None:
-    port = _free_port()
+    port = free_udp_port()
     ep = RoverMavlinkEndpoint(RoverSim(rover_preset("husky_50kg")), port)
     ep.start()
     gcs = mavutil.mavlink_connection(f"udpout:127.0.0.1:{port}", source_system=255)
@@ -72,7 +66,7 @@ def test_malformed_messages_get_an_answer_and_never_stop_the_rover() -> None:
     was read as a north one) are refused with a STATUSTEXT (no proof of life: OFFBOARD is
     refused), an unknown command is UNSUPPORTED; the rover keeps answering and then drives a
     good setpoint stream."""
-    port = _free_port()
+    port = free_udp_port()
     ep = RoverMavlinkEndpoint(RoverSim(rover_preset("husky_50kg")), port)
     ep.start()
     gcs = mavutil.mavlink_connection(f"udpout:127.0.0.1:{port}", source_system=255)
@@ -153,7 +147,7 @@ def test_modes_hold_is_reported_other_auto_modes_refused_bad_setpoints_ignored()
     cannot fly here (RTL, mission, land, takeoff); an offboard stream that stops puts the rover
     in Hold (PX4's failsafe); a setpoint with NaN speed is ignored, the endpoint keeps running;
     GLOBAL_POSITION_INT carries the ground velocity (MAVSDK's velocity_ned reads it)."""
-    port = _free_port()
+    port = free_udp_port()
     ep = RoverMavlinkEndpoint(RoverSim(rover_preset("husky_50kg")), port, setpoint_timeout_s=0.5)
     ep.start()
     gcs = mavutil.mavlink_connection(f"udpout:127.0.0.1:{port}", source_system=255)
@@ -202,7 +196,7 @@ def test_the_global_position_comes_as_often_as_the_local_one() -> None:
     """GLOBAL_POSITION_INT (MAVSDK's position, heading and velocity_ned) at the telemetry rate
     with LOCAL_POSITION_NED, as PX4 streams both, not once a second: a MAVSDK client reading
     the rover's heading while it turns got values up to a second old."""
-    port = _free_port()
+    port = free_udp_port()
     ep = RoverMavlinkEndpoint(RoverSim(rover_preset("husky_50kg")), port, telemetry_hz=10.0)
     ep.start()
     gcs = mavutil.mavlink_connection(f"udpout:127.0.0.1:{port}", source_system=255)

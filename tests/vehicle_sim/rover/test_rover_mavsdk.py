@@ -1,6 +1,5 @@
 """MAVSDK-Python drives the rover endpoint: arm, offboard body velocity + yaw rate, telemetry."""
 
-import socket
 import time
 
 import pytest
@@ -9,19 +8,14 @@ from mavsdk.plugins.action import Action
 from mavsdk.plugins.offboard import Offboard, VelocityBodyYawspeed
 from mavsdk.plugins.telemetry import Telemetry
 
+from tests.free_port import free_udp_port
 from vehicle_sim.rover import RoverSim, rover_preset
 from vehicle_sim.rover.mavlink_rover import RoverMavlinkEndpoint
 
 
-def _free_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 @pytest.mark.slow
 def test_mavsdk_arm_offboard_and_telemetry() -> None:
-    port = _free_port()
+    port = free_udp_port()
     ep = RoverMavlinkEndpoint(RoverSim(rover_preset("husky_50kg")), port)
     ep.start()
     mavsdk = Mavsdk(Configuration.create_with_component_type(ComponentType.GROUND_STATION))
