@@ -18,7 +18,7 @@ per run cannot follow the steps, and a start-velocity error takes up 1-3 % of it
 
 Measured on a clean NMPC flight's onboard log with realistic sensor noise
 (`vehicle_sim.sensor_noise`), diagnosed against the config that flew it: without the removal
-`flight_control` was named on several seeds (gains 1.1-1.5x: a vertical velocity P gain of 6-7
+`flight_control` was named on 8 seeds of 14 (gains 1.1-1.6x: a vertical velocity P gain of 6-7
 for the true 4); BENCHMARKS.md has the counts.
 """
 

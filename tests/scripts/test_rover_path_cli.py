@@ -272,6 +272,16 @@ def _wait_for(proc: subprocess.Popen, text: str, timeout_s: float = 60.0) -> Non
     raise AssertionError(f"no {text!r} within {timeout_s} s")
 
 
+def _repeat_loop(files: dict[str, Path], tmp_path: Path, port: int) -> subprocess.Popen:
+    """`rover-path repeat` of the taught loop against udpin port ``port``, as a process."""
+    return subprocess.Popen(
+        [sys.executable, "-m", "scripts.rover_path", "repeat", "--path", str(files["loop"]),
+         "--url", f"udpin://127.0.0.1:{port}", "--experience", str(tmp_path / "e.npz"),
+         "--out", str(tmp_path / "rep")],
+        cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize(
     ("sig", "code", "said"),
@@ -282,12 +292,7 @@ def test_ctrl_c_or_sigterm_mid_repeat_sends_hold(
 ) -> None:
     port = free_udp_port()
     endpoint = _endpoint(port)
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "scripts.rover_path", "repeat", "--path", str(files["loop"]),
-         "--url", f"udpin://127.0.0.1:{port}", "--experience", str(tmp_path / "e.npz"),
-         "--out", str(tmp_path / "rep")],
-        cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )  # fmt: skip
+    proc = _repeat_loop(files, tmp_path, port)
     try:
         _wait_for(proc, "no experience yet")
         deadline = time.monotonic() + 30.0
@@ -312,12 +317,7 @@ def test_ctrl_c_before_any_vehicle_answered_says_nothing_was_sent(
 ) -> None:
     """Ctrl-C while repeat still waits for a vehicle (none on the port): the last line does
     not claim the rover was sent Hold."""
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "scripts.rover_path", "repeat", "--path", str(files["loop"]),
-         "--url", f"udpin://127.0.0.1:{free_udp_port()}", "--experience", str(tmp_path / "e.npz"),
-         "--out", str(tmp_path / "rep")],
-        cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )  # fmt: skip
+    proc = _repeat_loop(files, tmp_path, free_udp_port())
     try:
         _wait_for(proc, "no experience yet")
         time.sleep(0.5)
