@@ -11,9 +11,10 @@ SIGTERM) makes it send a zero-velocity setpoint, leave OFFBOARD for HOLD, comman
 (with a deadline) for the vehicle to disarm.
 
 It never fights a pilot: when the vehicle leaves OFFBOARD because someone else (an RC pilot,
-a ground station) chose another mode, the companion stops streaming at once, commands no mode
-and ends with status "handed_over" ("pilot took control in POSCTL at t=12.3 s; mission
-abandoned"), as a PX4 offboard application must. The outcome is returned, never raised.
+a ground station, a PX4 failsafe) chose another mode, the companion stops streaming at once,
+commands no mode and ends with status "handed_over" ("pilot took control in POSCTL at t=12.3 s;
+mission abandoned"; for an automatic mode such as RTL it names the mode and does not guess
+who chose it), as a PX4 offboard application must. The outcome is returned, never raised.
 """
 
 from __future__ import annotations
@@ -50,6 +51,25 @@ COMPANION_RT_PRIORITY = 10
 """The companion's default SCHED_FIFO priority: above every normal process, below the
 kernel's own real-time threads (50) and below a simulator standing in for a flight
 controller on its own processor (experiments.sim_endpoint)."""
+
+
+_MANUAL_MODES = ("MANUAL", "STABILIZED", "ACRO", "ALTCTL", "POSCTL")
+"""Modes only a pilot's sticks fly: PX4's failsafes never choose them."""
+
+
+def handed_over_detail(mode: str, t_s: float) -> str:
+    """The outcome's detail when the vehicle left OFFBOARD for ``mode`` ``t_s`` seconds in.
+
+    A manual mode is a pilot's. An automatic one (RTL, LAND, HOLD, ...) may be a pilot's
+    switch, a ground station's command or one of PX4's failsafes (RC or data-link loss, low
+    battery, geofence), which the mode alone cannot tell apart, so the detail does not guess.
+    """
+    if mode in _MANUAL_MODES:
+        return f"pilot took control in {mode} at t={t_s:.1f} s; mission abandoned"
+    return (
+        f"the vehicle left OFFBOARD for {mode} at t={t_s:.1f} s (a pilot, a ground station "
+        "or a PX4 failsafe chose it); mission abandoned"
+    )
 
 
 class _HandedOver(Exception):
@@ -280,7 +300,7 @@ def _fly(
     except _HandedOver as exc:
         airborne = False  # the pilot's vehicle now: no safe stop, no command
         status = "handed_over"
-        detail = f"pilot took control in {exc.mode} at t={exc.t_s:.1f} s; mission abandoned"
+        detail = handed_over_detail(exc.mode, exc.t_s)
         progress(f"{detail}; nothing more sent")
     except Terminated:
         status, detail = "terminated", "terminated by SIGTERM"
@@ -477,7 +497,7 @@ def _follow(
     if monitor.taken_over is not None:
         mode, t_s, seen = monitor.taken_over
         if seen:
-            detail = f"pilot took control in {mode} at t={t_s:.1f} s; mission abandoned"
+            detail = handed_over_detail(mode, t_s)
         else:
             detail = (
                 f"the vehicle never reported OFFBOARD (it reports {mode} after {t_s:.1f} s); "

@@ -108,6 +108,15 @@ def test_a_vehicle_that_never_reports_offboard_is_handed_over_after_the_grace() 
     assert sim.state.mode is FlightMode.POSCTL
 
 
+def _names_who_took_over(detail: str, mode: str) -> None:
+    """A manual mode is a pilot's; an automatic one may be a failsafe's, so it is only named."""
+    if mode == "POSCTL":
+        assert detail.startswith("pilot took control in POSCTL at t="), detail
+    else:
+        assert detail.startswith(f"the vehicle left OFFBOARD for {mode} at t="), detail
+        assert "pilot" in detail and "PX4 failsafe" in detail, detail
+
+
 def _take_over_in_process(mode: str, after_s: float) -> None:
     """Fly LINE in process; ``after_s`` of following in OFFBOARD, the pilot switches to
     ``mode``: the companion hands over and sends nothing more."""
@@ -134,10 +143,44 @@ def _take_over_in_process(mode: str, after_s: float) -> None:
         lambda _m: None,
     )
     assert outcome.status == "handed_over", outcome.detail
-    assert outcome.detail.startswith(f"pilot took control in {mode} at t=")
+    _names_who_took_over(outcome.detail, mode)
     assert outcome.detail.endswith("; mission abandoned")
     assert link.sent_after == []
     assert sim.state.mode is FlightMode[mode]
+
+
+def test_a_px4_failsafe_mid_mission_is_handed_over_without_blaming_a_pilot() -> None:
+    """The ground station falls silent while the companion follows (NAV_DLL_ACT 2): PX4's
+    data-link failsafe returns the vehicle, and the companion yields to it without claiming
+    that a pilot took control, holding or landing nothing."""
+    sim = Simulator(load_sim_config("iris"), seed=5)
+    for name, value in (("NAV_DLL_ACT", 2), ("COM_DL_LOSS_T", 6), ("COM_FAIL_ACT_T", 0.0)):
+        sim.set_param(name, value)
+    link = CountingInProcessLink(sim)
+    mission = load_mission(LINE)
+    link.counting = True
+    sim.on_gcs_heartbeat()  # a ground station was there at take-off, then went silent
+
+    def note_failsafe(tick) -> None:
+        if tick.state.mode == "OFFBOARD":
+            link.sent_after.clear()  # count only what follows the failsafe's mode change
+
+    outcome = fly_mission(
+        link,
+        make_planner("pd", 3.0),
+        reference_of(mission),
+        mission,
+        RunnerConfig(),
+        note_failsafe,
+        lambda _m: None,
+    )
+    assert outcome.status == "handed_over", outcome.detail
+    assert outcome.detail.startswith("the vehicle left OFFBOARD for RTL at t="), outcome.detail
+    assert "pilot took control" not in outcome.detail
+    assert link.sent_after == [], link.sent_after
+    assert outcome.tracking_rmse_m is not None  # it had been following in OFFBOARD
+    assert sim.state.mode is FlightMode.RTL
+    assert any("data link lost" in text for _, text in sim.drain_events())
 
 
 def _await_offboard(
@@ -212,7 +255,7 @@ def test_pilot_takeover_over_mavlink_no_command_after_the_mode_change(kind: str,
         link.close()
         endpoint.stop()
     assert outcome is not None and outcome.status == "handed_over", outcome
-    assert outcome.detail.startswith(f"pilot took control in {mode} at t=")
+    _names_who_took_over(outcome.detail, mode)
     switch = marks["after_switch"]
     # No command at all after the pilot's: the pilot's own DO_SET_MODE retries are its only ones.
     assert later.commands_received == switch.commands_received
