@@ -202,7 +202,7 @@ def open_link(args: argparse.Namespace) -> Link:
 def teach(args: argparse.Namespace) -> int:
     from experiments.rover.link_drive import NotARover
     from experiments.rover.repeat import end_gap_m, is_loop
-    from experiments.rover.teach import HandedOver, TeachError, record_teach
+    from experiments.rover.teach import HandedOver, TeachError, record_teach, turns_not_driven
     from planners.rover.path_file import path_csv_text
 
     if args.link == "inprocess" and args.drive is None:
@@ -240,6 +240,8 @@ def teach(args: argparse.Namespace) -> int:
         f"wrote {args.out}: {len(path)} vertices {path.spacing_m:.2f} m apart, "
         f"{path.length_m:.1f} m ({shape}); recording ended: {taught.ended_for}"
     )
+    for line in turns_not_driven(args.drive or (), path):
+        _say(f"warning: {line}")
     return EXIT_OK
 
 

@@ -63,6 +63,34 @@ def _curvature_at(drive: Sequence[tuple[float, float]], s_m: float) -> float | N
     return None
 
 
+def turns_not_driven(
+    drive: Sequence[tuple[float, float]], path: TaughtPath, share: float = 0.8
+) -> list[str]:
+    """The scripted pattern's arcs the rover did not turn as asked, one line each.
+
+    A rover steers no tighter than its limits (an Ackermann robot's steering angle, a skid-steer
+    robot's yaw rate at the drive speed); asked for more, it drives a wider arc, and the taught
+    path is that arc, not the pattern. For each arc of ``drive`` ((length_m, curvature_1pm) per
+    segment), the taught path's mean curvature over the arc's middle half (heading change over
+    distance) is compared with the asked one: below ``share`` of it, the arc is named.
+    """
+    heading = np.unwrap(path.heading_rad)
+    lines, start = [], 0.0
+    for number, (length, curvature) in enumerate(drive, 1):
+        a, b = start + 0.25 * length, min(start + 0.75 * length, path.length_m)
+        start += length
+        if curvature == 0.0 or b - a < 2.0 * path.spacing_m:
+            continue
+        turned = float(np.diff(np.interp([a, b], path.s_m, heading))[0]) / (b - a)
+        if turned / curvature < share:
+            lines.append(
+                f"segment {number} asked for {curvature:+.2f} 1/m and the rover turned "
+                f"{turned:+.2f} 1/m there (its steering or yaw-rate limit): the taught path has "
+                "the wider turn it drove"
+            )
+    return lines
+
+
 def record_teach(
     link: Link,
     spacing_m: float = 0.25,
