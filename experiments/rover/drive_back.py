@@ -4,8 +4,8 @@ Two ways, both ending in Hold:
 
 - ``turn`` (:func:`drive_back`): turn towards the target, drive the straight line to it (the
   line must be clear: nothing here sees obstacles), turn to the target heading. For a rover that
-  turns in place (skid steer, differential); an Ackermann rover does not get there and the
-  drive says so at its deadline.
+  turns in place (skid steer, differential); an Ackermann rover does not, and the drive stops
+  after ``STALL_S`` of turning in place without turning, saying to reverse instead.
 - ``reverse`` (:func:`reverse_along`): drive backwards along the taught path itself, on ground
   the rover has already driven, steering by pure pursuit [Coulter92] on the path behind it (the
   rover's rear is the pursuer's front). Any rover, Ackermann too: the path was driven forwards,
@@ -39,10 +39,16 @@ _CREEP_MPS = 0.05  # the slowest a drive closes the last centimetres at
 _LOOKAHEAD_MIN_M = 0.6  # pure pursuit's lookahead: at least this,
 _LOOKAHEAD_S = 1.5  # or this many seconds of travel [s]
 _SEARCH_VERTICES = 20  # how far back along the path the nearest vertex is looked for
+STALL_S = 5.0  # turning in place this long [s] ...
+STALL_RAD = 0.1  # ... by less than this [rad] is a rover that does not turn in place
 
 Control = Callable[[np.ndarray], "tuple[float, float] | None"]
 """From the pose (x_m, y_m, heading_rad): the forward speed [m/s] (< 0 backwards) and turn
 rate [rad/s, counter-clockwise] to command, or None once there."""
+
+
+class _Stalled(Exception):
+    """A drive that cannot go on (the reason is the message); the rover is stopped."""
 
 
 def _wrap(a: float) -> float:
@@ -95,7 +101,7 @@ def drive_back(
     Raises:
         LinkError: arming or OFFBOARD refused (its reason in the message).
     """
-    control = _TurnDriveTurn(target, speed_mps, max_turn_radps)
+    control = _TurnDriveTurn(target, speed_mps, max_turn_radps, round(STALL_S / dt_s))
     late = " (a rover that cannot turn in place, an Ackermann one, gets back in reverse)"
     return _drive(link, control, timeout_s, dt_s, late)
 
@@ -121,13 +127,37 @@ def reverse_along(
 
 
 class _TurnDriveTurn:
-    """:func:`drive_back`'s three phases: face the target, drive to it, align with it."""
+    """:func:`drive_back`'s three phases: face the target, drive to it, align with it; raises
+    _Stalled when ``stall_calls`` calls in a row turning in place turned less than STALL_RAD."""
 
     def __init__(
-        self, target: tuple[float, float, float], speed_mps: float, max_turn_radps: float
+        self,
+        target: tuple[float, float, float],
+        speed_mps: float,
+        max_turn_radps: float,
+        stall_calls: int,
     ) -> None:
         self.target, self.speed_mps, self.max_turn_radps = target, speed_mps, max_turn_radps
         self.phase = "face"
+        self.stall_calls = stall_calls
+        self.turning_from: tuple[float, int] | None = None  # heading [rad], calls since
+
+    def _check_it_turns(self, heading_rad: float, error_rad: float) -> None:
+        """Count the calls turning in place while STALL_RAD is less than half the error left."""
+        if self.turning_from is None or abs(error_rad) < 2.0 * STALL_RAD:
+            self.turning_from = (heading_rad, 0)
+            return
+        start, calls = self.turning_from
+        turned = abs(_wrap(heading_rad - start))
+        if turned >= STALL_RAD:
+            self.turning_from = (heading_rad, 0)
+        elif calls + 1 >= self.stall_calls:
+            raise _Stalled(
+                f"the rover does not turn in place (it turned {turned:.2f} rad in {STALL_S:g} s "
+                "of trying; an Ackermann rover cannot): drive it back with --drive-back reverse"
+            )
+        else:
+            self.turning_from = (start, calls + 1)
 
     def __call__(self, pose: np.ndarray) -> tuple[float, float] | None:
         x, y, th = pose
@@ -144,9 +174,12 @@ class _TurnDriveTurn:
             if abs(err) < ALIGNED_RAD:
                 return None
             v, w = 0.0, err * _HEADING_GAIN
+            self._check_it_turns(th, err)
         elif self.phase == "face":
             v, w = 0.0, bearing_err * _HEADING_GAIN
+            self._check_it_turns(th, bearing_err)
         else:
+            self.turning_from = None
             v = min(self.speed_mps, _SPEED_GAIN * dist) * max(0.0, math.cos(bearing_err))
             w = bearing_err * _HEADING_GAIN
         return v, float(np.clip(w, -self.max_turn_radps, self.max_turn_radps))
@@ -226,7 +259,7 @@ def _drive(
             link.send_velocity(VelocityCommand((v * math.cos(yaw), v * math.sin(yaw), 0.0), -w))
             t_next += dt_s
             clock.sleep_until(t_next)
-    except LinkError as exc:
+    except (LinkError, _Stalled) as exc:
         stop_rover(link)
         return "", str(exc)
     except KeyboardInterrupt:
