@@ -19,12 +19,12 @@ local origin, one row per vertex --spacing apart), atomically.
 repeat: drives the path --trials times in OFFBOARD with the LB-NMPC, learning from trial to
 trial in experience bins kept in --experience (npz, written after each trial, read at the
 start: the next run goes on learning where this one stopped). One line per trial on stdout;
-repeat.json and repeat.png (errors and travel time per trial) in --out at the end. Each trial
-starts at the path's start: a loop ends there; after an open path --drive-back drives back to
-it: `turn` (the default: turn in place, the straight line, turn; a skid-steer rover, a clear
-line) or `reverse` (backwards along the path itself, on ground already driven; any rover,
-Ackermann too). Without it an open path is repeated once. A rover not at the start is refused
-in one line.
+repeat.json and repeat.png (errors and travel time per trial, speeds along the path) in --out
+at the end. Each trial starts at the path's start: a loop ends there; after an open path
+--drive-back drives back to it: `turn` (the default: turn in place, the straight line, turn; a
+skid-steer rover, a clear line) or `reverse` (backwards along the path itself, on ground
+already driven; any rover, Ackermann too). Without it an open path is repeated once. A rover
+not at the start is refused in one line.
 
 Exit codes: 0 done; 1 failed (no vehicle or position, link lost, refused, a teach pass too
 short or not finite, a trial stopped or not at its end in time: the rover was sent a zero
@@ -361,7 +361,8 @@ def repeat(args: argparse.Namespace) -> int:
             text = json.dumps(summary(outcome, about, rows), indent=1)
             write_text_atomic(Path(args.out) / "repeat.json", text)
             title = f"{args.path.name}: [Ostafew16] teach and repeat, trials 1-{int(rows[-1, 0])}"
-            write_figure_atomic(figure(rows, title), Path(args.out) / "repeat.png", dpi=90)
+            fig = figure(rows, title, path.s_m, outcome.trials)
+            write_figure_atomic(fig, Path(args.out) / "repeat.png", dpi=90)
             _say(f"wrote {Path(args.out) / 'repeat.json'} and {Path(args.out) / 'repeat.png'}")
         except OutputError as exc:
             _say(f"error: --out {exc}")

@@ -2,14 +2,16 @@
 
 The errors are [Ostafew16]'s e_L [m] and e_H [rad] against the path pose at the rover's
 projection, from the Link's own telemetry (experiments.rover.link_drive); the figure has the
-same first and last panels as the regimes' (experiments.rover.report): max and RMS errors per
-trial, and travel time per trial, numbered over every run that used the experience file (its
-history rows, experiments.rover.experience_file.HISTORY_COLUMNS).
+same panels as the regimes' (experiments.rover.report): max and RMS errors per trial, and
+travel time per trial, numbered over every run that used the experience file (its history
+rows, experiments.rover.experience_file.HISTORY_COLUMNS), and the speeds along the path,
+scheduled and driven, in this run's trials (earlier runs' schedules are not kept).
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -94,9 +96,12 @@ def summary(outcome: RepeatOutcome, about: dict, history: np.ndarray) -> dict:
     }
 
 
-def figure(history: np.ndarray, title: str) -> Figure:
+def figure(
+    history: np.ndarray, title: str, path_s_m: np.ndarray, trials: Sequence[Trial]
+) -> Figure:
     """The figure of history rows (k, 6): max and RMS e_L / e_H per trial; travel time per
-    trial."""
+    trial; and for ``trials`` (this run's), the scheduled speed at each path vertex (its arc
+    length ``path_s_m``, (N,) [m]) and the speed driven along the path (ds/dt of the drive)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -105,7 +110,7 @@ def figure(history: np.ndarray, title: str) -> Figure:
 
     s = {c: history[:, k] for k, c in enumerate(HISTORY_COLUMNS)}
     j = s["trial"]
-    fig, axes = plt.subplots(2, 1, figsize=(8, 6))
+    fig, axes = plt.subplots(3, 1, figsize=(8, 9))
     ax = axes[0]
     ax.plot(j, s["max_e_lat_m"], "o-", label="max |e_L| [m]")
     ax.plot(j, s["rms_e_lat_m"], "s-", label="RMS e_L [m]")
@@ -115,9 +120,22 @@ def figure(history: np.ndarray, title: str) -> Figure:
     ax.legend()
     axes[1].plot(j, s["travel_time_s"], "o-")
     axes[1].set_ylabel("travel time [s]")
-    for ax in axes:
+    if np.any(np.isfinite(s["travel_time_s"])):  # from 0: equal times got an offset axis
+        axes[1].set_ylim(0.0, 1.1 * np.nanmax(s["travel_time_s"]) + 1e-9)
+    for ax in axes[:2]:
         ax.set_xlabel("trial")
         ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+    ax = axes[2]
+    for trial in trials:
+        (line,) = ax.plot(path_s_m, trial.schedule_mps, label=f"trial {trial.number} scheduled")
+        d = trial.drive
+        if len(d.t_s) > 1:
+            driven = np.gradient(d.s_m, d.t_s)
+            ax.plot(d.s_m, driven, ".", ms=3, color=line.get_color(), alpha=0.5)
+    ax.set_xlabel("distance along the path [m] (dots: speed driven)")
+    ax.set_ylabel("speed [m/s]")
+    if trials:
+        ax.legend(fontsize="small", ncol=2)
     fig.suptitle(title)
     fig.tight_layout()
     return fig
