@@ -133,15 +133,7 @@ def _take_over_in_process(mode: str, after_s: float) -> None:
             assert sim.set_mode(FlightMode[mode]).accepted
             link.counting = True
 
-    outcome = fly_mission(
-        link,
-        make_planner("pd", 3.0),
-        reference_of(mission),
-        mission,
-        RunnerConfig(),
-        pilot,
-        lambda _m: None,
-    )
+    outcome = fly_quietly(link, mission, on_tick=pilot)
     assert outcome.status == "handed_over", outcome.detail
     _names_who_took_over(outcome.detail, mode)
     assert outcome.detail.endswith("; mission abandoned")
@@ -165,15 +157,7 @@ def test_a_px4_failsafe_mid_mission_is_handed_over_without_blaming_a_pilot() -> 
         if tick.state.mode == "OFFBOARD":
             link.sent_after.clear()  # count only what follows the failsafe's mode change
 
-    outcome = fly_mission(
-        link,
-        make_planner("pd", 3.0),
-        reference_of(mission),
-        mission,
-        RunnerConfig(),
-        note_failsafe,
-        lambda _m: None,
-    )
+    outcome = fly_quietly(link, mission, on_tick=note_failsafe)
     assert outcome.status == "handed_over", outcome.detail
     assert outcome.detail.startswith("the vehicle left OFFBOARD for RTL at t="), outcome.detail
     assert "pilot took control" not in outcome.detail
@@ -272,16 +256,18 @@ def test_pilot_takeover_over_mavlink_no_command_after_the_mode_change(kind: str,
         assert float(np.linalg.norm(final.pos_ned_m[:2] - pos_at_return[:2])) < 1.0
 
 
-def fly_quietly(link, mission, progress=lambda _m: None) -> FlightOutcome:  # noqa: ANN001
+def fly_quietly(  # noqa: ANN001
+    link, mission, progress=lambda _m: None, on_tick=lambda _t: None
+) -> FlightOutcome:
     """The mission flown with the PD planner and the default runner settings; the progress
-    lines go to ``progress`` (dropped by default)."""
+    lines go to ``progress`` (dropped by default), each control tick to ``on_tick``."""
     return fly_mission(
         link,
         make_planner("pd", 3.0),
         reference_of(mission),
         mission,
         RunnerConfig(),
-        lambda _tick: None,
+        on_tick,
         progress,
     )
 
