@@ -10,16 +10,19 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping
+from collections import deque
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
 from companion.link import (
+    STATUS_TEXTS_KEPT,
     CommandOutcome,
     LandedPhase,
     LinkError,
     LinkState,
     ObstacleDistances,
+    StatusText,
     VelocityCommand,
 )
 from vehicle_sim import CommandResult, Simulator, load_sim_config
@@ -49,7 +52,8 @@ class InProcessLink:
     """A Link to a Simulator living in this process.
 
     Args:
-        sim: the simulator to fly (the caller keeps ownership and may inspect it).
+        sim: the simulator to fly (the caller keeps ownership and may inspect it; its events,
+            the texts a PX4 would send, are drained into ``status_texts`` at each read).
         metadata: extra sidecar entries (e.g. vehicle preset name, seed).
     """
 
@@ -58,6 +62,7 @@ class InProcessLink:
         self._clock = SimClock(sim)
         self._metadata = dict(metadata or {})
         self._scan: ObstacleDistances | None = None
+        self._status_texts: deque[StatusText] = deque(maxlen=STATUS_TEXTS_KEPT)
 
     @classmethod
     def from_vehicle(cls, vehicle: str, seed: int, world: object | None = None) -> InProcessLink:
@@ -100,6 +105,9 @@ class InProcessLink:
             raise LinkError("in-process simulator has a non-finite state; cannot fly it")
 
     def read_state(self) -> LinkState:
+        self._status_texts.extend(
+            StatusText(self._clock.now_s(), text) for _, text in self._sim.drain_events()
+        )
         state = link_state_of(self._sim.state)
         scan = self._obstacle_distances()
         return state if scan is None else dataclasses.replace(state, obstacle_distances=scan)
@@ -137,6 +145,9 @@ class InProcessLink:
     def simulator(self) -> Simulator:
         """The simulated vehicle (for contact counts and truth after a flight)."""
         return self._sim
+
+    def status_texts(self) -> Sequence[StatusText]:
+        return tuple(self._status_texts)
 
     def metadata(self) -> Mapping[str, object]:
         contacts = {} if self._sim.world is None else {"contacts": len(self._sim.contacts)}

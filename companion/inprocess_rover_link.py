@@ -12,13 +12,20 @@ Nothing here imports vehicle_sim at module level: the simulator object is handed
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
 
 from companion.inprocess_link import SimClock
-from companion.link import CommandOutcome, LandedPhase, LinkError, LinkState, VelocityCommand
+from companion.link import (
+    CommandOutcome,
+    LandedPhase,
+    LinkError,
+    LinkState,
+    StatusText,
+    VelocityCommand,
+)
 
 
 class InProcessRoverLink:
@@ -111,6 +118,10 @@ class InProcessRoverLink:
 
     def land(self) -> CommandOutcome:
         return CommandOutcome(False, "a ground rover does not land; use hold")
+
+    def status_texts(self) -> Sequence[StatusText]:
+        """None: the rover simulator has no failsafes or notices of its own in process."""
+        return ()
 
     def metadata(self) -> Mapping[str, object]:
         return {

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import enum
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Literal, Protocol, get_args
 
@@ -152,6 +152,23 @@ class VelocityCommand:
 ZERO_VELOCITY = VelocityCommand((0.0, 0.0, 0.0), 0.0)
 
 
+STATUS_TEXTS_KEPT = 32
+"""How many of the vehicle's latest texts a Link keeps (Link.status_texts)."""
+
+
+@dataclass(frozen=True)
+class StatusText:
+    """A text the vehicle sent (MAVLink STATUSTEXT; PX4's user messages, its failsafes' too).
+
+    Attributes:
+        t_s: when it arrived, on the Link's clock [s].
+        text: what it said.
+    """
+
+    t_s: float
+    text: str
+
+
 @dataclass(frozen=True)
 class CommandOutcome:
     """Answer to a vehicle command: accepted or not, and why (the autopilot's words)."""
@@ -234,6 +251,11 @@ class Link(Protocol):
 
     def land(self) -> CommandOutcome:
         """Land at the current position; PX4 disarms after touchdown."""
+        ...
+
+    def status_texts(self) -> Sequence[StatusText]:
+        """The vehicle's latest texts since connecting, oldest first (the last
+        STATUS_TEXTS_KEPT)."""
         ...
 
     def metadata(self) -> Mapping[str, object]:

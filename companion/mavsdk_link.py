@@ -22,7 +22,8 @@ from __future__ import annotations
 import contextlib
 import math
 import time
-from collections.abc import Callable, Mapping
+from collections import deque
+from collections.abc import Callable, Mapping, Sequence
 from typing import TypeVar
 
 import numpy as np
@@ -50,10 +51,12 @@ from mavsdk.plugins.telemetry import Telemetry, TelemetryError
 from companion.clocks import WallClock
 from companion.link import (
     FLIGHT_MODE_NAMES,
+    STATUS_TEXTS_KEPT,
     CommandOutcome,
     LandedPhase,
     LinkError,
     LinkState,
+    StatusText,
     VehicleKind,
     VelocityCommand,
 )
@@ -107,6 +110,7 @@ class MavsdkLink:
         self._system: System | None = None
         self._yaw_target_rad: float | None = None
         self._yaw_updated_s = 0.0
+        self._status_texts: deque[StatusText] = deque(maxlen=STATUS_TEXTS_KEPT)
 
     @property
     def name(self) -> str:
@@ -134,6 +138,7 @@ class MavsdkLink:
         self._telemetry = Telemetry(system)
         self._offboard = Offboard(system)
         self._param = Param(system)
+        self._telemetry.subscribe_status_text(self._on_status_text)
         for set_rate in (
             self._telemetry.set_rate_position_velocity_ned,
             self._telemetry.set_rate_attitude_quaternion,
@@ -239,6 +244,13 @@ class MavsdkLink:
 
     def land(self) -> CommandOutcome:
         return _call(self._require(self._action).land)
+
+    def status_texts(self) -> Sequence[StatusText]:
+        return tuple(self._status_texts)
+
+    def _on_status_text(self, status: object, _user_data: object) -> None:
+        """MAVSDK's callback (its own thread; a deque's append is atomic)."""
+        self._status_texts.append(StatusText(self._clock.now_s(), str(status.text)))
 
     def metadata(self) -> Mapping[str, object]:
         return {"link": self.name, "url": self._url}

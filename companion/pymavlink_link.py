@@ -11,18 +11,21 @@ from __future__ import annotations
 
 import math
 import struct
-from collections.abc import Callable, Mapping
+from collections import deque
+from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 from pymavlink import mavutil
 
 from companion.clocks import WallClock
 from companion.link import (
+    STATUS_TEXTS_KEPT,
     CommandOutcome,
     LandedPhase,
     LinkError,
     LinkState,
     ObstacleDistances,
+    StatusText,
     VehicleKind,
     VelocityCommand,
     vehicle_kind,
@@ -114,7 +117,8 @@ class PymavlinkLink:
         self._heartbeat_seen_s = -math.inf
         self._acks: dict[int, int] = {}
         self._params: dict[str, float] = {}
-        self._status_texts: list[str] = []
+        self._status_texts: deque[StatusText] = deque(maxlen=STATUS_TEXTS_KEPT)
+        self._texts_received = 0
         self._pos = np.full(3, np.nan)
         self._vel = np.full(3, np.nan)
         self._q = np.full(4, np.nan)
@@ -210,6 +214,9 @@ class PymavlinkLink:
     def land(self) -> CommandOutcome:
         self._setpoint = None
         return self._command(_MAV.MAV_CMD_NAV_LAND, (math.nan,) * 7)
+
+    def status_texts(self) -> Sequence[StatusText]:
+        return tuple(self._status_texts)
 
     def metadata(self) -> Mapping[str, object]:
         return {"link": self.name, "url": self._url}
@@ -331,7 +338,8 @@ class PymavlinkLink:
 
     def _on_status_text(self, msg: MAVLink_message) -> None:
         text = msg.text.decode() if isinstance(msg.text, bytes) else msg.text
-        self._status_texts.append(text.rstrip("\x00"))
+        self._status_texts.append(StatusText(self._clock.now_s(), text.rstrip("\x00")))
+        self._texts_received += 1
 
     _HANDLERS = {
         "HEARTBEAT": _on_heartbeat,
@@ -354,7 +362,7 @@ class PymavlinkLink:
         mav = self._require_open()
         target = self._require_target()
         p = (*params, *(0.0,) * (7 - len(params)))
-        texts_before = len(self._status_texts)
+        texts_before = self._texts_received
         for confirmation in range(attempts or self._command_attempts):
             self._acks.pop(command, None)
             mav.mav.command_long_send(*target, command, confirmation, *p)
@@ -366,7 +374,9 @@ class PymavlinkLink:
                     break
                 deadline_s = self._clock.now_s() + self._command_timeout_s
             if result is not None:
-                texts = "; ".join(self._status_texts[texts_before:])
+                new = min(self._texts_received - texts_before, len(self._status_texts))
+                recent = list(self._status_texts)[len(self._status_texts) - new :]
+                texts = "; ".join(t.text for t in recent)
                 name = (
                     _MAV.enums["MAV_RESULT"][result].name
                     if result in _MAV.enums["MAV_RESULT"]

@@ -13,8 +13,9 @@ SIGTERM) makes it send a zero-velocity setpoint, leave OFFBOARD for HOLD, comman
 It never fights a pilot: when the vehicle leaves OFFBOARD because someone else (an RC pilot,
 a ground station, a PX4 failsafe) chose another mode, the companion stops streaming at once,
 commands no mode and ends with status "handed_over" ("pilot took control in POSCTL at t=12.3 s;
-mission abandoned"; for an automatic mode such as RTL it names the mode and does not guess
-who chose it), as a PX4 offboard application must. The outcome is returned, never raised.
+mission abandoned"; a failsafe the vehicle announced is named with its text; for another
+automatic mode such as RTL it names the mode and does not guess who chose it), as a PX4
+offboard application must. The outcome is returned, never raised.
 """
 
 from __future__ import annotations
@@ -57,13 +58,35 @@ _MANUAL_MODES = ("MANUAL", "STABILIZED", "ACRO", "ALTCTL", "POSCTL")
 """Modes only a pilot's sticks fly: PX4's failsafes never choose them."""
 
 
-def handed_over_detail(mode: str, t_s: float) -> str:
+FAILSAFE_TEXT_RECENT_S = 3.0
+"""A vehicle text naming a failsafe this recent [s] explains a mode change."""
+
+
+def failsafe_said(link: Link) -> str:
+    """The vehicle's newest text naming a failsafe ("Failsafe: data link lost, returning") in
+    the last FAILSAFE_TEXT_RECENT_S, or "" when it said none."""
+    now_s = link.clock.now_s()
+    for said in reversed(link.status_texts()):
+        if now_s - said.t_s > FAILSAFE_TEXT_RECENT_S:
+            break
+        if "failsafe" in said.text.lower():
+            return said.text
+    return ""
+
+
+def handed_over_detail(mode: str, t_s: float, failsafe_text: str = "") -> str:
     """The outcome's detail when the vehicle left OFFBOARD for ``mode`` ``t_s`` seconds in.
 
-    A manual mode is a pilot's. An automatic one (RTL, LAND, HOLD, ...) may be a pilot's
-    switch, a ground station's command or one of PX4's failsafes (RC or data-link loss, low
-    battery, geofence), which the mode alone cannot tell apart, so the detail does not guess.
+    With ``failsafe_text`` (what the vehicle just said of a failsafe, see failsafe_said), it
+    was PX4's failsafe. Otherwise a manual mode is a pilot's, and an automatic one (RTL, LAND,
+    HOLD, ...) may be a pilot's switch, a ground station's command or a failsafe that said
+    nothing the link heard, which the mode alone cannot tell apart: the detail does not guess.
     """
+    if failsafe_text:
+        return (
+            f"a PX4 failsafe took the vehicle out of OFFBOARD into {mode} at t={t_s:.1f} s "
+            f'("{failsafe_text}"); mission abandoned'
+        )
     if mode in _MANUAL_MODES:
         return f"pilot took control in {mode} at t={t_s:.1f} s; mission abandoned"
     return (
@@ -300,7 +323,7 @@ def _fly(
     except _HandedOver as exc:
         airborne = False  # the pilot's vehicle now: no safe stop, no command
         status = "handed_over"
-        detail = handed_over_detail(exc.mode, exc.t_s)
+        detail = handed_over_detail(exc.mode, exc.t_s, failsafe_said(link))
         progress(f"{detail}; nothing more sent")
     except Terminated:
         status, detail = "terminated", "terminated by SIGTERM"
@@ -497,7 +520,7 @@ def _follow(
     if monitor.taken_over is not None:
         mode, t_s, seen = monitor.taken_over
         if seen:
-            detail = handed_over_detail(mode, t_s)
+            detail = handed_over_detail(mode, t_s, failsafe_said(link))
         else:
             detail = (
                 f"the vehicle never reported OFFBOARD (it reports {mode} after {t_s:.1f} s); "

@@ -19,18 +19,21 @@ import numpy as np
 import pytest
 
 from companion.inprocess_link import InProcessLink
-from companion.link import CommandOutcome, VelocityCommand
+from companion.link import CommandOutcome, StatusText, VelocityCommand
 from companion.mavsdk_link import MavsdkLink
 from companion.mission import load_mission
 from companion.mission_reference import reference_of
 from companion.planner_registry import make_planner
 from companion.pymavlink_link import PymavlinkLink
 from companion.runner import (
+    FAILSAFE_TEXT_RECENT_S,
     FlightOutcome,
     RunnerConfig,
+    failsafe_said,
     fly_mission,
     mission_beyond_vehicle_limits,
 )
+from tests.companion.test_companion_control_loop import ManualClock
 from tests.companion.test_companion_mission_on_every_link import LINE, free_udp_port
 from vehicle_sim import FlightMode, Simulator, load_sim_config
 from vehicle_sim.mavlink import EndpointConfig, LinkConfig, MavlinkEndpoint
@@ -143,8 +146,8 @@ def _take_over_in_process(mode: str, after_s: float) -> None:
 
 def test_a_px4_failsafe_mid_mission_is_handed_over_without_blaming_a_pilot() -> None:
     """The ground station falls silent while the companion follows (NAV_DLL_ACT 2): PX4's
-    data-link failsafe returns the vehicle, and the companion yields to it without claiming
-    that a pilot took control, holding or landing nothing."""
+    data-link failsafe returns the vehicle and says so, and the companion yields to it naming
+    the failsafe (not "pilot took control"), holding or landing nothing."""
     sim = Simulator(load_sim_config("iris"), seed=5)
     for name, value in (("NAV_DLL_ACT", 2), ("COM_DL_LOSS_T", 6), ("COM_FAIL_ACT_T", 0.0)):
         sim.set_param(name, value)
@@ -159,12 +162,12 @@ def test_a_px4_failsafe_mid_mission_is_handed_over_without_blaming_a_pilot() -> 
 
     outcome = fly_quietly(link, mission, on_tick=note_failsafe)
     assert outcome.status == "handed_over", outcome.detail
-    assert outcome.detail.startswith("the vehicle left OFFBOARD for RTL at t="), outcome.detail
-    assert "pilot took control" not in outcome.detail
+    start = "a PX4 failsafe took the vehicle out of OFFBOARD into RTL at t="
+    assert outcome.detail.startswith(start), outcome.detail
+    assert '("Failsafe: data link lost, returning"); mission abandoned' in outcome.detail
     assert link.sent_after == [], link.sent_after
     assert outcome.tracking_rmse_m is not None  # it had been following in OFFBOARD
     assert sim.state.mode is FlightMode.RTL
-    assert any("data link lost" in text for _, text in sim.drain_events())
 
 
 def _await_offboard(
@@ -181,6 +184,70 @@ def _await_offboard(
             if time.monotonic() - offboard_since >= TAKEOVER_AFTER_S:
                 return
         time.sleep(rate_s)
+
+
+def _ground_station_goes_silent(port: int, endpoint: MavlinkEndpoint) -> None:
+    """A ground station with a joystick on its own link: sets the manual-control-loss
+    failsafe to return at once (NAV_RCL_ACT 2, COM_FAIL_ACT_T 0, COM_RC_LOSS_T 2 s), sends
+    heartbeats and centred sticks until the vehicle has followed in OFFBOARD a while, then falls
+    silent (a radio out of range)."""
+    gcs = mavutil.mavlink_connection(f"udpout:127.0.0.1:{port}", source_system=245)
+    try:
+        gcs.mav.heartbeat_send(6, 8, 0, 0, 0)
+        for name, value, kind in (
+            (b"NAV_RCL_ACT", int32_as_float(2), 6),
+            (b"COM_FAIL_ACT_T", 0.0, 9),
+            (b"COM_RC_LOSS_T", 2.0, 9),
+        ):
+            gcs.mav.param_set_send(1, 1, name, value, kind)
+        offboard_since, deadline = None, time.monotonic() + 90.0
+        while time.monotonic() < deadline:
+            gcs.mav.heartbeat_send(6, 8, 0, 0, 0)
+            gcs.mav.manual_control_send(1, 0, 0, 500, 0, 0)
+            if endpoint.state.mode is FlightMode.OFFBOARD:
+                offboard_since = offboard_since or time.monotonic()
+                if time.monotonic() - offboard_since >= TAKEOVER_AFTER_S:
+                    return
+            time.sleep(0.1)
+    finally:
+        gcs.close()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kind", ["pymavlink", "mavsdk"])
+def test_a_failsafe_over_mavlink_is_named_with_what_px4_said(kind: str) -> None:
+    """The ground station's radio goes silent mid-mission: PX4's manual-control-loss failsafe
+    returns the vehicle and says so in a STATUSTEXT; the companion, over either link, hands
+    over naming the failsafe and its text, and sends nothing more."""
+    companion_port = free_udp_port()
+    endpoint = _iris_with_a_ground_station(companion_port)
+    url = f"udpin://127.0.0.1:{companion_port}"
+    link = MavsdkLink(url) if kind == "mavsdk" else PymavlinkLink(url)
+    gcs = threading.Thread(
+        target=_ground_station_goes_silent, args=(endpoint.local_ports["gcs"], endpoint)
+    )
+    gcs.start()
+    outcome: FlightOutcome | None = None
+    try:
+        outcome = fly_quietly(link, load_mission(LINE))
+        at_return = endpoint.stats
+        time.sleep(2.0)  # anything still streaming or commanding would show now
+        later = endpoint.stats
+        final_mode = endpoint.state.mode
+    finally:
+        gcs.join(10.0)
+        link.close()
+        endpoint.stop()
+    assert outcome is not None and outcome.status == "handed_over", outcome
+    start = "a PX4 failsafe took the vehicle out of OFFBOARD into RTL at t="
+    assert outcome.detail.startswith(start), outcome.detail
+    assert '("Failsafe: manual control lost, returning")' in outcome.detail, outcome.detail
+    assert outcome.tracking_rmse_m is not None  # it had been following in OFFBOARD
+    assert final_mode is FlightMode.RTL
+    assert later.commands_received == at_return.commands_received
+    assert later.setpoints_accepted + later.setpoints_rejected == (
+        at_return.setpoints_accepted + at_return.setpoints_rejected
+    )
 
 
 def _pilot_switches(port: int, mode: str, endpoint: MavlinkEndpoint, marks: dict) -> None:
@@ -500,3 +567,31 @@ def test_a_pilot_who_takes_over_while_offboard_is_retried_is_not_fought() -> Non
     assert outcome.detail.startswith("pilot took control in POSCTL at t=")
     assert link.sent_after == []
     assert sim.state.mode is FlightMode.POSCTL
+
+
+class _SaidLink:
+    """What failsafe_said reads of a Link: its clock and the texts it heard."""
+
+    def __init__(self, now_s: float, texts: list[tuple[float, str]]) -> None:
+        self.clock = ManualClock()
+        self.clock.sleep_until(now_s)
+        self.texts = [StatusText(t, text) for t, text in texts]
+
+    def status_texts(self) -> list[StatusText]:
+        return self.texts
+
+
+@pytest.mark.parametrize(
+    ("texts", "said"),
+    [
+        ([(9.0, "Failsafe: battery critical, returning")], "Failsafe: battery critical, returning"),
+        ([(9.0, "failsafe activated"), (9.5, "Takeoff detected")], "failsafe activated"),
+        ([(10.0 - FAILSAFE_TEXT_RECENT_S - 0.1, "Failsafe: data link lost, returning")], ""),
+        ([(9.9, "Offboard control lost")], ""),
+        ([], ""),
+    ],
+)
+def test_only_a_recent_text_naming_a_failsafe_explains_a_mode_change(
+    texts: list[tuple[float, str]], said: str
+) -> None:
+    assert failsafe_said(_SaidLink(10.0, texts)) == said
