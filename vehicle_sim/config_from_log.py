@@ -21,7 +21,13 @@ import numpy as np
 
 from flightlog.reader import read_log
 from flightlog.schema import FlightLog, FlightLogError
-from flightlog.ulog import FLY_HINT, is_ulog, parameters_give_a_config, summarise_ulog
+from flightlog.ulog import (
+    FLY_HINT,
+    damage_note,
+    is_ulog,
+    parameters_give_a_config,
+    summarise_ulog,
+)
 from vehicle_sim.config import GRAVITY_MPS2, config_from_mapping, load_sim_config
 from vehicle_sim.params import PX4_PARAMS
 
@@ -54,7 +60,8 @@ def config_from_log(log: FlightLog, preset: str = "iris") -> ConfigFromLog:
         )
     vehicle = log.metadata.get("vehicle")
     kind = vehicle.get("type") if isinstance(vehicle, Mapping) else None
-    return _build(log.where, params, hover, hover_how, preset, (), kind)
+    damaged = damage_note(log)
+    return _build(log.where, params, hover, hover_how, preset, (damaged,) if damaged else (), kind)
 
 
 def config_from_log_file(path: str | Path, preset: str = "iris") -> ConfigFromLog:

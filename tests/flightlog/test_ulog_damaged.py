@@ -15,6 +15,7 @@ from flightlog.info import describe_log
 from flightlog.schema import FlightLogError
 from flightlog.ulog import damage_note, read_ulog, summarise_ulog
 from flightlog.ulog_integrity import find_damage
+from scripts import flightlog_cli, vehicle_sim_cli
 from tests.flightlog.ulog_damage import corrupt_copy, hardfault_copy, stale_copy
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "ulog"
@@ -205,3 +206,17 @@ def test_a_zero_header_timestamp_does_not_stretch_the_log_to_the_boot(tmp_path) 
     assert abs(zeroed.metadata["duration_s"] - whole.metadata["duration_s"]) < 0.5
     summary = summarise_ulog(path)
     assert summary["duration_s"] < 80.0 and summary["modes"][0][1] < 1.0
+
+
+def test_convert_and_config_from_log_of_a_damaged_ulog_say_it_is_damaged(tmp_path, capsys):
+    """diagnose and fit-gp warned of a damaged log; convert and config-from-log wrote their
+    output without a word."""
+    path, offset = corrupt_copy(tmp_path, "type")
+    csv, toml = tmp_path / "damaged.csv", tmp_path / "damaged.toml"
+    assert flightlog_cli.main(["convert", str(path), "--out", str(csv)]) == 0
+    err = capsys.readouterr().err
+    assert f"flightlog: warning: damaged.ulg is corrupt at byte {offset}" in err
+    assert vehicle_sim_cli.main(["config-from-log", str(path), "--out", str(toml)]) == 0
+    err = capsys.readouterr().err
+    assert f"from the log: damaged.ulg is corrupt at byte {offset}" in err
+    assert f"#   damaged.ulg is corrupt at byte {offset}" in toml.read_text()
