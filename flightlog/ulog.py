@@ -108,6 +108,32 @@ def damage_note(log: FlightLog) -> str | None:
     return None
 
 
+# Why the mapping left rows out (``metadata['dropped_rows']`` keys), for a report's headline.
+LEFT_OUT_WHY = {
+    "estimator_invalid": "with the estimator's position or velocity invalid or dead reckoning",
+    "mode_unknown": "before the first vehicle_status (mode unknown)",
+    "not_multicopter_phase": "outside the multicopter phase",
+    "not_position_controlled": "outside position-controlled modes",
+    "no_velocity_command": "without a velocity command",
+}
+LEFT_OUT_NOTE_FRACTION = 0.1  # of a log's rows: fewer left out go unsaid
+
+
+def rows_left_out_note(log: FlightLog) -> str | None:
+    """One sentence for a report's headline when the mapping left out more than a tenth of a
+    ULog's rows (how many, and why: ``metadata['dropped_rows']``), else None: a flight that
+    lost its position fix for a while is diagnosed on what is left, and says so."""
+    dropped = log.metadata.get("dropped_rows")
+    total = log.metadata.get("rows_in_log")
+    if not isinstance(dropped, Mapping) or not total:
+        return None
+    if sum(dropped.values()) <= LEFT_OUT_NOTE_FRACTION * total:
+        return None
+    why = ", ".join(f"{n} {LEFT_OUT_WHY.get(k, k)}" for k, n in dropped.items() if n)
+    name = log.metadata.get("ulog", "the ULog")
+    return f"{name}: {log.n_rows} of its {total} rows used; left out: {why}"
+
+
 def _out_of_order_clause(samples: int) -> str:
     """What a damage note adds when ``samples`` samples went back in time and were left out."""
     if not samples:
