@@ -8,7 +8,9 @@ the values of other times without an error (the attitude, thrust and command of 
 log so damaged were off by up to 9 deg, 40 % and 1.1 m/s). So only the samples later than
 every earlier sample of their topic are kept: the log's own time line, and what follows it in
 time once the stale block is over. Stale data is not sorted back in: it may be another flight's
-or another boot's.
+or another boot's. A single sample out of line with its neighbours, which are in order (a bit
+flipped in its timestamp: ULog carries no checksum), is left out first, so that a far-future
+timestamp does not take the rest of its topic with it.
 
 The span starts at the later of the file header's timestamp (the logging start) and the first
 non-zero data timestamp: some files record 0 in the header (a v1.17 flight logged from 408.9 s
@@ -31,14 +33,26 @@ def in_time_order(topics: Topics) -> tuple[dict[str, dict[str, np.ndarray]], int
     left_out = 0
     for name, topic in topics.items():
         t = np.asarray(topic["timestamp"], dtype=float)
-        keep = np.ones(len(t), dtype=bool)
-        keep[1:] = t[1:] >= np.maximum.accumulate(t)[:-1]
+        keep = ~_out_of_line(t)
+        running_max = np.maximum.accumulate(np.where(keep, t, -np.inf))
+        keep[1:] &= t[1:] >= running_max[:-1]
         if keep.all():
             kept[name] = dict(topic)
             continue
         left_out += int(np.sum(~keep))
         kept[name] = {field: np.asarray(values)[keep] for field, values in topic.items()}
     return kept, left_out
+
+
+def _out_of_line(t: np.ndarray) -> np.ndarray:
+    """Samples later than the next one while the next one is in order with the one before
+    (or, for the first sample, later than the next): one bad timestamp, not a stale block."""
+    bad = np.zeros(len(t), dtype=bool)
+    if len(t) >= 2:
+        bad[0] = t[0] > t[1]
+    if len(t) >= 3:
+        bad[1:-1] = (t[1:-1] > t[2:]) & (t[2:] >= t[:-2])
+    return bad
 
 
 def data_span_us(topics: Topics, header_us: float) -> tuple[float, float]:
