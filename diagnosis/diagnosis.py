@@ -55,7 +55,7 @@ from diagnosis.thrust_response import (
 )
 from diagnosis.warm_up import LEAD_IN_S
 from flightlog.schema import FlightLog
-from flightlog.ulog import damage_note
+from flightlog.ulog import damage_note, rows_left_out_note
 from flightlog.vehicle_identity import mixed_vehicle_fields
 from vehicle_sim import SimConfig
 from vehicle_sim.effects import EFFECT_CLASSES, BatterySag
@@ -309,6 +309,7 @@ def diagnose(
             f"closed-loop tracking not examined: no held-out row of a whole flight segment ({why})"
         )
     warnings += [note for note in map(damage_note, logs) if note]
+    warnings += [note for note in map(rows_left_out_note, logs) if note]
     mixed = mixed_vehicle_fields(logs)
     if mixed:
         warnings.append(

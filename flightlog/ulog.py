@@ -25,8 +25,10 @@ fields by presence, so every layout below is read:
 - ``vehicle_angular_velocity`` xyz[0..2] (v1.10+), ``battery_status`` voltage_v (all).
 
 Continuous signals are interpolated onto the local-position times, setpoints and states held
-(zero-order). Initial parameters go to ``metadata['px4_params']``, rates per signal to
-``metadata['rates_hz']``, dropped-row counts to ``metadata['dropped_rows']``.
+(zero-order), after each topic's samples older than those before them (older data a damaged
+file holds after its damage) are left out and counted (:mod:`flightlog.ulog_time`). Initial
+parameters go to ``metadata['px4_params']``, rates per signal to ``metadata['rates_hz']``,
+dropped-row counts to ``metadata['dropped_rows']``.
 """
 
 from __future__ import annotations
@@ -41,6 +43,7 @@ import numpy as np
 from flightlog import px4
 from flightlog.schema import FlightLog, FlightLogError, validate_flight_log
 from flightlog.ulog_integrity import ULogDamage, find_damage
+from flightlog.ulog_time import data_span_us, in_time_order
 
 Topics = Mapping[str, Mapping[str, np.ndarray]]
 ULOG_MAGIC = b"ULog\x01\x12\x35"
@@ -79,34 +82,76 @@ def _parse(path: Path):
 
 def damage_note(log: FlightLog) -> str | None:
     """One sentence for a report's headline when ``log`` was read from a truncated or a corrupt
-    ULog (:mod:`flightlog.ulog_integrity`), else None."""
+    ULog (:mod:`flightlog.ulog_integrity`), or had samples out of time order left out
+    (:mod:`flightlog.ulog_time`), else None."""
     name = log.metadata.get("ulog", "the ULog")
     duration = f"{log.metadata.get('duration_s', float('nan')):.1f} s"
+    stale = _out_of_order_clause(int(log.metadata.get("samples_out_of_time_order", 0)))
     cut = log.metadata.get("truncated_at_byte")
     if cut:
         return (
             f"{name} is truncated (last message incomplete at byte {cut[0]} of {cut[1]}: logging "
             f"stopped mid-message, as a crash or power loss leaves it); its complete part, "
-            f"{duration}, was read"
+            f"{duration}, was read{stale}"
         )
     bad = log.metadata.get("corrupt_at_byte")
     if bad:
         return (
             f"{name} is corrupt at byte {bad[0]} of {bad[1]} "
             f"({log.metadata.get('corrupt_header', 'an invalid message header')}: the file was "
-            f"damaged, e.g. by the SD card or the copy, not cut short); {duration} were read and "
-            "messages after the damage may be missing; copy the .ulg again from the vehicle"
+            f"damaged, e.g. by the SD card or the copy, not cut short); {duration} of data were "
+            f"read{stale}; messages after the damage may be missing; copy the .ulg again from "
+            "the vehicle"
         )
+    if stale:
+        return f"{name}{stale}; copy the .ulg again from the vehicle"
     return None
 
 
-def _damage_clause(damage: ULogDamage, duration_s: float) -> str:
+# Why the mapping left rows out (``metadata['dropped_rows']`` keys), for a report's headline.
+LEFT_OUT_WHY = {
+    "estimator_invalid": "with the estimator's position or velocity invalid or dead reckoning",
+    "mode_unknown": "before the first vehicle_status (mode unknown)",
+    "not_multicopter_phase": "outside the multicopter phase",
+    "not_position_controlled": "outside position-controlled modes",
+    "no_velocity_command": "without a velocity command",
+}
+LEFT_OUT_NOTE_FRACTION = 0.1  # of a log's rows: fewer left out go unsaid
+
+
+def rows_left_out_note(log: FlightLog) -> str | None:
+    """One sentence for a report's headline when the mapping left out more than a tenth of a
+    ULog's rows (how many, and why: ``metadata['dropped_rows']``), else None: a flight that
+    lost its position fix for a while is diagnosed on what is left, and says so."""
+    dropped = log.metadata.get("dropped_rows")
+    total = log.metadata.get("rows_in_log")
+    if not isinstance(dropped, Mapping) or not total:
+        return None
+    if sum(dropped.values()) <= LEFT_OUT_NOTE_FRACTION * total:
+        return None
+    why = ", ".join(f"{n} {LEFT_OUT_WHY.get(k, k)}" for k, n in dropped.items() if n)
+    name = log.metadata.get("ulog", "the ULog")
+    return f"{name}: {log.n_rows} of its {total} rows used; left out: {why}"
+
+
+def _out_of_order_clause(samples: int) -> str:
+    """What a damage note adds when ``samples`` samples went back in time and were left out."""
+    if not samples:
+        return ""
+    return (
+        f"; {samples} samples older than the data before them (blocks of older data read "
+        "after damage, e.g. left on the card) were left out"
+    )
+
+
+def _damage_clause(damage: ULogDamage, duration_s: float, out_of_order: int = 0) -> str:
     """What a mapping error on a damaged file adds: where, and how much could be read."""
+    stale = _out_of_order_clause(out_of_order)
     if damage.kind == "truncated":
         where = f"truncated (at byte {damage.at_byte} of {damage.file_bytes})"
-    else:
-        where = f"corrupt (at byte {damage.at_byte} of {damage.file_bytes}: {damage.detail})"
-    return f"the file is {where}: only its first {duration_s:.1f} s could be read"
+        return f"the file is {where}: only its first {duration_s:.1f} s could be read{stale}"
+    where = f"corrupt (at byte {damage.at_byte} of {damage.file_bytes}: {damage.detail})"
+    return f"the file is {where}: {duration_s:.1f} s of data could be read{stale}"
 
 
 def read_ulog(path: str | Path) -> FlightLog:
@@ -136,7 +181,9 @@ def read_ulog(path: str | Path) -> FlightLog:
             f"{path}: not a readable ULog file ({type(exc).__name__}: {exc}); "
             "copy the .ulg again from the vehicle's SD card"
         ) from None
-    topics = {d.name: d.data for d in ulog.data_list if d.multi_id == 0}
+    topics, out_of_order = in_time_order(
+        {d.name: d.data for d in ulog.data_list if d.multi_id == 0}
+    )
     if "vehicle_local_position" not in topics and (damage or ulog.file_corruption):
         what = f"{damage.kind} at byte {damage.at_byte}" if damage else "corrupt"
         raise FlightLogError(
@@ -150,9 +197,13 @@ def read_ulog(path: str | Path) -> FlightLog:
         "firmware": px4.firmware_version(info.get("ver_sw_release")),
         "sys_name": info.get("sys_name"),
         "hardware": info.get("ver_hw"),
-        "duration_s": round((ulog.last_timestamp - ulog.start_timestamp) * 1e-6, 3),
+        "duration_s": round(
+            float(np.diff(data_span_us(topics, ulog.start_timestamp))[0]) * 1e-6, 3
+        ),
         "logger_dropouts": logger_dropouts(ulog),
     }
+    if out_of_order:
+        meta["samples_out_of_time_order"] = out_of_order
     if damage is not None and damage.kind == "truncated":
         meta["truncated_at_byte"] = [damage.at_byte, damage.file_bytes]
     elif damage is not None:
@@ -169,7 +220,8 @@ def read_ulog(path: str | Path) -> FlightLog:
     except FlightLogError as exc:
         if damage is None:
             raise
-        raise FlightLogError(f"{exc}; {_damage_clause(damage, meta['duration_s'])}") from None
+        clause = _damage_clause(damage, meta["duration_s"], out_of_order)
+        raise FlightLogError(f"{exc}; {clause}") from None
     return FlightLog(log.columns, {**log.metadata, **meta}, path)
 
 
@@ -190,9 +242,11 @@ def summarise_ulog(path: str | Path) -> dict[str, object]:
         ulog = _parse(path)
     except Exception as exc:  # pyulog raises several types for corrupt files
         raise FlightLogError(f"{path}: not a readable ULog file ({type(exc).__name__})") from None
-    t0, t1 = ulog.start_timestamp, ulog.last_timestamp
     firmware = px4.firmware_version(ulog.msg_info_dict.get("ver_sw_release"))
-    topics = {d.name: d.data for d in ulog.data_list if d.multi_id == 0}
+    topics, out_of_order = in_time_order(
+        {d.name: d.data for d in ulog.data_list if d.multi_id == 0}
+    )
+    t0, t1 = data_span_us(topics, ulog.start_timestamp)
     params = ulog.initial_parameters
     mav_type = int(params["MAV_TYPE"]) if "MAV_TYPE" in params else None
     span = np.array([t0, t1], dtype=float)
@@ -217,6 +271,7 @@ def summarise_ulog(path: str | Path) -> dict[str, object]:
         "modes": modes,
         "px4_params": {k: float(v) for k, v in params.items()},
         "logger_dropouts": logger_dropouts(ulog),
+        "samples_out_of_time_order": out_of_order,
     }
 
 

@@ -50,7 +50,7 @@ from companion.runner import RunnerConfig
 from flightlog.atomic_output import OutputError, check_writable_file
 from flightlog.reader import read_log, require_distinct, require_modes, require_rates
 from flightlog.schema import FlightLogError
-from flightlog.ulog import damage_note
+from flightlog.ulog import damage_note, rows_left_out_note
 from flightlog.vehicle_identity import mixed_vehicle_fields
 from gp.datasets import ResidualDataset
 from gp.errors import DatasetError, GPInputError, ModelFileError
@@ -307,9 +307,9 @@ def _fit(config: FitGpConfig, written: list[Path]) -> int:
             logs.append(read_log(path))
             require_rates(logs[-1], "fit-gp")
             progress(f"read {path} ({logs[-1].n_rows} rows)")
-            damaged = damage_note(logs[-1])
-            if damaged:
-                print(f"fit-gp: warning: {damaged}", file=sys.stderr)
+            for note in (damage_note(logs[-1]), rows_left_out_note(logs[-1])):
+                if note:
+                    print(f"fit-gp: warning: {note}", file=sys.stderr)
         mixed = mixed_vehicle_fields(logs)
         if mixed:
             print(

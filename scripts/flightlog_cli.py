@@ -18,7 +18,7 @@ from flightlog.flight_log_files import check_csv_log_name
 from flightlog.info import describe_log, describe_unusable_ulog
 from flightlog.reader import read_log
 from flightlog.schema import FlightLogError, sidecar_path, write_flight_log
-from flightlog.ulog import is_ulog, summarise_ulog
+from flightlog.ulog import damage_note, is_ulog, summarise_ulog
 from scripts.one_line_parser import OneLineParser, output_path
 
 EXIT_BAD_INPUT = 2
@@ -45,16 +45,17 @@ def parse_args(argv: list[str] | None) -> FlightlogArgs:
     return FlightlogArgs(args.command, args.log, getattr(args, "out", None))
 
 
-def convert(log_path: Path, out: Path) -> Path:
+def convert(log_path: Path, out: Path) -> tuple[Path, str | None]:
     """Read any log and write it as schema-v1 CSV + sidecar, each atomically (temp, then
-    rename). The output place is checked before writing (OutputError in one line), so a folder
-    or a file in the way leaves nothing behind, not even the sidecar."""
+    rename); the CSV's path and, for a damaged ULog, its :func:`damage_note` (else None). The
+    output place is checked before writing (OutputError in one line), so a folder or a file in
+    the way leaves nothing behind, not even the sidecar."""
     log = read_log(log_path)
     check_not_an_input(out, [log_path])
     check_csv_log_name(out)
     check_writable_file(out)
     check_writable_file(sidecar_path(out))
-    return write_flight_log(out, log)
+    return write_flight_log(out, log), damage_note(log)
 
 
 def _info_lines(path: Path) -> list[str]:
@@ -79,7 +80,9 @@ def main(argv: list[str] | None = None) -> int:
             print("\n".join(_info_lines(args.log)))
         else:
             assert args.out is not None
-            out = convert(args.log, args.out)
+            out, damaged = convert(args.log, args.out)
+            if damaged:
+                print(f"flightlog: warning: {damaged}", file=sys.stderr)
             print(f"wrote {out} and {sidecar_path(out)}", file=sys.stderr)
     except OutputError as exc:
         print(f"flightlog: --out {exc}", file=sys.stderr)

@@ -5,25 +5,38 @@ A command's libraries (NumPy, SciPy, CasADi, Matplotlib, MAVSDK) take a second o
 before ``main`` can catch anything: a Ctrl-C then (a user who sees a typo in the command line
 just entered) was a KeyboardInterrupt traceback through importlib. Here it ends in one line and
 exit 130, as a Ctrl-C later on does; nothing has been done yet.
+
+A reader of the output that stops early (``flightlog info LOG | head``) closes the pipe: the
+next write was a BrokenPipeError traceback. The command ends there quietly, as a program that
+SIGPIPE stops does (exit 141): its reader has what it wanted.
 """
 
 from __future__ import annotations
 
 import importlib
+import os
 import sys
 
 EXIT_INTERRUPTED = 130
+EXIT_BROKEN_PIPE = 128 + 13  # SIGPIPE's number, as the shell reports a process it stopped
 
 
 def run(module: str, prog: str) -> int:
     """Load ``scripts.<module>`` and return its ``main()``'s exit code; a Ctrl-C while it loads
-    is one line naming ``prog`` and exit 130."""
+    is one line naming ``prog`` and exit 130, a closed standard output exit 141."""
     try:
         main = importlib.import_module(f"scripts.{module}").main
     except KeyboardInterrupt:
         print(f"{prog}: stopped by Ctrl-C while starting; nothing done", file=sys.stderr)
         return EXIT_INTERRUPTED
-    return main()
+    try:
+        code = main()
+        sys.stdout.flush()
+    except BrokenPipeError:
+        # What is still buffered would fail again when Python flushes it on exit.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return EXIT_BROKEN_PIPE
+    return code
 
 
 def vehicle_sim() -> int:

@@ -7,7 +7,8 @@ geometry, rotor speed or thrust coefficient: those come from the preset, and the
 from hover thrust x the preset's maximum thrust / g, so the simulated vehicle hovers at the
 log's hover thrust. A multirotor ULog whose flight no command can read (flown in STAB, no
 position estimate) still gives its parameters; the hover thrust is then MPC_THR_HOVER, and the
-config says so.
+config says so. Velocity-loop gains a log records under their names before v1.11 are carried
+over in today's units (:mod:`vehicle_sim.legacy_velocity_gains`).
 """
 
 from __future__ import annotations
@@ -21,8 +22,15 @@ import numpy as np
 
 from flightlog.reader import read_log
 from flightlog.schema import FlightLog, FlightLogError
-from flightlog.ulog import FLY_HINT, is_ulog, parameters_give_a_config, summarise_ulog
+from flightlog.ulog import (
+    FLY_HINT,
+    damage_note,
+    is_ulog,
+    parameters_give_a_config,
+    summarise_ulog,
+)
 from vehicle_sim.config import GRAVITY_MPS2, config_from_mapping, load_sim_config
+from vehicle_sim.legacy_velocity_gains import acceleration_gains
 from vehicle_sim.params import PX4_PARAMS
 
 HOVER_SPEED_MPS = 0.3  # rows slower than this (and not landed) count as hovering
@@ -54,7 +62,8 @@ def config_from_log(log: FlightLog, preset: str = "iris") -> ConfigFromLog:
         )
     vehicle = log.metadata.get("vehicle")
     kind = vehicle.get("type") if isinstance(vehicle, Mapping) else None
-    return _build(log.where, params, hover, hover_how, preset, (), kind)
+    damaged = damage_note(log)
+    return _build(log.where, params, hover, hover_how, preset, (damaged,) if damaged else (), kind)
 
 
 def config_from_log_file(path: str | Path, preset: str = "iris") -> ConfigFromLog:
@@ -107,6 +116,8 @@ def _build(
         unset = f"MPC_THR_HOVER = {hover:g} is PX4's default: it may never have been set for "
         notes = (*notes, unset + "this vehicle, so the mass may be off")
     mass_kg = hover * 4 * v.max_rotor_thrust_n / GRAVITY_MPS2
+    legacy = acceleration_gains(params, hover)
+    params = {**params, **legacy}
     tuned = {n: float(f"{float(params[n]):.7g}") for n in sorted(PX4_PARAMS) if n in params}
     tuned.pop("MPC_THR_HOVER", None)
     clamped = _clamp_to_px4_ranges(tuned)
@@ -116,6 +127,7 @@ def _build(
         f"mass_kg = {mass_kg:.4f}: hover thrust {hover:.3f} ({hover_how}) x the preset's "
         f"maximum thrust {4 * v.max_rotor_thrust_n:.2f} N / g",
         f"{len(tuned)} PX4 parameters: {', '.join(tuned) or 'none'}",
+        *_legacy_note(legacy, hover),
         *clamped,
     ]
     battery = _battery_from_params(params)
@@ -165,6 +177,17 @@ def _build(
 
     config_from_mapping(tomllib.loads(text), preset_name="from_log")  # valid before written
     return ConfigFromLog(text, tuple(from_log), tuple(assumed))
+
+
+def _legacy_note(legacy: Mapping[str, float], hover: float) -> list[str]:
+    """The line saying which velocity-loop gains came from their pre-v1.11 names, if any."""
+    if not legacy:
+        return []
+    gains = ", ".join(f"{name} = {value:.4g}" for name, value in legacy.items())
+    return [
+        f"{gains}: logged as MPC_*_VEL_P/I/D (PX4 before v1.11, normalised thrust per m/s) "
+        f"x g / hover thrust {hover:.3f}"
+    ]
 
 
 def _battery_from_params(params: Mapping[str, float]) -> tuple[float, float, str] | None:

@@ -7,14 +7,16 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 from pyulog import ULog
 
 from flightlog.info import describe_log
 from flightlog.schema import FlightLogError
-from flightlog.ulog import damage_note, read_ulog
+from flightlog.ulog import damage_note, read_ulog, summarise_ulog
 from flightlog.ulog_integrity import find_damage
-from tests.flightlog.ulog_damage import corrupt_copy, hardfault_copy
+from scripts import flightlog_cli, vehicle_sim_cli
+from tests.flightlog.ulog_damage import corrupt_copy, hardfault_copy, stale_copy
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "ulog"
 
@@ -170,3 +172,51 @@ def test_appended_offsets_count_only_with_the_incompat_data_appended_bit(tmp_pat
     assert damage_of(tmp_path, compat_only) is None
     short_flags = message(b"B", bytes(8) + b"\x01" + bytes(7))  # no appended_offsets field
     assert damage_of(tmp_path, HEADER + short_flags + message(b"I", b"\xff" * 30)) is None
+
+
+def test_older_data_read_after_the_damage_is_left_out_not_interpolated(tmp_path) -> None:
+    """A block of older samples after the damage would give the rows before it other times'
+    attitude, thrust and command; the log is its newer half, row for row, and says so."""
+    path, _ = stale_copy(tmp_path)
+    whole, stale = read_ulog(FIXTURES / "quad_posctl_v1_15.ulg"), read_ulog(path)
+    first = int(np.argmin(np.abs(whole.columns["pos_n_m"] - stale.columns["pos_n_m"][0])))
+    rows = slice(first, first + stale.n_rows)
+    assert 300 < stale.n_rows < whole.n_rows - first + 1
+    for name, values in stale.columns.items():
+        if name != "t_s" and values.dtype.kind == "f":
+            np.testing.assert_array_equal(values, whole.columns[name][rows], err_msg=name)
+    assert stale.metadata["samples_out_of_time_order"] > 1000
+    assert stale.metadata["duration_s"] < 0.6 * whole.metadata["duration_s"]
+    note = damage_note(stale)
+    assert note is not None and "\n" not in note
+    assert "samples older than the data before them" in note and "were left out" in note
+    summary = summarise_ulog(path)
+    assert min(summary["rates_hz"].values()) > 0 and summary["duration_s"] < 40.0
+
+
+def test_a_zero_header_timestamp_does_not_stretch_the_log_to_the_boot(tmp_path) -> None:
+    """A log whose file header records 0 (a v1.17 flight logged from 408.9 s after boot read as
+    504 s long) lasts as long as its data."""
+    data = bytearray((FIXTURES / "quad_posctl_v1_15.ulg").read_bytes())
+    data[8:16] = bytes(8)  # the header's timestamp [us]
+    path = tmp_path / "zero_header.ulg"
+    path.write_bytes(bytes(data))
+    whole = read_ulog(FIXTURES / "quad_posctl_v1_15.ulg")
+    zeroed = read_ulog(path)
+    assert abs(zeroed.metadata["duration_s"] - whole.metadata["duration_s"]) < 0.5
+    summary = summarise_ulog(path)
+    assert summary["duration_s"] < 80.0 and summary["modes"][0][1] < 1.0
+
+
+def test_convert_and_config_from_log_of_a_damaged_ulog_say_it_is_damaged(tmp_path, capsys):
+    """diagnose and fit-gp warned of a damaged log; convert and config-from-log wrote their
+    output without a word."""
+    path, offset = corrupt_copy(tmp_path, "type")
+    csv, toml = tmp_path / "damaged.csv", tmp_path / "damaged.toml"
+    assert flightlog_cli.main(["convert", str(path), "--out", str(csv)]) == 0
+    err = capsys.readouterr().err
+    assert f"flightlog: warning: damaged.ulg is corrupt at byte {offset}" in err
+    assert vehicle_sim_cli.main(["config-from-log", str(path), "--out", str(toml)]) == 0
+    err = capsys.readouterr().err
+    assert f"from the log: damaged.ulg is corrupt at byte {offset}" in err
+    assert f"#   damaged.ulg is corrupt at byte {offset}" in toml.read_text()

@@ -55,3 +55,22 @@ def hardfault_copy(tmp_path: Path) -> tuple[Path, int]:
     path = tmp_path / "hardfault.ulg"
     path.write_bytes(bytes(data))
     return path, cut_message[0]
+
+
+SYNC_MAGIC = bytes([0x2F, 0x73, 0x13, 0x20, 0x25, 0x0C, 0xBB, 0x12])
+
+
+def stale_copy(tmp_path: Path) -> tuple[Path, int]:
+    """quad_posctl_v1_15.ulg as a failing SD card can leave it (a real v1.17 log went from
+    5519.8 s back to 5402.6 s after its damage): the second half of its data, then a message of
+    an unknown type, a sync message (pyulog resynchronises on it) and the first half, older
+    data read as if it followed; the file and the offset where the second half starts."""
+    whole = POSCTL.read_bytes()
+    data_messages = [h for h in message_headers(whole) if h[2] == "D"]
+    first = data_messages[0][0]
+    half = next(h[0] for h in data_messages if h[0] > (first + len(whole)) // 2)
+    damaged = (4).to_bytes(2, "little") + b"\x00" + bytes(4)
+    sync = len(SYNC_MAGIC).to_bytes(2, "little") + b"S" + SYNC_MAGIC
+    path = tmp_path / "stale.ulg"
+    path.write_bytes(whole[:first] + whole[half:] + damaged + sync + whole[first:half])
+    return path, half

@@ -103,3 +103,11 @@ def test_a_model_from_a_10_hz_ulog_says_the_companion_rate_it_flies_at(tmp_path,
         "(the residual is measured over the logs' 0.0992 s steps): fly it with companion "
         "--rate-hz 10.1, or fit logs flown at 50 Hz"
     ) in err
+
+
+def test_the_rows_the_mapping_left_out_are_warned_of(tmp_path, capsys):
+    """PX4 SITL's AUTO flight: 196 of its 311 rows have no valid position estimate or no
+    velocity command; fit-gp named only the rows it used, as diagnose did."""
+    assert fit_gp_cli.main([str(AUTO), "--out", str(tmp_path / "m"), *FAST]) == 0
+    err = capsys.readouterr().err
+    assert "fit-gp: warning: quad_sitl_v1_15_auto.ulg: 115 of its 311 rows used; left out:" in err

@@ -3,6 +3,7 @@ the rest assumed and listed; bad logs one line, exit 2, nothing written."""
 
 from __future__ import annotations
 
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -11,7 +12,7 @@ import pytest
 from flightlog.reader import read_log
 from scripts import vehicle_sim_cli
 from vehicle_sim import SimConfigError, Simulator, load_sim_config
-from vehicle_sim.config import config_from_mapping
+from vehicle_sim.config import GRAVITY_MPS2, config_from_mapping
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "ulog"
 AUTO = FIXTURES / "quad_sitl_v1_15_auto.ulg"
@@ -207,3 +208,21 @@ def test_a_config_from_parameters_needs_a_multirotor_and_its_hover_thrust():
     assert parameters_give_a_config({"mav_type": 2, "px4_params": hover})
     assert not parameters_give_a_config({"mav_type": 2, "px4_params": {"MAV_TYPE": 2.0}})
     assert not parameters_give_a_config({"mav_type": 1, "px4_params": hover})  # fixed wing
+
+
+def test_velocity_gains_logged_under_their_pre_v1_11_names_are_carried_over(tmp_path, capsys):
+    """The real v1.9 flight logs MPC_XY_VEL_P 0.12 and MPC_Z_VEL_P 0.25 (normalised thrust per
+    m/s, PX4's defaults then 0.09 and 0.2); its config said 'assumed: PX4 defaults' for the
+    MPC_*_VEL_*_ACC gains and flew PX4's current default loop instead of the vehicle's."""
+    log, out = FIXTURES / "quad_mission_rtl_v1_9_esc.ulg", tmp_path / "v19.toml"
+    assert vehicle_sim_cli.main(["config-from-log", str(log), "--out", str(out)]) == 0
+    err = capsys.readouterr().err
+    params = tomllib.loads(out.read_text())["px4_params"]
+    scale = GRAVITY_MPS2 / 0.5  # its hover thrust: MPC_THR_HOVER, not measured (8 Hz log)
+    assert params["MPC_XY_VEL_P_ACC"] == pytest.approx(0.12 * scale, rel=1e-6)
+    assert params["MPC_Z_VEL_P_ACC"] == pytest.approx(0.25 * scale, rel=1e-6)
+    assert params["MPC_XY_VEL_I_ACC"] == pytest.approx(0.05 * scale, rel=1e-6)
+    assumed = next(line for line in err.splitlines() if line.startswith("assumed: PX4 defaults"))
+    assert "VEL_P_ACC" not in assumed and "VEL_I_ACC" not in assumed
+    assert "logged as MPC_*_VEL_P/I/D (PX4 before v1.11" in err
+    assert dict(load_sim_config(out).px4_params)["MPC_XY_VEL_P_ACC"] == params["MPC_XY_VEL_P_ACC"]

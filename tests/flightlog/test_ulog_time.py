@@ -1,0 +1,35 @@
+"""A topic's samples out of time order: a stale block after damage is left out from where
+time goes back until it is over; one bad timestamp is left out alone."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from flightlog.ulog_time import data_span_us, in_time_order
+
+
+def topic(times_s: list[float]) -> dict[str, np.ndarray]:
+    t = np.asarray(times_s) * 1e6
+    return {"timestamp": t, "x": np.arange(len(t), dtype=float)}
+
+
+def test_a_stale_block_is_left_out_until_time_passes_where_it_went_back() -> None:
+    kept, left_out = in_time_order({"a": topic([10, 11, 12, 5, 6, 7, 13, 14])})
+    np.testing.assert_array_equal(kept["a"]["x"], [0, 1, 2, 6, 7])
+    assert left_out == 3
+
+
+def test_one_far_future_timestamp_is_left_out_alone_not_the_rest_of_its_topic() -> None:
+    for times, bad in (([10, 11, 9e6, 12, 13], 2), ([9e6, 10, 11, 12], 0)):
+        kept, left_out = in_time_order({"a": topic(times)})
+        assert left_out == 1 and bad not in kept["a"]["x"], (times, kept)
+        assert len(kept["a"]["x"]) == len(times) - 1
+
+
+def test_a_sound_topic_is_kept_whole_and_the_span_starts_at_the_data() -> None:
+    sound = {"a": topic([0, 408.9, 409.0, 504.1]), "b": topic([409.5, 410.0])}
+    kept, left_out = in_time_order(sound)
+    assert left_out == 0 and len(kept["a"]["x"]) == 4
+    start, end = data_span_us(kept, header_us=0.0)  # a header that recorded 0
+    assert (start, end) == (408.9e6, 504.1e6)
+    assert data_span_us(kept, header_us=409.2e6)[0] == 409.2e6  # the logging start
