@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import threading
 import time
 from collections import deque
 from collections.abc import Callable, Mapping, Sequence
@@ -111,6 +112,7 @@ class MavsdkLink:
         self._yaw_target_rad: float | None = None
         self._yaw_updated_s = 0.0
         self._status_texts: deque[StatusText] = deque(maxlen=STATUS_TEXTS_KEPT)
+        self._status_texts_lock = threading.Lock()  # MAVSDK's callback thread appends
 
     @property
     def name(self) -> str:
@@ -246,11 +248,13 @@ class MavsdkLink:
         return _call(self._require(self._action).land)
 
     def status_texts(self) -> Sequence[StatusText]:
-        return tuple(self._status_texts)
+        with self._status_texts_lock:
+            return tuple(self._status_texts)
 
     def _on_status_text(self, status: object, _user_data: object) -> None:
-        """MAVSDK's callback (its own thread; a deque's append is atomic)."""
-        self._status_texts.append(StatusText(self._clock.now_s(), str(status.text)))
+        """MAVSDK's callback, on its own thread."""
+        with self._status_texts_lock:
+            self._status_texts.append(StatusText(self._clock.now_s(), str(status.text)))
 
     def metadata(self) -> Mapping[str, object]:
         return {"link": self.name, "url": self._url}
