@@ -82,10 +82,12 @@ def require_a_rover(link: Link) -> None:
 
 def pose_of(link: Link) -> np.ndarray:
     """(x_m, y_m, heading_rad) in the path frame from the Link's NED state."""
-    return _pose(link.read_state())
+    return state_pose(link.read_state())
 
 
-def _pose(st: LinkState) -> np.ndarray:
+def state_pose(st: LinkState) -> np.ndarray:
+    """(x_m, y_m, heading_rad) in the path frame of the NED state ``st``: a drive steers by
+    the very state it checked (a second read may be newer, and not finite)."""
     return np.array([st.pos_ned_m[0], -st.pos_ned_m[1], -st.yaw_rad])
 
 
@@ -143,7 +145,7 @@ def drive_path(
             if not st.is_finite():
                 stopped_for = f"the rover's pose is not finite at t={st.t_s:.1f} s"
                 break
-            pose = _pose(st)
+            pose = state_pose(st)
             pose_prev = pose if pose_prev is None else pose_prev
             fix = path.localise(*pose, hint=hint, window=window)
             on_path = path.localise_on_path(*pose, hint=hint, window=window)

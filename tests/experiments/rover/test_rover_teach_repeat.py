@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from companion.inprocess_rover_link import InProcessRoverLink
-from companion.link import CommandOutcome, LinkError
+from companion.link import CommandOutcome, LinkError, VelocityCommand
 from companion.pymavlink_link import PymavlinkLink
 from companion.runner import Terminated
 from experiments.rover import learner
@@ -605,4 +605,34 @@ def test_a_drive_back_that_ends_away_from_the_start_drives_no_trial() -> None:
                       drive_back=DriveBack("reverse", 0.5))  # fmt: skip
     assert out.status == "not_at_start" and out.trials == [], out.detail
     assert "driving back ended 2.1 m from the path's start" in out.detail
+    assert link.read_state().mode == "HOLD"
+
+
+@pytest.mark.parametrize("glitch", [31, 32])
+def test_a_drive_back_steers_by_the_very_state_it_checked(glitch: int) -> None:
+    """One state read of the drive back is not finite (a position estimate that glitches for
+    one message): whichever read it is, no command is computed from it. The pose was read a
+    second time after the finiteness check, so a glitch on that read was steered by: a NaN
+    command streamed, or reverse's nearest vertex stuck at the start for the whole drive."""
+
+    class OneGlitch(InProcessRoverLink):
+        reads = 0
+        sent: list[VelocityCommand] = []
+
+        def read_state(self):
+            st = super().read_state()
+            self.reads += 1
+            return replace(st, pos_ned_m=np.full(3, np.nan)) if self.reads == glitch else st
+
+        def send_velocity(self, command) -> None:
+            self.sent.append(command)
+            super().send_velocity(command)
+
+    path = _open_ackermann_path()
+    link = OneGlitch(RoverSim(rover_preset("husky_50kg"), pose=path.pose(len(path) - 1)))
+    link.sent = []
+    link.connect(1.0)
+    left_for, stopped_for = reverse_along(link, path, 0.5, timeout_s=60.0)
+    assert left_for == "" and stopped_for.startswith("the rover's pose is not finite")
+    assert all(np.all(np.isfinite([*c.vel_ned_mps, c.yaw_rate_radps])) for c in link.sent)
     assert link.read_state().mode == "HOLD"
