@@ -297,14 +297,17 @@ def repeat(args: argparse.Namespace) -> int:
     from experiments.rover.link_drive import NotARover, require_a_rover
     from experiments.rover.repeat import RepeatOutcome, Trial, repeat_path
     from experiments.rover.repeat_report import figure, history_row, summary, trial_line
-    from experiments.rover.scenarios import tuning_for
+    from experiments.rover.scenarios import NMPC_TUNING, tuning_for
 
     path, experience, scheduler, gp, memory, schedule = _repeat_inputs(args)
     link = open_link(args)
+    tuning = args.tuning if args.tuning in NMPC_TUNING else None
     _say(
         f"{args.path}: {len(path)} vertices, {path.length_m:.1f} m; {experience}: "
         + (f"{len(gp)} experiences from {_trials(memory.trials_done)}" if memory.trials_done
            else "no experience yet")
+        + (f"; NMPC tuned for {tuning}" if tuning
+           else "; NMPC on the planner's defaults (an Ackermann rover wants --tuning)")
     )  # fmt: skip
     driven: list[Trial] = []
     history = [*memory.history]
@@ -326,7 +329,7 @@ def repeat(args: argparse.Namespace) -> int:
         require_a_rover(link)
         outcome = repeat_path(
             link, path, args.trials, gp, schedule, scheduler, memory.trials_done + 1, back,
-            trial_done, _say, tuning_for(args.tuning or ""),
+            trial_done, _say, tuning_for(tuning or ""),
         )  # fmt: skip
         code = {"completed": EXIT_OK, "handed_over": EXIT_HANDED_OVER}.get(
             outcome.status, EXIT_FAILED
@@ -352,6 +355,7 @@ def repeat(args: argparse.Namespace) -> int:
         "experience": str(experience), "trials_before": memory.trials_done,
         "trials_after": memory.trials_done + len(driven), "experiences_after": len(gp),
         "speed_mps": None if scheduler else float(schedule[0]), "scheduler": args.scheduler,
+        "nmpc_tuning": tuning,
     }  # fmt: skip
     if outcome.trials:
         try:

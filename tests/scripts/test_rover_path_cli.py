@@ -139,6 +139,27 @@ def test_a_speed_above_the_rovers_is_reported_as_driven_not_as_asked(
     assert f"at {driven:.2f} m/s mean (5.00 m/s scheduled)" in line, line
 
 
+@pytest.mark.parametrize(
+    ("options", "tuning", "said"),
+    [
+        (["--tuning", "roc6_150kg"], "roc6_150kg", "NMPC tuned for roc6_150kg"),
+        (["--vehicle", "husky_50kg"], "husky_50kg", "NMPC tuned for husky_50kg"),
+    ],
+)
+def test_repeat_says_and_records_the_nmpc_tuning_it_drove_with(
+    tmp_path: Path, files: dict[str, Path], capsys, options, tuning, said
+) -> None:
+    """A run's weights decide how it tracks (the 600 kg rover: 5 mm or 0.2 m off), so its
+    first line and repeat.json name them; neither did, and two runs' figures could not be
+    told apart by what drove them."""
+    rep = tmp_path / "rep"
+    argv = ["repeat", "--link", "inprocess", "--path", str(files["open"]), "--trials", "1",
+            "--experience", str(tmp_path / "e.npz"), "--out", str(rep), *options]  # fmt: skip
+    assert main(argv) == 0
+    assert said in capsys.readouterr().err.splitlines()[0]
+    assert _json(rep)["nmpc_tuning"] == tuning
+
+
 @pytest.mark.slow
 def test_teach_and_repeat_in_process_go_on_learning_across_runs(tmp_path: Path, capsys) -> None:
     path, exp, rep = tmp_path / "loop.csv", tmp_path / "loop.npz", tmp_path / "rep"
