@@ -3,7 +3,6 @@ rate into a yaw target; that target must not run away from a vehicle that turns 
 commanded (a rover at its turn-rate limit), or the heading loop takes the short way round it
 and the vehicle turns the other way. A rover is sent its yaw rate itself (body velocity)."""
 
-import socket
 import time
 
 import numpy as np
@@ -16,21 +15,16 @@ from companion.mavsdk_link import (
     MavsdkLink,
     next_yaw_target_rad,
 )
+from tests.free_port import free_udp_port
 from vehicle_sim.rover import RoverSim, rover_preset
 from vehicle_sim.rover.mavlink_rover import RoverMavlinkEndpoint
-
-
-def _free_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 @pytest.mark.slow
 def test_a_yaw_rate_above_what_the_rover_turns_turns_it_one_way_only() -> None:
     preset = rover_preset("husky_50kg")  # turns in place at up to 1.5 rad/s
     command_radps, turn_s = 2.0 * preset.max_yaw_rate_radps, 4.0
-    port = _free_port()
+    port = free_udp_port()
     sim = RoverSim(preset, seed=5)
     endpoint = RoverMavlinkEndpoint(sim, port, setpoint_timeout_s=2.0, mode="udpout")
     endpoint.start()
@@ -75,7 +69,7 @@ def test_the_yaw_target_stays_near_a_vehicle_that_does_not_turn_and_follows_the_
 def test_a_rover_is_sent_its_yaw_rate_not_a_yaw_target() -> None:
     """At once the rover's setpoint is the commanded forward speed and turn rate (NED yaw
     rate 0.3 rad/s clockwise: -0.3 counter-clockwise), not a heading loop's catching up."""
-    port = _free_port()
+    port = free_udp_port()
     sim = RoverSim(rover_preset("husky_50kg"), seed=6)
     endpoint = RoverMavlinkEndpoint(sim, port, setpoint_timeout_s=2.0, mode="udpout")
     endpoint.start()

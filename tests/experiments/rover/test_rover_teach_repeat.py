@@ -3,7 +3,6 @@ repeating a loop with learning, and the refusals (too little motion, NaN positio
 path's experience, damaged files)."""
 
 import math
-import socket
 import threading
 import time
 from dataclasses import replace
@@ -29,6 +28,7 @@ from experiments.rover.teach import HandedOver, TeachError, record_teach
 from planners.rover.path import TaughtPath
 from planners.rover.path_file import PathFileError, path_csv_text, read_path_file
 from planners.rover.speed_scheduler import TABLE_I, initial_schedule
+from tests.free_port import free_udp_port
 from vehicle_sim.rover import RoverSim, rover_preset
 from vehicle_sim.rover.mavlink_rover import RoverMavlinkEndpoint
 
@@ -349,12 +349,6 @@ def test_a_pilot_who_takes_over_during_the_drive_back_ends_the_run_as_handed_ove
     assert link.after == 0
 
 
-def _free_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 def _pilot(endpoint: RoverMavlinkEndpoint, legs: list[tuple[float, float, float]]) -> None:
     """A pilot in MANUAL: arm, drive (duration_s, speed, yaw rate) legs, disarm."""
     time.sleep(1.0)
@@ -369,7 +363,7 @@ def _pilot(endpoint: RoverMavlinkEndpoint, legs: list[tuple[float, float, float]
 def test_a_pilot_driven_teach_is_recorded_until_the_rover_disarms() -> None:
     """Nobody commands the rover over the Link: a pilot drives it in MANUAL from arming to
     disarming, and the teach pass records that drive."""
-    port = _free_port()
+    port = free_udp_port()
     endpoint = RoverMavlinkEndpoint(RoverSim(rover_preset("husky_50kg")), port, mode="udpout")
     endpoint.start()
     pilot = threading.Thread(
@@ -389,7 +383,7 @@ def test_a_pilot_driven_teach_is_recorded_until_the_rover_disarms() -> None:
 
 @pytest.mark.slow
 def test_a_teach_pass_whose_position_turns_nan_is_refused() -> None:
-    port = _free_port()
+    port = free_udp_port()
     sim = RoverSim(rover_preset("husky_50kg"))
     endpoint = RoverMavlinkEndpoint(sim, port, mode="udpout")
     endpoint.start()
