@@ -95,7 +95,10 @@ def airborne_runs(log: FlightLog) -> list[tuple[int, int]]:
 
 
 def windows(logs: Sequence[FlightLog], window_s: float = 2.0) -> list[Window]:
-    """Consecutive windows of ``window_s`` [s] over the airborne runs of every log."""
+    """Consecutive windows of ``window_s`` [s] over the airborne runs of every log (ValueError
+    unless ``window_s`` is a finite number > 0)."""
+    if not (math.isfinite(window_s) and window_s > 0.0):
+        raise ValueError(f"replay window {window_s!r} s: must be a finite number of seconds > 0")
     out = []
     for i, log in enumerate(logs):
         t = log["t_s"]
