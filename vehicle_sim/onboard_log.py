@@ -13,8 +13,9 @@ from: when a new setpoint was received (the step is the first to fly it; PX4's v
 controller likewise acts on a setpoint at a vehicle_local_position update, which is a ULog
 row), and otherwise once per logging period. Rows fall on the endpoint's steps, so their
 spacing jitters by up to one step, and a setpoint stream faster than the logging rate is
-logged at up to twice the rate (a setpoint that arrives sooner than half a period after the
-last one logged waits for the next row). Given a
+logged at up to twice the rate: a setpoint that arrives sooner than half a period after the
+last one logged gets its row at the first step half a period after that one (it has flown
+since it arrived; a newer one arriving meanwhile takes the row). Given a
 ``stream_path``, every row is also appended to the file at once (flightlog.live_log), as PX4
 writes its log while it flies: a killed simulator leaves every row logged up to then.
 """
