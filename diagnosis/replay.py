@@ -55,7 +55,10 @@ class ReplayResult:
 
     Attributes:
         t_s: (m,) log time of each compared row [s].
-        sim_vel_ned_mps, meas_vel_ned_mps: (m, 3) simulated and measured velocity.
+        sim_vel_ned_mps, meas_vel_ned_mps: (m, 3) simulated and measured velocity NED
+            [m/s]; the simulated one with its run's nuisance added (what an error in the run's
+            start integral and in each anchor's measured velocity explain,
+            :mod:`.window_nuisance`), so their difference is what the config leaves.
         window: (m,) index of the window each row belongs to.
     """
 
