@@ -302,6 +302,7 @@ def repeat(args: argparse.Namespace) -> int:
     path, experience, scheduler, gp, memory, schedule = _repeat_inputs(args)
     link = open_link(args)
     tuning = args.tuning if args.tuning in NMPC_TUNING else None
+    rover_tuning = tuning_for(tuning or "")
     _say(
         f"{args.path}: {len(path)} vertices, {path.length_m:.1f} m; {experience}: "
         + (f"{len(gp)} experiences from {_trials(memory.trials_done)}" if memory.trials_done
@@ -329,7 +330,7 @@ def repeat(args: argparse.Namespace) -> int:
         require_a_rover(link)
         outcome = repeat_path(
             link, path, args.trials, gp, schedule, scheduler, memory.trials_done + 1, back,
-            trial_done, _say, tuning_for(tuning or ""),
+            trial_done, _say, rover_tuning.nmpc, rover_tuning.feedforward,
         )  # fmt: skip
         code = {"completed": EXIT_OK, "handed_over": EXIT_HANDED_OVER}.get(
             outcome.status, EXIT_FAILED
