@@ -4,7 +4,7 @@
                      [--drive 3:0,4.7:0.67 --drive-speed 0.5] [--spacing 0.25]
     rover-path repeat --path PATH.csv [--experience EXP.npz] [--trials 3]
                       [--speed 0.5 | --scheduler experiment_2] [--drive-back [turn|reverse]]
-                      [--out DIR]
+                      [--tuning husky_50kg|roc6_150kg|dmrv_600kg] [--out DIR]
 
 [Ostafew16]'s teach and repeat with learning, for a PX4 rover (or `vehicle-sim --vehicle
 husky_50kg`) over MAVLink, as the companion reaches it (--link pymavlink or mavsdk, --url as
@@ -16,7 +16,8 @@ from arming until it disarms, --max-distance is driven, --timeout passes or Ctrl
 (curvature > 0 turns left). Writes the path (CSV ``x_m,y_m``: metres north and west of the
 local origin, one row per vertex --spacing apart), atomically.
 
-repeat: drives the path --trials times in OFFBOARD with the LB-NMPC, learning from trial to
+repeat: drives the path --trials times in OFFBOARD with the LB-NMPC (tuned as [Ostafew16]'s
+experiment on the rover --tuning names; in process --vehicle's), learning from trial to
 trial in experience bins kept in --experience (npz, written after each trial, read at the
 start: the next run goes on learning where this one stopped). One line per trial on stdout;
 repeat.json and repeat.png (errors and travel time per trial) in --out at the end. Each trial
