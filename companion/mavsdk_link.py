@@ -84,6 +84,16 @@ def next_yaw_target_rad(
     return yaw_rad + min(max(lead_rad, lo_rad), hi_rad)
 
 
+def body_velocity(vn_mps: float, ve_mps: float, yaw_rad: float) -> tuple[float, float]:
+    """The horizontal NED velocity (north, east) [m/s] as (forward, right) [m/s] of a vehicle
+    heading ``yaw_rad`` [rad]; a zero velocity is zero whatever the heading, so a stop is sent
+    as a stop also when the attitude is not finite (0 * NaN would make it NaN)."""
+    if vn_mps == 0.0 and ve_mps == 0.0:
+        return 0.0, 0.0
+    c, s = math.cos(yaw_rad), math.sin(yaw_rad)
+    return vn_mps * c + ve_mps * s, -vn_mps * s + ve_mps * c
+
+
 class MavsdkLink:
     """A Link to a PX4-like autopilot through MAVSDK.
 
@@ -195,11 +205,9 @@ class MavsdkLink:
         vn, ve, vd = command.vel_ned_mps
         try:
             if state.vehicle_kind == "rover":  # PX4 rover offboard: forward speed + yaw rate
-                c, s = math.cos(state.yaw_rad), math.sin(state.yaw_rad)
+                forward, right = body_velocity(vn, ve, state.yaw_rad)
                 yaw_rate_dps = math.degrees(command.yaw_rate_radps)
-                offboard.set_velocity_body(
-                    VelocityBodyYawspeed(vn * c + ve * s, -vn * s + ve * c, vd, yaw_rate_dps)
-                )
+                offboard.set_velocity_body(VelocityBodyYawspeed(forward, right, vd, yaw_rate_dps))
             else:
                 yaw_deg = math.degrees(math.remainder(self._yaw_target_rad, 2.0 * math.pi))
                 offboard.set_velocity_ned(VelocityNedYaw(vn, ve, vd, yaw_deg))

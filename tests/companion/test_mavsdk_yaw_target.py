@@ -3,6 +3,7 @@ rate into a yaw target; that target must not run away from a vehicle that turns 
 commanded (a rover at its turn-rate limit), or the heading loop takes the short way round it
 and the vehicle turns the other way. A rover is sent its yaw rate itself (body velocity)."""
 
+import math
 import time
 
 import numpy as np
@@ -13,6 +14,7 @@ from companion.mavsdk_link import (
     MAX_YAW_LEAD_RAD,
     YAW_HOLD_RAD,
     MavsdkLink,
+    body_velocity,
     next_yaw_target_rad,
 )
 from tests.free_port import free_udp_port
@@ -90,3 +92,11 @@ def test_a_rover_is_sent_its_yaw_rate_not_a_yaw_target() -> None:
         endpoint.close()
     assert yaw_rate_radps == pytest.approx(-0.3, abs=1e-3)
     assert speed_mps == pytest.approx(0.4, abs=0.01)
+
+
+def test_a_stop_is_a_stop_whatever_the_heading() -> None:
+    """The rover's body velocity: north at heading 90 deg is to its left; a zero velocity stays
+    zero when the attitude is not finite (an estimator reset): the stop a drive sends on a
+    non-finite state went out as a NaN forward speed, which the rover refuses, driving on."""
+    assert body_velocity(1.0, 0.0, math.pi / 2) == pytest.approx((0.0, -1.0), abs=1e-12)
+    assert body_velocity(0.0, 0.0, math.nan) == (0.0, 0.0)
