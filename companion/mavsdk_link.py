@@ -76,7 +76,10 @@ def next_yaw_target_rad(
 ) -> float:
     """The yaw target [rad] ``dt_s`` [s] on at ``yaw_rate_radps`` [rad/s], kept within
     ``YAW_LEAD_S`` of that rate (at most ``MAX_YAW_LEAD_RAD``) ahead of the vehicle's
-    ``yaw_rad`` on the side it is to turn to, and ``YAW_HOLD_RAD`` on either side."""
+    ``yaw_rad`` on the side it is to turn to, and ``YAW_HOLD_RAD`` on either side. A target
+    that is not finite (made of a non-finite attitude earlier) starts again at ``yaw_rad``."""
+    if not math.isfinite(target_rad):
+        return yaw_rad
     lead_rad = math.remainder(target_rad + yaw_rate_radps * dt_s - yaw_rad, 2.0 * math.pi)
     reach_rad = yaw_rate_radps * YAW_LEAD_S
     lo_rad = max(min(0.0, reach_rad) - YAW_HOLD_RAD, -MAX_YAW_LEAD_RAD)

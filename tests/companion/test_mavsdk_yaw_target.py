@@ -100,3 +100,12 @@ def test_a_stop_is_a_stop_whatever_the_heading() -> None:
     non-finite state went out as a NaN forward speed, which the rover refuses, driving on."""
     assert body_velocity(1.0, 0.0, math.pi / 2) == pytest.approx((0.0, -1.0), abs=1e-12)
     assert body_velocity(0.0, 0.0, math.nan) == (0.0, 0.0)
+
+
+def test_a_yaw_target_made_of_a_nan_attitude_starts_again_at_the_heading() -> None:
+    """One non-finite attitude (an estimator reset) made the target NaN, and every later target
+    was made from it: a multicopter was sent a NaN yaw for the rest of the flight."""
+    target = next_yaw_target_rad(0.0, math.nan, 0.5, 0.1)
+    assert math.isnan(target)
+    assert next_yaw_target_rad(target, 0.3, 0.5, 0.1) == 0.3
+    assert next_yaw_target_rad(0.3, 0.3, 0.5, 0.1) == pytest.approx(0.35)
