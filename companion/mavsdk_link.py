@@ -80,12 +80,25 @@ def next_yaw_target_rad(
 ) -> float:
     """The yaw target [rad] ``dt_s`` [s] on at ``yaw_rate_radps`` [rad/s], kept within
     ``YAW_LEAD_S`` of that rate (at most ``MAX_YAW_LEAD_RAD``) ahead of the vehicle's
-    ``yaw_rad`` on the side it is to turn to, and ``YAW_HOLD_RAD`` on either side."""
+    ``yaw_rad`` on the side it is to turn to, and ``YAW_HOLD_RAD`` on either side. A target
+    that is not finite (made of a non-finite attitude earlier) starts again at ``yaw_rad``."""
+    if not math.isfinite(target_rad):
+        return yaw_rad
     lead_rad = math.remainder(target_rad + yaw_rate_radps * dt_s - yaw_rad, 2.0 * math.pi)
     reach_rad = yaw_rate_radps * YAW_LEAD_S
     lo_rad = max(min(0.0, reach_rad) - YAW_HOLD_RAD, -MAX_YAW_LEAD_RAD)
     hi_rad = min(max(0.0, reach_rad) + YAW_HOLD_RAD, MAX_YAW_LEAD_RAD)
     return yaw_rad + min(max(lead_rad, lo_rad), hi_rad)
+
+
+def body_velocity(vn_mps: float, ve_mps: float, yaw_rad: float) -> tuple[float, float]:
+    """The horizontal NED velocity (north, east) [m/s] as (forward, right) [m/s] of a vehicle
+    heading ``yaw_rad`` [rad]; a zero velocity is zero whatever the heading, so a stop is sent
+    as a stop also when the attitude is not finite (0 * NaN would make it NaN)."""
+    if vn_mps == 0.0 and ve_mps == 0.0:
+        return 0.0, 0.0
+    c, s = math.cos(yaw_rad), math.sin(yaw_rad)
+    return vn_mps * c + ve_mps * s, -vn_mps * s + ve_mps * c
 
 
 class MavsdkLink:
@@ -202,11 +215,9 @@ class MavsdkLink:
         vn, ve, vd = command.vel_ned_mps
         try:
             if state.vehicle_kind == "rover":  # PX4 rover offboard: forward speed + yaw rate
-                c, s = math.cos(state.yaw_rad), math.sin(state.yaw_rad)
+                forward, right = body_velocity(vn, ve, state.yaw_rad)
                 yaw_rate_dps = math.degrees(command.yaw_rate_radps)
-                offboard.set_velocity_body(
-                    VelocityBodyYawspeed(vn * c + ve * s, -vn * s + ve * c, vd, yaw_rate_dps)
-                )
+                offboard.set_velocity_body(VelocityBodyYawspeed(forward, right, vd, yaw_rate_dps))
             else:
                 yaw_deg = math.degrees(math.remainder(self._yaw_target_rad, 2.0 * math.pi))
                 offboard.set_velocity_ned(VelocityNedYaw(vn, ve, vd, yaw_deg))

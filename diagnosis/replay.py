@@ -55,7 +55,10 @@ class ReplayResult:
 
     Attributes:
         t_s: (m,) log time of each compared row [s].
-        sim_vel_ned_mps, meas_vel_ned_mps: (m, 3) simulated and measured velocity.
+        sim_vel_ned_mps, meas_vel_ned_mps: (m, 3) simulated and measured velocity NED
+            [m/s]; the simulated one with its run's nuisance added (what an error in the run's
+            start integral and in each anchor's measured velocity explain,
+            :mod:`.window_nuisance`), so their difference is what the config leaves.
         window: (m,) index of the window each row belongs to.
     """
 
@@ -95,7 +98,10 @@ def airborne_runs(log: FlightLog) -> list[tuple[int, int]]:
 
 
 def windows(logs: Sequence[FlightLog], window_s: float = 2.0) -> list[Window]:
-    """Consecutive windows of ``window_s`` [s] over the airborne runs of every log."""
+    """Consecutive windows of ``window_s`` [s] over the airborne runs of every log (ValueError
+    unless ``window_s`` is a finite number > 0)."""
+    if not (math.isfinite(window_s) and window_s > 0.0):
+        raise ValueError(f"replay window {window_s!r} s: must be a finite number of seconds > 0")
     out = []
     for i, log in enumerate(logs):
         t = log["t_s"]

@@ -24,6 +24,7 @@ for the true 4); BENCHMARKS.md has the counts.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from functools import lru_cache
 
@@ -32,21 +33,22 @@ import numpy as np
 from diagnosis import sim_anchor
 from vehicle_sim import AnchorState, SimConfig, VelocitySetpoint
 
-HORIZON_S = 2.5  # a window's last compared row: within 2 s of its anchor plus one row gap
+HORIZON_S = 2.5  # a 2 s window's last compared row: within 2 s of its anchor plus a row gap
 GRID_S = 0.02  # the responses' time step (interpolated linearly between; rows 20-40 ms apart)
+_HORIZON_STEPS = int(round(HORIZON_S / GRID_S))
 _STEP_MPS2 = 0.1  # integral perturbation of the finite differences [m/s^2]
 _STEP_MPS = 0.1  # start-velocity perturbation of the finite differences [m/s]
 _HOVER = VelocitySetpoint((0.0, 0.0, 0.0))
 
 
 @lru_cache(maxsize=sim_anchor.TEMPLATES_KEPT)
-def responses(config: SimConfig) -> np.ndarray:
-    """(k, 3, 6) the velocity NED [m/s] at times ``GRID_S * i`` after the start per unit of
-    each nuisance: the velocity-loop integral offset NED [m/s^2] (columns 0-2) and the start
-    velocity error NED [m/s] (3-5); by finite differences about hover, the setpoint streamed."""
+def responses(config: SimConfig, steps: int = _HORIZON_STEPS) -> np.ndarray:
+    """(steps + 1, 3, 6) the velocity NED [m/s] at times ``GRID_S * i`` after the start per
+    unit of each nuisance: the velocity-loop integral offset NED [m/s^2] (columns 0-2) and the
+    start velocity error NED [m/s] (3-5); by finite differences about hover, the setpoint
+    streamed. A longer flight's first rows are a shorter one's (the flights are the same)."""
     template = sim_anchor.hovering_template(config)
     hover = template.state
-    steps = int(round(HORIZON_S / GRID_S))
 
     def fly(integral: np.ndarray, dv0: np.ndarray) -> np.ndarray:
         sim = sim_anchor.fresh_copy(template)
@@ -89,13 +91,19 @@ class RunNuisance:
     """
 
     def __init__(self, config: SimConfig) -> None:
+        self._config = config
         self._curves = responses(config)
         self._parts: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = []
         self._normal, self._rhs, self._sq = np.zeros((3, 3)), np.zeros(3), 0.0
 
     def add(self, tau_s: np.ndarray, sim_vel_ned_mps: np.ndarray, meas: np.ndarray) -> None:
         """A window's compared rows: times since its anchor ``tau_s`` (m,) [s], simulated and
-        measured velocity NED (m, 3) [m/s]."""
+        measured velocity NED (m, 3) [m/s]. Rows past ``HORIZON_S`` (a window longer than 2 s)
+        get responses flown as far, in whole multiples of it (never extrapolated)."""
+        last_s = float(np.max(tau_s, initial=0.0))
+        if last_s > (len(self._curves) - 1) * GRID_S:
+            spans = math.ceil(last_s / HORIZON_S)
+            self._curves = responses(self._config, spans * _HORIZON_STEPS)
         grid = np.arange(len(self._curves)) * GRID_S
         k = np.clip(np.searchsorted(grid, tau_s) - 1, 0, len(grid) - 2)
         w = ((tau_s - grid[k]) / GRID_S)[:, None, None]

@@ -7,6 +7,7 @@ as it would a real vehicle. The endpoint is always stopped on exit of the ``with
 
 from __future__ import annotations
 
+import random
 import signal
 import socket
 import subprocess
@@ -30,14 +31,33 @@ class EndpointError(RuntimeError):
     """The endpoint process could not be started or died at once; one line."""
 
 
+# Below Linux's ephemeral range (32768-60999), from which sockets bound to port 0 (a simulator
+# endpoint's own, MAVSDK's) are given theirs: a port picked there and released could be handed
+# to one of them before the peer binds it (seen: MAVSDK's BIND_ERROR on a port free a moment
+# earlier, with tests beside that bind port 0).
+PORT_RANGE = (20000, 32000)
+
+
 def free_udp_ports(count: int) -> list[int]:
-    """``count`` distinct loopback UDP ports free right now."""
-    sockets = []
+    """``count`` distinct UDP ports in ``PORT_RANGE`` that can be bound on 127.0.0.1 now
+    (RuntimeError if 200 random tries do not find them)."""
+    pick = random.SystemRandom()
+    sockets: list[socket.socket] = []
     try:
-        for _ in range(count):
+        for _ in range(200):
+            if len(sockets) == count:
+                break
             s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-            s.bind(("127.0.0.1", 0))
+            try:
+                s.bind(("127.0.0.1", pick.randrange(*PORT_RANGE)))
+            except OSError:
+                s.close()
+                continue
             sockets.append(s)
+        if len(sockets) < count:
+            raise RuntimeError(
+                f"no {count} free UDP ports in {PORT_RANGE[0]}-{PORT_RANGE[1]} on loopback"
+            )
         return [s.getsockname()[1] for s in sockets]
     finally:
         for s in sockets:

@@ -7,8 +7,8 @@ user cache directory (``$RESIDUAL_COMPANION_CACHE``, else
 that hashes the source, so a changed formulation gets a new library and concurrent processes
 never see a half-written one; the library is synced to disk before it is renamed into place,
 and a cached library that does not load (left empty by a power cut, damaged) is built again.
-Without a working compiler the Function is returned unchanged (the CasADi virtual machine
-evaluates it, slower but identical).
+Without a working compiler (or with a $CC that is no command line, e.g. an unclosed quote) the
+Function is returned unchanged (the CasADi virtual machine evaluates it, slower but identical).
 """
 
 from __future__ import annotations
@@ -83,7 +83,7 @@ def _build(source: str, library: Path) -> bool:
                 os.fsync(fh.fileno())
             os.replace(out, library)
         return True
-    except (OSError, subprocess.SubprocessError):
+    except (OSError, subprocess.SubprocessError, ValueError):  # ValueError: $CC unparsable
         return False
 
 

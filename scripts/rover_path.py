@@ -4,7 +4,7 @@
                      [--drive 3:0,4.7:0.67 --drive-speed 0.5] [--spacing 0.25]
     rover-path repeat --path PATH.csv [--experience EXP.npz] [--trials 3]
                       [--speed 0.5 | --scheduler experiment_2] [--drive-back [turn|reverse]]
-                      [--out DIR]
+                      [--tuning husky_50kg|roc6_150kg|dmrv_600kg] [--out DIR]
 
 [Ostafew16]'s teach and repeat with learning, for a PX4 rover (or `vehicle-sim --vehicle
 husky_50kg`) over MAVLink, as the companion reaches it (--link pymavlink or mavsdk, --url as
@@ -16,7 +16,8 @@ from arming until it disarms, --max-distance is driven, --timeout passes or Ctrl
 (curvature > 0 turns left). Writes the path (CSV ``x_m,y_m``: metres north and west of the
 local origin, one row per vertex --spacing apart), atomically.
 
-repeat: drives the path --trials times in OFFBOARD with the LB-NMPC, learning from trial to
+repeat: drives the path --trials times in OFFBOARD with the LB-NMPC (tuned as [Ostafew16]'s
+experiment on the rover --tuning names; in process --vehicle's), learning from trial to
 trial in experience bins kept in --experience (npz, written after each trial, read at the
 start: the next run goes on learning where this one stopped). One line per trial on stdout;
 repeat.json and repeat.png (errors and travel time per trial, speeds along the path) in --out
@@ -299,14 +300,18 @@ def repeat(args: argparse.Namespace) -> int:
     from experiments.rover.link_drive import NotARover, require_a_rover
     from experiments.rover.repeat import RepeatOutcome, Trial, repeat_path
     from experiments.rover.repeat_report import figure, history_row, summary, trial_line
-    from experiments.rover.scenarios import tuning_for
+    from experiments.rover.scenarios import NMPC_TUNING, tuning_for
 
     path, experience, scheduler, gp, memory, schedule = _repeat_inputs(args)
     link = open_link(args)
+    tuning = args.tuning if args.tuning in NMPC_TUNING else None
+    rover_tuning = tuning_for(tuning or "")
     _say(
         f"{args.path}: {len(path)} vertices, {path.length_m:.1f} m; {experience}: "
         + (f"{len(gp)} experiences from {_trials(memory.trials_done)}" if memory.trials_done
            else "no experience yet")
+        + (f"; NMPC tuned for {tuning}" if tuning
+           else "; NMPC on the planner's defaults (an Ackermann rover wants --tuning)")
     )  # fmt: skip
     driven: list[Trial] = []
     history = [*memory.history]
@@ -328,7 +333,7 @@ def repeat(args: argparse.Namespace) -> int:
         require_a_rover(link)
         outcome = repeat_path(
             link, path, args.trials, gp, schedule, scheduler, memory.trials_done + 1, back,
-            trial_done, _say, tuning_for(args.tuning or ""),
+            trial_done, _say, rover_tuning.nmpc, rover_tuning.feedforward,
         )  # fmt: skip
         code = {"completed": EXIT_OK, "handed_over": EXIT_HANDED_OVER}.get(
             outcome.status, EXIT_FAILED
@@ -354,6 +359,7 @@ def repeat(args: argparse.Namespace) -> int:
         "experience": str(experience), "trials_before": memory.trials_done,
         "trials_after": memory.trials_done + len(driven), "experiences_after": len(gp),
         "speed_mps": None if scheduler else float(schedule[0]), "scheduler": args.scheduler,
+        "nmpc_tuning": tuning,
     }  # fmt: skip
     if outcome.trials:
         try:

@@ -11,10 +11,12 @@ vehicle flew on from that row's time to the next row's, as a replay of the log a
 (diagnosis.replay). So a row is written just before a step, with the state the step starts
 from: when a new setpoint was received (the step is the first to fly it; PX4's velocity
 controller likewise acts on a setpoint at a vehicle_local_position update, which is a ULog
-row), and otherwise once per logging period. Rows fall on the endpoint's steps, so their
-spacing jitters by up to one step, and a setpoint stream faster than the logging rate is
-logged at up to twice the rate (a setpoint that arrives sooner than half a period after the
-last one logged waits for the next row). Given a
+row), and otherwise once per logging period, also within a long step of the endpoint's (one
+catching up after a stall is flown in parts). Rows fall on physics steps, so their spacing
+jitters by up to one, and a setpoint stream faster than the logging rate is
+logged at up to twice the rate: a setpoint that arrives sooner than half a period after the
+last one logged gets its row at the first step half a period after that one (it has flown
+since it arrived; a newer one arriving meanwhile takes the row). Given a
 ``stream_path``, every row is also appended to the file at once (flightlog.live_log), as PX4
 writes its log while it flies: a killed simulator leaves every row logged up to then.
 """
@@ -70,8 +72,22 @@ class OnboardLogger:
         self._fresh = True
 
     def step(self, duration_s: float) -> VehicleState:
-        """A row if one is due (above), then the simulator's step."""
-        t_s = self._sim.state.t_s
+        """The simulator's step, a row before it if one is due (above), and one at each row
+        due during it: a long step (the endpoint catching up after a stall) is flown in parts
+        that end where the next row is due, as PX4 logs on at its rate whatever its link does.
+        """
+        dt_s = self._sim.physics_dt_s
+        remaining = round(duration_s / dt_s) if math.isfinite(duration_s) else 0
+        while True:
+            self._row_if_due()
+            steps_to_row = max(1, math.ceil((self._next_s - self._sim.t_s) / dt_s - 1e-6))
+            if remaining <= steps_to_row:
+                return self._sim.step(duration_s if remaining <= 0 else remaining * dt_s)
+            self._sim.advance(steps_to_row * dt_s)
+            remaining -= steps_to_row
+
+    def _row_if_due(self) -> None:
+        t_s = self._sim.t_s
         if self._fresh and t_s - self._last_setpoint_row_s >= 0.5 * self._period_s:
             self._log_row()
             self._last_setpoint_row_s = t_s
@@ -80,7 +96,6 @@ class OnboardLogger:
             self._log_row()
             due_s = self._next_s + self._period_s
             self._next_s = due_s if due_s > t_s else t_s + self._period_s
-        return self._sim.step(duration_s)
 
     def _log_row(self) -> None:
         row = self._sim.log_row(self._received)

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from companion.link import ZERO_VELOCITY, Link, LinkError, VelocityCommand
-from experiments.rover.link_drive import pose_of, stop_rover
+from experiments.rover.link_drive import state_pose, stop_rover
 from planners.rover.path import TaughtPath
 
 ARRIVED_M = 0.05
@@ -250,7 +250,7 @@ def _drive(
             if clock.now_s() > t_end:
                 stop_rover(link)
                 return "", f"it did not get back to the start within {timeout_s:.0f} s{late}"
-            pose = pose_of(link)
+            pose = state_pose(st)
             command = control(pose)
             if command is None:
                 break

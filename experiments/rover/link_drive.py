@@ -82,10 +82,12 @@ def require_a_rover(link: Link) -> None:
 
 def pose_of(link: Link) -> np.ndarray:
     """(x_m, y_m, heading_rad) in the path frame from the Link's NED state."""
-    return _pose(link.read_state())
+    return state_pose(link.read_state())
 
 
-def _pose(st: LinkState) -> np.ndarray:
+def state_pose(st: LinkState) -> np.ndarray:
+    """(x_m, y_m, heading_rad) in the path frame of the NED state ``st``: a drive steers by
+    the very state it checked (a second read may be newer, and not finite)."""
     return np.array([st.pos_ned_m[0], -st.pos_ned_m[1], -st.yaw_rad])
 
 
@@ -97,12 +99,15 @@ def drive_path(
     timeout_s: float = 120.0,
     gp: LocalGP | None = None,
     connect: bool = True,
+    feedforward: bool = False,
 ) -> LinkDrive:
     """Arm, switch to OFFBOARD and follow ``path``; then hold.
 
     ``speed_mps`` is one speed for the whole path or a schedule (N,) per vertex [m/s] (the
     horizon takes the scheduled speeds ahead, as experiments.rover.trial does). ``connect``
-    False: the Link is connected already (a later trial on the same Link).
+    False: the Link is connected already (a later trial on the same Link). ``feedforward``:
+    the NMPC's turn-rate penalty is measured from the path's v * curvature ahead, as
+    experiments.rover.trial does for a tuning chosen with it (scenarios.RoverTuning).
 
     Once the vehicle has reported OFFBOARD, a report of another mode ends the drive at once,
     with nothing more sent (the companion never fights a pilot or a failsafe): the mode is in
@@ -125,6 +130,7 @@ def drive_path(
             raise LinkError(f"rover refused {what}: {result.detail or 'no reason given'}")
     solver = UnicycleNmpc(nmpc)
     K, N = nmpc.horizon, len(path)
+    curvature = path.curvature_1pm()
     window = min(40, N // 2)  # a loop's end must not be found at its start
     t_end = clock.now_s() + timeout_s
     hint, w_prev, pose_prev, pending = 0, 0.0, None, None
@@ -143,7 +149,7 @@ def drive_path(
             if not st.is_finite():
                 stopped_for = f"the rover's pose is not finite at t={st.t_s:.1f} s"
                 break
-            pose = _pose(st)
+            pose = state_pose(st)
             pose_prev = pose if pose_prev is None else pose_prev
             fix = path.localise(*pose, hint=hint, window=window)
             on_path = path.localise_on_path(*pose, hint=hint, window=window)
@@ -156,7 +162,9 @@ def drive_path(
                 reached = True
                 break
             v_now = float(schedule[fix.vertex])
-            v_h = np.interp(fix.s_m + v_now * dt * np.arange(K), path.s_m, schedule)
+            s_ahead = fix.s_m + v_now * dt * np.arange(K)
+            v_h = np.interp(s_ahead, path.s_m, schedule)
+            w_ref = v_h * np.interp(s_ahead, path.s_m, curvature) if feedforward else None
 
             def reference(poses: np.ndarray, vertex: int = fix.vertex) -> np.ndarray:
                 return path.ref_at(project_arc_length(path, poses[:, :2], vertex, window))
@@ -165,7 +173,8 @@ def drive_path(
                 model = learner.LocalDisturbance(gp, fix.vertex, v_now) if gp is not None else None
                 w = float(
                     solver.solve(pose, v_h, reference, w_prev, pose_prev=pose_prev,
-                                 s0_m=fix.s_m, model=model, ref0=np.array(path.pose(fix.vertex)))[0]
+                                 s0_m=fix.s_m, model=model, ref0=np.array(path.pose(fix.vertex)),
+                                 omega_ref_radps=w_ref)[0]
                 )  # fmt: skip
             except (ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError) as exc:
                 stopped_for = f"the NMPC solve failed at t={st.t_s:.1f} s: {exc}"

@@ -98,9 +98,11 @@ def repeat_path(
     on_trial: Callable[[Trial, np.ndarray], None] = lambda _t, _s: None,
     progress: Callable[[str], None] = lambda _m: None,
     nmpc: UnicycleNmpcConfig = UnicycleNmpcConfig(),  # noqa: B008 (frozen)
+    feedforward: bool = False,
 ) -> RepeatOutcome:
     """Drive ``trials`` trials from ``schedule_mps`` (N,) [m/s] on the connected ``link``,
-    its NMPC tuned by ``nmpc`` (experiments.rover.scenarios.tuning_for the rover).
+    its NMPC tuned by ``nmpc`` and ``feedforward`` (link_drive.drive_path; the rover's are
+    experiments.rover.scenarios.tuning_for's).
 
     ``on_trial(trial, next_schedule)`` is called as each trial ends (e.g. to save the
     experience). With ``scheduler`` each trial's records set the next trial's speeds.
@@ -143,7 +145,10 @@ def repeat_path(
                 return out
         schedule = out.schedule_mps
         timeout_s = 4.0 * path.length_m / float(np.min(schedule)) + 30.0
-        drive = drive_path(link, path, schedule, nmpc, timeout_s=timeout_s, gp=gp, connect=False)
+        drive = drive_path(
+            link, path, schedule, nmpc, timeout_s=timeout_s, gp=gp, connect=False,
+            feedforward=feedforward,
+        )  # fmt: skip
         trial = Trial(number, drive, schedule.copy(), len(gp))
         out.trials.append(trial)
         if scheduler is not None:

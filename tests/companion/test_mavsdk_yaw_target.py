@@ -3,7 +3,7 @@ rate into a yaw target; that target must not run away from a vehicle that turns 
 commanded (a rover at its turn-rate limit), or the heading loop takes the short way round it
 and the vehicle turns the other way. A rover is sent its yaw rate itself (body velocity)."""
 
-import socket
+import math
 import time
 
 import numpy as np
@@ -14,23 +14,19 @@ from companion.mavsdk_link import (
     MAX_YAW_LEAD_RAD,
     YAW_HOLD_RAD,
     MavsdkLink,
+    body_velocity,
     next_yaw_target_rad,
 )
+from tests.free_port import free_udp_port
 from vehicle_sim.rover import RoverSim, rover_preset
 from vehicle_sim.rover.mavlink_rover import RoverMavlinkEndpoint
-
-
-def _free_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 @pytest.mark.slow
 def test_a_yaw_rate_above_what_the_rover_turns_turns_it_one_way_only() -> None:
     preset = rover_preset("husky_50kg")  # turns in place at up to 1.5 rad/s
     command_radps, turn_s = 2.0 * preset.max_yaw_rate_radps, 4.0
-    port = _free_port()
+    port = free_udp_port()
     sim = RoverSim(preset, seed=5)
     endpoint = RoverMavlinkEndpoint(sim, port, setpoint_timeout_s=2.0, mode="udpout")
     endpoint.start()
@@ -75,7 +71,7 @@ def test_the_yaw_target_stays_near_a_vehicle_that_does_not_turn_and_follows_the_
 def test_a_rover_is_sent_its_yaw_rate_not_a_yaw_target() -> None:
     """At once the rover's setpoint is the commanded forward speed and turn rate (NED yaw
     rate 0.3 rad/s clockwise: -0.3 counter-clockwise), not a heading loop's catching up."""
-    port = _free_port()
+    port = free_udp_port()
     sim = RoverSim(rover_preset("husky_50kg"), seed=6)
     endpoint = RoverMavlinkEndpoint(sim, port, setpoint_timeout_s=2.0, mode="udpout")
     endpoint.start()
@@ -96,3 +92,20 @@ def test_a_rover_is_sent_its_yaw_rate_not_a_yaw_target() -> None:
         endpoint.close()
     assert yaw_rate_radps == pytest.approx(-0.3, abs=1e-3)
     assert speed_mps == pytest.approx(0.4, abs=0.01)
+
+
+def test_a_stop_is_a_stop_whatever_the_heading() -> None:
+    """The rover's body velocity: north at heading 90 deg is to its left; a zero velocity stays
+    zero when the attitude is not finite (an estimator reset): the stop a drive sends on a
+    non-finite state went out as a NaN forward speed, which the rover refuses, driving on."""
+    assert body_velocity(1.0, 0.0, math.pi / 2) == pytest.approx((0.0, -1.0), abs=1e-12)
+    assert body_velocity(0.0, 0.0, math.nan) == (0.0, 0.0)
+
+
+def test_a_yaw_target_made_of_a_nan_attitude_starts_again_at_the_heading() -> None:
+    """One non-finite attitude (an estimator reset) made the target NaN, and every later target
+    was made from it: a multicopter was sent a NaN yaw for the rest of the flight."""
+    target = next_yaw_target_rad(0.0, math.nan, 0.5, 0.1)
+    assert math.isnan(target)
+    assert next_yaw_target_rad(target, 0.3, 0.5, 0.1) == 0.3
+    assert next_yaw_target_rad(0.3, 0.3, 0.5, 0.1) == pytest.approx(0.35)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from diagnosis.replay import ReplayResult, airborne_runs, windows
 from flightlog.schema import FlightLog
@@ -16,6 +17,17 @@ def test_a_last_run_shorter_than_the_lead_in_gives_no_window_not_an_index_error(
     wins = windows([log], 2.0)
     assert wins and all(w.stop < 100 for w in wins)  # all in the first, 10 s run
     assert windows([FlightLog({"t_s": t[100:], "pos_d_m": np.full(3, -5.0)})], 2.0) == []
+
+
+@pytest.mark.timeout(30)
+@pytest.mark.parametrize("window_s", [0.0, -1.0, float("inf"), float("nan")])
+def test_a_window_length_that_is_no_positive_duration_is_refused(window_s):
+    """DiagnosisConfig.window_s = 0 made each window end at its own anchor and the next start
+    there: windows() never returned; inf and NaN gave no window, silently."""
+    t = 0.1 * np.arange(100)
+    log = FlightLog({"t_s": t, "pos_d_m": np.full(t.size, -5.0)})
+    with pytest.raises(ValueError, match="replay window .* must be a finite number of seconds"):
+        windows([log], window_s)
 
 
 def test_window_times_are_counted_from_the_logs_start():

@@ -46,6 +46,15 @@ def test_without_compiler_returns_the_function(tmp_path, monkeypatch):
     assert not list(tmp_path.glob("*.so"))
 
 
+def test_a_cc_that_is_no_command_line_returns_the_function(tmp_path, monkeypatch):
+    # an unclosed quote in $CC: shlex's "No closing quotation" came out of every planner's
+    # construction as a traceback, where a missing compiler falls back to the NumPy path
+    monkeypatch.setenv("RESIDUAL_COMPANION_CACHE", str(tmp_path))
+    monkeypatch.setenv("CC", 'cc "-O3')
+    fn = small_function()
+    assert compiled(fn) is fn
+
+
 @pytest.mark.skipif(
     shutil.which(shlex.split(os.environ.get("CC") or "cc")[0]) is None, reason="needs a C compiler"
 )

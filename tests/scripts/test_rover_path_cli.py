@@ -139,6 +139,27 @@ def test_a_speed_above_the_rovers_is_reported_as_driven_not_as_asked(
     assert f"at {driven:.2f} m/s mean (5.00 m/s scheduled)" in line, line
 
 
+@pytest.mark.parametrize(
+    ("options", "tuning", "said"),
+    [
+        (["--tuning", "roc6_150kg"], "roc6_150kg", "NMPC tuned for roc6_150kg"),
+        (["--vehicle", "husky_50kg"], "husky_50kg", "NMPC tuned for husky_50kg"),
+    ],
+)
+def test_repeat_says_and_records_the_nmpc_tuning_it_drove_with(
+    tmp_path: Path, files: dict[str, Path], capsys, options, tuning, said
+) -> None:
+    """A run's weights decide how it tracks (the 600 kg rover: 5 mm or 0.2 m off), so its
+    first line and repeat.json name them; neither did, and two runs' figures could not be
+    told apart by what drove them."""
+    rep = tmp_path / "rep"
+    argv = ["repeat", "--link", "inprocess", "--path", str(files["open"]), "--trials", "1",
+            "--experience", str(tmp_path / "e.npz"), "--out", str(rep), *options]  # fmt: skip
+    assert main(argv) == 0
+    assert said in capsys.readouterr().err.splitlines()[0]
+    assert _json(rep)["nmpc_tuning"] == tuning
+
+
 @pytest.mark.slow
 def test_teach_and_repeat_in_process_go_on_learning_across_runs(tmp_path: Path, capsys) -> None:
     path, exp, rep = tmp_path / "loop.csv", tmp_path / "loop.npz", tmp_path / "rep"
@@ -195,7 +216,8 @@ def test_teach_and_repeat_against_vehicle_sim(tmp_path: Path) -> None:
         assert first["trial"] == [1] and all(first["reached_end"]) and first["experiences"][0] > 0
         run2 = rover_path("repeat", *common, "--trials", "1", "--speed", "0.9", "--drive-back")
         assert run2.returncode == 0, run2.stderr
-        assert "experiences from 1 trial\n" in run2.stderr and run2.stdout.startswith("trial 2:")
+        assert "experiences from 1 trial; NMPC on the planner's defaults" in run2.stderr
+        assert run2.stdout.startswith("trial 2:")
         second = _json(rep)
         assert second["trial"] == [2] and second["all_trials"]["trial"] == [1, 2]
         assert second["experiences_after"] > first["experiences_after"]

@@ -37,6 +37,27 @@ def test_rows_at_the_log_rate_with_measured_columns():
     assert logger.physics_dt_s == sim.physics_dt_s  # everything else is the simulator's
 
 
+def test_a_long_step_is_logged_at_the_log_rate_throughout():
+    """The endpoint catching up after a stall (a busy computer) steps the simulator up to 2 s
+    at once: the rows go on at the log's rate through it, as PX4's logger does, and the states
+    are those of short steps. One row was written for the whole step, and a gap over 0.5 s
+    ends the diagnosis's replay run there."""
+    config = load_sim_config("iris")
+    short, long = (OnboardLogger(Simulator(config, seed=4), rate_hz=50.0) for _ in range(2))
+    for logger in (short, long):
+        _offboard(logger)
+        logger.set_velocity_setpoint(VelocitySetpoint((1.5, -0.5, 0.2)))
+    for _ in range(500):
+        short.step(short.physics_dt_s)
+    long.step(500 * long.physics_dt_s)
+    assert long.state.t_s == pytest.approx(short.state.t_s, abs=1e-9)
+    a, b = short.to_log(), long.to_log()
+    assert a.n_rows == b.n_rows
+    assert np.max(np.diff(b["t_s"])) <= 0.02 + long.physics_dt_s + 1e-9  # one step's jitter
+    np.testing.assert_allclose(b["t_s"], a["t_s"], atol=1e-9)
+    np.testing.assert_allclose(b["vel_n_mps"], a["vel_n_mps"], atol=1e-9)
+
+
 def test_the_logged_command_is_the_received_one_not_the_delayed_one():
     rng = np.random.default_rng(3)
     delay_s = float(rng.uniform(0.2, 0.4))

@@ -11,7 +11,6 @@ endpoint, MAVSDK's own mavlink stack; deadlines are generous so a busy CPU does 
 from __future__ import annotations
 
 import math
-import socket
 import time
 from collections.abc import Callable, Iterator
 
@@ -30,23 +29,18 @@ from mavsdk.plugins.offboard import (
 from mavsdk.plugins.param import Param
 from mavsdk.plugins.telemetry import Telemetry
 
+from tests.free_port import free_udp_port
 from vehicle_sim import FlightMode, LandedState, Simulator, load_sim_config
 from vehicle_sim.mavlink import EndpointConfig, LinkConfig, MavlinkEndpoint
 
 pytestmark = pytest.mark.slow
 
 
-def _free_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 class Drone:
     """vehicle-sim's endpoint sending to a MAVSDK instance listening on a free port."""
 
     def __init__(self) -> None:
-        port = _free_port()
+        port = free_udp_port()
         link = LinkConfig("offboard", remote=("127.0.0.1", port))
         self.endpoint = MavlinkEndpoint(
             Simulator(load_sim_config("iris"), seed=11), EndpointConfig(links=(link,))

@@ -55,6 +55,9 @@ def drone() -> Iterator[Drone]:
 def test_manual_control_example_flow(drone: Drone) -> None:
     manual = ManualControl(drone.mavsdk.first_autopilot(5.0))
     drone.param.set_param_int("NAV_RCL_ACT", 3)  # land when the sticks stop
+    # a stick thread starved on a busy computer must not lose the sticks before the test does
+    # (PX4's 0.5 s is five of its 10 Hz inputs; as test_mavlink_manual_control's)
+    drone.param.set_param_float("COM_RC_LOSS_T", 2.0)
     manual.set_manual_control_input(0.0, 0.0, 0.5, 0.0)
     take_off(drone)
     sticks = StickStream(manual)

@@ -3,7 +3,6 @@ repeating a loop with learning, and the refusals (too little motion, NaN positio
 path's experience, damaged files)."""
 
 import math
-import socket
 import threading
 import time
 from dataclasses import replace
@@ -13,7 +12,7 @@ import numpy as np
 import pytest
 
 from companion.inprocess_rover_link import InProcessRoverLink
-from companion.link import CommandOutcome, LinkError
+from companion.link import CommandOutcome, LinkError, VelocityCommand
 from companion.pymavlink_link import PymavlinkLink
 from companion.runner import Terminated
 from experiments.rover import learner
@@ -29,6 +28,7 @@ from experiments.rover.teach import HandedOver, TeachError, record_teach
 from planners.rover.path import TaughtPath
 from planners.rover.path_file import PathFileError, path_csv_text, read_path_file
 from planners.rover.speed_scheduler import TABLE_I, initial_schedule
+from tests.free_port import free_udp_port
 from vehicle_sim.rover import RoverSim, rover_preset
 from vehicle_sim.rover.mavlink_rover import RoverMavlinkEndpoint
 
@@ -349,12 +349,6 @@ def test_a_pilot_who_takes_over_during_the_drive_back_ends_the_run_as_handed_ove
     assert link.after == 0
 
 
-def _free_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 def _pilot(endpoint: RoverMavlinkEndpoint, legs: list[tuple[float, float, float]]) -> None:
     """A pilot in MANUAL: arm, drive (duration_s, speed, yaw rate) legs, disarm."""
     time.sleep(1.0)
@@ -369,7 +363,7 @@ def _pilot(endpoint: RoverMavlinkEndpoint, legs: list[tuple[float, float, float]
 def test_a_pilot_driven_teach_is_recorded_until_the_rover_disarms() -> None:
     """Nobody commands the rover over the Link: a pilot drives it in MANUAL from arming to
     disarming, and the teach pass records that drive."""
-    port = _free_port()
+    port = free_udp_port()
     endpoint = RoverMavlinkEndpoint(RoverSim(rover_preset("husky_50kg")), port, mode="udpout")
     endpoint.start()
     pilot = threading.Thread(
@@ -389,7 +383,7 @@ def test_a_pilot_driven_teach_is_recorded_until_the_rover_disarms() -> None:
 
 @pytest.mark.slow
 def test_a_teach_pass_whose_position_turns_nan_is_refused() -> None:
-    port = _free_port()
+    port = free_udp_port()
     sim = RoverSim(rover_preset("husky_50kg"))
     endpoint = RoverMavlinkEndpoint(sim, port, mode="udpout")
     endpoint.start()
@@ -609,4 +603,34 @@ def test_a_drive_back_that_ends_away_from_the_start_drives_no_trial() -> None:
                       drive_back=DriveBack("reverse", 0.5))  # fmt: skip
     assert out.status == "not_at_start" and out.trials == [], out.detail
     assert "driving back ended 2.1 m from the path's start" in out.detail
+    assert link.read_state().mode == "HOLD"
+
+
+@pytest.mark.parametrize("glitch", [31, 32])
+def test_a_drive_back_steers_by_the_very_state_it_checked(glitch: int) -> None:
+    """One state read of the drive back is not finite (a position estimate that glitches for
+    one message): whichever read it is, no command is computed from it. The pose was read a
+    second time after the finiteness check, so a glitch on that read was steered by: a NaN
+    command streamed, or reverse's nearest vertex stuck at the start for the whole drive."""
+
+    class OneGlitch(InProcessRoverLink):
+        reads = 0
+        sent: list[VelocityCommand] = []
+
+        def read_state(self):
+            st = super().read_state()
+            self.reads += 1
+            return replace(st, pos_ned_m=np.full(3, np.nan)) if self.reads == glitch else st
+
+        def send_velocity(self, command) -> None:
+            self.sent.append(command)
+            super().send_velocity(command)
+
+    path = _open_ackermann_path()
+    link = OneGlitch(RoverSim(rover_preset("husky_50kg"), pose=path.pose(len(path) - 1)))
+    link.sent = []
+    link.connect(1.0)
+    left_for, stopped_for = reverse_along(link, path, 0.5, timeout_s=60.0)
+    assert left_for == "" and stopped_for.startswith("the rover's pose is not finite")
+    assert all(np.all(np.isfinite([*c.vel_ned_mps, c.yaw_rate_radps])) for c in link.sent)
     assert link.read_state().mode == "HOLD"
