@@ -113,6 +113,11 @@ def test_px4_velocity_pi_reads_gains_a_ulog_records_under_their_pre_v1_11_names(
     out = tmp_path / "pi"
     argv = [str(old_names), "--nominal", "px4_velocity_pi", "--out", str(out), *FAST]
     assert fit_gp_cli.main(argv) == 0, capsys.readouterr().err
+    assert (
+        f"velocity-loop gains of {old_names}: its PX4 parameters MPC_XY_VEL_P, MPC_XY_VEL_I, "
+        "MPC_XY_VEL_D, MPC_Z_VEL_P, MPC_Z_VEL_I, MPC_Z_VEL_D (before v1.11, normalised thrust "
+        "per m/s) x g / hover thrust 0.580 (MPC_THR_HOVER parameter)"
+    ) in capsys.readouterr().err
     nominal = read_model_header(out)["feature_definition"]["nominal_model"]["params"]
     assert nominal["vel_p_xy"] == pytest.approx(flown["MPC_XY_VEL_P_ACC"], rel=1e-6)
     assert nominal["vel_i_z"] == pytest.approx(flown["MPC_Z_VEL_I_ACC"], rel=1e-6)
