@@ -4,7 +4,7 @@ velocity loop (planners.nominal_models.px4_velocity_pi)."""
 from __future__ import annotations
 
 from companion.link import Link
-from gp.velocity_integrator import GAINS_METADATA_KEY, VELOCITY_LOOP_PARAMS
+from flightlog.velocity_loop_gains import GAINS_METADATA_KEY, VELOCITY_LOOP_PARAMS
 
 
 def velocity_loop_gains(link: Link) -> tuple[tuple[str, float], ...]:

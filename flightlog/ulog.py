@@ -394,7 +394,8 @@ def flight_log_from_topics(
 
 
 def _vehicle(topics: Topics, params: Mapping[str, float], where: str) -> dict[str, object]:
-    """Vehicle type from MAV_TYPE and vehicle_status; refuses non-multirotors in one line."""
+    """Vehicle type from MAV_TYPE and vehicle_status; refuses non-multirotors in one line, and
+    a board with no airframe set (SYS_AUTOSTART 0, MAV_TYPE 0) saying so."""
     status = topics.get("vehicle_status", {})
     is_vtol = bool("is_vtol" in status and np.any(np.asarray(status["is_vtol"]) > 0))
     mav_type = int(params["MAV_TYPE"]) if "MAV_TYPE" in params else None
@@ -408,6 +409,11 @@ def _vehicle(topics: Topics, params: Mapping[str, float], where: str) -> dict[st
                                 (px4.VEHICLE_TYPE_ROVER, "ground rover")):  # fmt: skip
             if np.all(vt == kind):
                 refuse, name = True, name or kind_name
+    if refuse and mav_type == 0 and params.get("SYS_AUTOSTART") == 0:  # a board never set up
+        raise FlightLogError(
+            f"{where}: no airframe set (SYS_AUTOSTART 0, MAV_TYPE 0): set the airframe "
+            "(QGroundControl: Vehicle Setup > Airframe) and log again"
+        )
     if refuse:
         known = f" (MAV_TYPE {mav_type})" if mav_type is not None else ""
         rover = mav_type == px4.MAV_TYPE_GROUND_ROVER or name == "ground rover"

@@ -10,66 +10,63 @@ where two logs both say it:
 - ``vehicle type``: a ULog's MAV_TYPE name (quadrotor, hexarotor ...);
 - ``airframe``: a ULog's SYS_AUTOSTART ([PX4-params]), PX4's airframe id;
 - ``hardware``: a ULog's flight-controller board (ver_hw);
-- ``velocity_loop_gains``: the PX4 velocity-loop gains the companion read before arming (each
-  equal within :data:`GAIN_REL_TOL`: over MAVLink a parameter is a float32, so 1.8 read in
-  process is 1.7999999523 read from vehicle-sim or PX4).
+- ``velocity_loop_gains``: the PX4 velocity-loop gains the companion read before arming, or a
+  ULog's MPC_*_VEL_*_ACC parameters (those it records under their names before v1.11 scaled to
+  today's units; flightlog.velocity_loop_gains), each equal within :data:`GAIN_REL_TOL` (over
+  MAVLink a parameter is a float32, so 1.8 read in process is 1.7999999523 read from
+  vehicle-sim or PX4). A log whose gains cannot be read (old gains, no hover thrust) is left
+  out of this field, as a log that does not record it.
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Mapping, Sequence
 
 from flightlog.schema import FlightLog
+from flightlog.velocity_loop_gains import is_number, velocity_loop_gains
 
 MASS_REL_TOL = 1e-3  # masses closer than this (relative) are the same configured mass
 GAIN_REL_TOL = 1e-6  # gains closer than this (relative) are the same (float32 keeps ~6e-8)
 
 
-def _preset(meta: Mapping[str, object]) -> object:
+def _preset(log: FlightLog) -> object:
     for key in ("vehicle", "vehicle_preset"):
-        if isinstance(meta.get(key), str):
-            return meta[key]
+        if isinstance(log.metadata.get(key), str):
+            return log.metadata[key]
     return None
 
 
-def _backend(meta: Mapping[str, object]) -> object:
-    return meta.get("backend") if isinstance(meta.get("backend"), str) else None
+def _backend(log: FlightLog) -> object:
+    backend = log.metadata.get("backend")
+    return backend if isinstance(backend, str) else None
 
 
-def _hardware(meta: Mapping[str, object]) -> object:
-    return meta.get("hardware") if isinstance(meta.get("hardware"), str) else None
+def _hardware(log: FlightLog) -> object:
+    hardware = log.metadata.get("hardware")
+    return hardware if isinstance(hardware, str) else None
 
 
-def _vehicle_type(meta: Mapping[str, object]) -> object:
-    vehicle = meta.get("vehicle")
+def _vehicle_type(log: FlightLog) -> object:
+    vehicle = log.metadata.get("vehicle")
     return vehicle.get("type") if isinstance(vehicle, Mapping) else None
 
 
-def _airframe(meta: Mapping[str, object]) -> object:
-    params = meta.get("px4_params")
+def _airframe(log: FlightLog) -> object:
+    params = log.metadata.get("px4_params")
     value = params.get("SYS_AUTOSTART") if isinstance(params, Mapping) else None
-    return int(value) if _is_number(value) else None
+    return int(value) if is_number(value) else None
 
 
-def _mass(meta: Mapping[str, object]) -> object:
-    mass = meta.get("mass_kg")
-    return float(mass) if _is_number(mass) else None
+def _mass(log: FlightLog) -> object:
+    mass = log.metadata.get("mass_kg")
+    return float(mass) if is_number(mass) else None
 
 
-def _gains(meta: Mapping[str, object]) -> object:
-    gains = meta.get("velocity_loop_gains")
-    if not isinstance(gains, Mapping) or not all(map(_is_number, gains.values())):
-        return None
-    return {name: float(value) for name, value in sorted(gains.items())}
+def _gains(log: FlightLog) -> object:
+    return velocity_loop_gains(log).gains
 
 
-def _is_number(value: object) -> bool:
-    """A finite int or float (not a bool, a string or NaN: a sidecar may hold anything)."""
-    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
-
-
-IDENTITY_FIELDS: tuple[tuple[str, Callable[[Mapping[str, object]], object]], ...] = (
+IDENTITY_FIELDS: tuple[tuple[str, Callable[[FlightLog], object]], ...] = (
     ("vehicle preset", _preset),
     ("simulator backend", _backend),
     ("mass_kg", _mass),
@@ -101,7 +98,7 @@ def mixed_vehicle_fields(logs: Sequence[FlightLog]) -> list[str]:
     for name, read in IDENTITY_FIELDS:
         groups: list[tuple[object, list[str]]] = []
         for log in logs:
-            value = read(log.metadata)
+            value = read(log)
             if value is None:
                 continue
             group = next((g for g in groups if _same(g[0], value)), None)

@@ -13,6 +13,7 @@ from typing import Literal
 import numpy as np
 
 from flightlog.schema import FlightLog
+from flightlog.velocity_loop_gains import velocity_loop_gains
 from gp.datasets import DatasetConfig, ResidualDataset, residual_dataset
 from gp.evaluation import holdout_split, residual_rmse
 from gp.features import FeatureDefinition, feature_definition
@@ -127,7 +128,7 @@ def train_residual_model(
         logs, check_logs = split_logs(
             logs, config.check_fraction, config.modes, config.check_rotate
         )
-    features, identified = resolve_features(logs, config)
+    features, identified = resolve_features(logs, config, progress)
     if identified is not None:
         progress(f"identified {identified.describe()}")
     progress(f"features {features.describe()}")
@@ -187,12 +188,15 @@ def train_residual_model(
 
 
 def resolve_features(
-    logs: Sequence[FlightLog], config: TrainingConfig
+    logs: Sequence[FlightLog],
+    config: TrainingConfig,
+    progress: Callable[[str], None] = lambda message: None,
 ) -> tuple[FeatureDefinition, LagIdentification | None]:
     """The feature definition with the nominal parameters the logs decide: kinematic_4dof's
     residual_dt_s (their median step), first_order_lag's time constants when not given
     (identified; the identification is returned too, else None), px4_velocity_pi's gains when
-    not given (the autopilot's, recorded with the logs)."""
+    not given (the autopilot's, recorded with the logs; ``progress`` is told where each log's
+    came from)."""
     params = dict(config.nominal_params)
     identified = None
     from_logs = set(make_model(config.nominal).params_from_logs) - set(params)
@@ -207,6 +211,8 @@ def resolve_features(
     if gains:
         logged = logged_velocity_loop_gains(logs)
         params |= {n: v for n, v in logged.items() if n in gains}
+        for log in logs:
+            progress(f"velocity-loop gains of {log.where}: {velocity_loop_gains(log).source}")
     definition = feature_definition(
         config.features, config.nominal, residual_steps=config.residual_steps, **params
     )

@@ -17,8 +17,8 @@ over INTEGRATOR_GAP_S; a shorter gap that splits a segment restarts it here only
 
 The gains Ki are the autopilot's MPC_*_VEL_I_ACC, recorded with the log (the sidecar's
 ``velocity_loop_gains``, written by the companion from what the autopilot reports,
-companion.autopilot_gains, or a PX4 ULog's own parameters); :func:`logged_velocity_loop_gains`
-reads them.
+companion.autopilot_gains, or a PX4 ULog's own parameters, under their names before v1.11
+too: flightlog.velocity_loop_gains); :func:`logged_velocity_loop_gains` reads them.
 """
 
 from __future__ import annotations
@@ -28,27 +28,10 @@ from collections.abc import Sequence
 import numpy as np
 
 from flightlog.schema import FlightLog
+from flightlog.velocity_loop_gains import VELOCITY_LOOP_PARAMS, velocity_loop_gains
 from gp.errors import DatasetError
 
-GAINS_METADATA_KEY = "velocity_loop_gains"
-VELOCITY_LOOP_GAIN_NAMES: tuple[str, ...] = (
-    "vel_p_xy",
-    "vel_i_xy",
-    "vel_d_xy",
-    "vel_p_z",
-    "vel_i_z",
-    "vel_d_z",
-)
-
-# px4_velocity_pi's parameter -> PX4's parameter ([PX4-params] MPC_XY_VEL_*_ACC, MPC_Z_VEL_*_ACC)
-VELOCITY_LOOP_PARAMS: dict[str, str] = {
-    "vel_p_xy": "MPC_XY_VEL_P_ACC",
-    "vel_i_xy": "MPC_XY_VEL_I_ACC",
-    "vel_d_xy": "MPC_XY_VEL_D_ACC",
-    "vel_p_z": "MPC_Z_VEL_P_ACC",
-    "vel_i_z": "MPC_Z_VEL_I_ACC",
-    "vel_d_z": "MPC_Z_VEL_D_ACC",
-}
+VELOCITY_LOOP_GAIN_NAMES: tuple[str, ...] = tuple(VELOCITY_LOOP_PARAMS)
 
 
 def velocity_integrator(log: FlightLog, ki: Sequence[float]) -> np.ndarray:
@@ -67,34 +50,26 @@ def velocity_integrator(log: FlightLog, ki: Sequence[float]) -> np.ndarray:
 
 def logged_velocity_loop_gains(logs: Sequence[FlightLog]) -> dict[str, float]:
     """The autopilot's velocity-loop gains (px4_velocity_pi's parameter names) recorded with
-    ``logs``: the sidecar's ``velocity_loop_gains``, else the PX4 parameters a ULog records
-    (``px4_params``, :data:`VELOCITY_LOOP_PARAMS`); every log must carry them, and the same ones.
+    ``logs`` (flightlog.velocity_loop_gains: the sidecar's, else the PX4 parameters a ULog
+    records, under their names since v1.11 or before); every log must carry them, and the same
+    ones.
 
     Raises:
         DatasetError: a log without them, or logs with different gains (one line each).
     """
     gains: dict[str, float] | None = None
     for log in logs:
-        where = log.where
-        record = log.metadata.get(GAINS_METADATA_KEY)
-        params = log.metadata.get("px4_params")
-        if not isinstance(record, dict) and isinstance(params, dict):
-            record = {n: params[p] for n, p in VELOCITY_LOOP_PARAMS.items() if p in params}
-        missing = [
-            n for n in VELOCITY_LOOP_GAIN_NAMES if not isinstance(record, dict) or n not in record
-        ]
-        if missing:
+        logged = velocity_loop_gains(log)
+        if logged.gains is None:
             raise DatasetError(
-                f"{where}: neither its sidecar's {GAINS_METADATA_KEY} nor its PX4 parameters "
-                f"hold {missing}; px4_velocity_pi needs the autopilot's MPC_*_VEL_*_ACC gains: "
-                "fly with a companion that records them, or give them with --nominal-param "
-                "vel_p_xy=... (all six)"
+                f"{log.where}: {logged.source}; px4_velocity_pi needs the autopilot's "
+                "MPC_*_VEL_*_ACC gains: fly with a companion that records them, or give them "
+                "with --nominal-param vel_p_xy=... (all six)"
             )
-        these = {n: float(record[n]) for n in VELOCITY_LOOP_GAIN_NAMES}
-        if gains is not None and these != gains:
+        if gains is not None and logged.gains != gains:
             raise DatasetError(
-                f"{where}: velocity-loop gains {these} differ from the other logs' {gains}; "
-                "fit logs flown with one tuning at a time"
+                f"{log.where}: velocity-loop gains {logged.gains} differ from the other logs' "
+                f"{gains}; fit logs flown with one tuning at a time"
             )
-        gains = these
+        gains = logged.gains
     return gains or {}

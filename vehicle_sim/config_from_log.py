@@ -8,7 +8,8 @@ from hover thrust x the preset's maximum thrust / g, so the simulated vehicle ho
 log's hover thrust. A multirotor ULog whose flight no command can read (flown in STAB, no
 position estimate) still gives its parameters; the hover thrust is then MPC_THR_HOVER, and the
 config says so. Velocity-loop gains a log records under their names before v1.11 are carried
-over in today's units (:mod:`vehicle_sim.legacy_velocity_gains`).
+over in today's units (flightlog.velocity_loop_gains: x g / MPC_THR_HOVER, else / the measured
+hover thrust).
 """
 
 from __future__ import annotations
@@ -17,8 +18,6 @@ import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-
-import numpy as np
 
 from flightlog.reader import read_log
 from flightlog.schema import FlightLog, FlightLogError
@@ -29,12 +28,15 @@ from flightlog.ulog import (
     parameters_give_a_config,
     summarise_ulog,
 )
+from flightlog.velocity_loop_gains import (
+    HOVER_ESTIMATED,
+    HOVER_PARAMETER,
+    acceleration_gains,
+    estimated_hover_thrust,
+    hover_thrust_for_gains,
+)
 from vehicle_sim.config import GRAVITY_MPS2, config_from_mapping, load_sim_config
-from vehicle_sim.legacy_velocity_gains import acceleration_gains
 from vehicle_sim.params import PX4_PARAMS
-
-HOVER_SPEED_MPS = 0.3  # rows slower than this (and not landed) count as hovering
-HOVER_PARAMETER = "MPC_THR_HOVER parameter"  # how the hover thrust was found, when not measured
 
 
 @dataclass(frozen=True)
@@ -116,7 +118,8 @@ def _build(
         unset = f"MPC_THR_HOVER = {hover:g} is PX4's default: it may never have been set for "
         notes = (*notes, unset + "this vehicle, so the mass may be off")
     mass_kg = hover * 4 * v.max_rotor_thrust_n / GRAVITY_MPS2
-    legacy = acceleration_gains(params, hover)
+    gains_hover, gains_hover_how = hover_thrust_for_gains(params, hover)
+    legacy = acceleration_gains(params, gains_hover)
     params = {**params, **legacy}
     tuned = {n: float(f"{float(params[n]):.7g}") for n in sorted(PX4_PARAMS) if n in params}
     tuned.pop("MPC_THR_HOVER", None)
@@ -127,7 +130,7 @@ def _build(
         f"mass_kg = {mass_kg:.4f}: hover thrust {hover:.3f} ({hover_how}) x the preset's "
         f"maximum thrust {4 * v.max_rotor_thrust_n:.2f} N / g",
         f"{len(tuned)} PX4 parameters: {', '.join(tuned) or 'none'}",
-        *_legacy_note(legacy, hover),
+        *_legacy_note(legacy, gains_hover, gains_hover_how),
         *clamped,
     ]
     battery = _battery_from_params(params)
@@ -179,14 +182,15 @@ def _build(
     return ConfigFromLog(text, tuple(from_log), tuple(assumed))
 
 
-def _legacy_note(legacy: Mapping[str, float], hover: float) -> list[str]:
-    """The line saying which velocity-loop gains came from their pre-v1.11 names, if any."""
+def _legacy_note(legacy: Mapping[str, float], hover: float, hover_how: str) -> list[str]:
+    """The line saying which velocity-loop gains came from their pre-v1.11 names, if any, and
+    the hover thrust that scaled them (``hover_how``: its source)."""
     if not legacy:
         return []
     gains = ", ".join(f"{name} = {value:.4g}" for name, value in legacy.items())
     return [
         f"{gains}: logged as MPC_*_VEL_P/I/D (PX4 before v1.11, normalised thrust per m/s) "
-        f"x g / hover thrust {hover:.3f}"
+        f"x g / hover thrust {hover:.3f} ({hover_how})"
     ]
 
 
@@ -228,15 +232,9 @@ def _clamp_to_px4_ranges(tuned: dict[str, float]) -> list[str]:
 
 def _hover_thrust(log: FlightLog, params: Mapping[str, float]) -> tuple[float | None, str]:
     """Hover thrust (normalised): measured if the log has produced thrust, else MPC_THR_HOVER."""
-    source = log.metadata.get("thrust_source")
-    produced = isinstance(source, Mapping) and source.get("kind") == "produced"
-    if produced and log.has("thrust_norm"):
-        speed = np.linalg.norm(log.stack("vel_n_mps", "vel_e_mps", "vel_d_mps"), axis=1)
-        rows = speed < HOVER_SPEED_MPS
-        if log.has("landed"):
-            rows &= log["landed"] == 0
-        if rows.sum() >= 10:
-            return float(np.median(log["thrust_norm"][rows])), "median produced thrust in hover"
+    measured = estimated_hover_thrust(log)
+    if measured is not None:
+        return measured, HOVER_ESTIMATED
     if "MPC_THR_HOVER" in params:
         return float(params["MPC_THR_HOVER"]), HOVER_PARAMETER
     return None, ""

@@ -17,7 +17,7 @@ from flightlog.reader import read_log
 from flightlog.ulog import TOPICS
 from scripts import diagnose as diagnose_cli
 from scripts import fit_gp as fit_gp_cli
-from scripts import flightlog_cli
+from scripts import flightlog_cli, vehicle_sim_cli
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "ulog"
 FLIGHTS = {  # file: (firmware, modes kept)
@@ -148,6 +148,30 @@ def test_a_fixed_wing_log_is_not_offered_to_config_from_log(capsys):
     assert flightlog_cli.main(["info", str(FIXTURES / "fixedwing_v1_17rc_status.ulg")]) == 0
     out = capsys.readouterr().out
     assert "not a multirotor" in out and "config-from-log" not in out
+
+
+def test_a_log_of_a_board_with_no_airframe_set_says_so(tmp_path, capsys):
+    """A board never given an airframe logs SYS_AUTOSTART 0 and MAV_TYPE 0; every command
+    called its log 'a generic vehicle log (MAV_TYPE 0), not a multirotor' and asked for a
+    quadcopter's log, though the vehicle may be one: the airframe is what is missing. The real
+    POSCTL flight with those two parameters stands for such a log."""
+    ulog = ULog(str(FIXTURES / "quad_posctl_v1_15.ulg"))
+    ulog.initial_parameters.update({"SYS_AUTOSTART": 0, "MAV_TYPE": 0})
+    log = tmp_path / "no_airframe.ulg"
+    ulog.write_ulog(str(log))
+    said = "no airframe set (SYS_AUTOSTART 0, MAV_TYPE 0): set the airframe"
+    assert flightlog_cli.main(["info", str(log)]) == 0
+    assert f"cannot use this log: {said}" in capsys.readouterr().out
+    out = str(tmp_path / "out")
+    runs = [
+        ("vehicle-sim", vehicle_sim_cli.main, ["config-from-log", str(log), "--out", out]),
+        ("fit-gp", fit_gp_cli.main, [str(log), "--out", out, "--no-plots"]),
+    ]
+    for prog, main, argv in runs:
+        assert main(argv) == 2, prog
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith(prog) and said in err[0], err
+        assert "not a multirotor" not in err[0] and "generic vehicle" not in err[0]
 
 
 @pytest.mark.parametrize("name", ["quad_posctl_v1_15.ulg", "quad_offboard_v1_16.ulg"])

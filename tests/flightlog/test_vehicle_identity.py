@@ -12,7 +12,12 @@ from companion.inprocess_link import InProcessLink
 from flightlog.schema import FlightLog
 from flightlog.ulog import read_ulog
 from flightlog.vehicle_identity import mixed_vehicle_fields
-from gp.velocity_integrator import GAINS_METADATA_KEY, VELOCITY_LOOP_PARAMS
+from flightlog.velocity_loop_gains import (
+    GAINS_METADATA_KEY,
+    GRAVITY_MPS2,
+    OLD_TO_ACC,
+    VELOCITY_LOOP_PARAMS,
+)
 from scripts import fit_gp as fit_gp_cli
 from vehicle_sim import Simulator, load_sim_config
 from vehicle_sim.mavlink.params import param_value_msg
@@ -20,6 +25,7 @@ from vehicle_sim.mavlink.params import param_value_msg
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "ulog"
 POSCTL = FIXTURES / "quad_posctl_v1_15.ulg"  # airframe 4001 on a PX4_FMU_V6C
 OFFBOARD = FIXTURES / "quad_offboard_v1_16.ulg"  # airframe 4003 on a CUAV_7_NANO
+V1_9 = FIXTURES / "quad_mission_rtl_v1_9_esc.ulg"  # gains under their pre-v1.11 names
 
 
 def with_metadata(log: FlightLog, name: str, **metadata: object) -> FlightLog:
@@ -98,3 +104,19 @@ def test_unreadable_identity_values_are_left_out_not_a_crash() -> None:
         with_metadata(rows, "c.csv", velocity_loop_gains={"vel_p_xy": "fast"}),
     ]
     assert mixed_vehicle_fields(logs) == []
+
+
+def test_gains_logged_under_their_pre_v1_11_names_are_compared_in_todays_units() -> None:
+    """The real v1.9 flight logs MPC_XY_VEL_P 0.12 ... (normalised thrust per m/s): a log of
+    another tuning passed as the same vehicle (only a sidecar's gains were compared), while
+    the same loop logged under the v1.11 names (x g / MPC_THR_HOVER 0.5) is the same vehicle."""
+    rows = read_ulog(V1_9)
+    params = rows.metadata["px4_params"]
+    today = {k: v for k, v in params.items() if k not in OLD_TO_ACC}
+    today |= {new: params[old] * GRAVITY_MPS2 / 0.5 for old, new in OLD_TO_ACC.items()}
+    renamed = with_metadata(rows, "v1_11.ulg", px4_params=today)
+    assert mixed_vehicle_fields([rows, renamed]) == []
+    retuned = with_metadata(rows, "retuned.ulg", px4_params={**params, "MPC_XY_VEL_P": 0.2})
+    clauses = mixed_vehicle_fields([rows, renamed, retuned])
+    assert len(clauses) == 1 and clauses[0].startswith("velocity_loop_gains {"), clauses
+    assert f"in {V1_9} and v1_11.ulg," in clauses[0] and "'vel_p_xy': 3.92" in clauses[0]

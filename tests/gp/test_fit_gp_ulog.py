@@ -6,16 +6,21 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from pyulog import ULog
 
 from flightlog.reader import read_log
 from flightlog.schema import FlightLog, write_flight_log
+from flightlog.velocity_loop_gains import GRAVITY_MPS2, OLD_TO_ACC
+from gp.errors import DatasetError
 from gp.model_io import read_model_header
+from gp.velocity_integrator import logged_velocity_loop_gains
 from scripts import fit_gp as fit_gp_cli
 from scripts import flightlog_cli
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "ulog"
 AUTO = FIXTURES / "quad_sitl_v1_15_auto.ulg"
 POSCTL = FIXTURES / "quad_posctl_v1_15.ulg"  # a real vehicle
+V1_9 = FIXTURES / "quad_mission_rtl_v1_9_esc.ulg"  # a real vehicle, gains under pre-v1.11 names
 FAST = ["--no-plots", "--m", "10", "--restarts", "1", "--force"]
 
 
@@ -91,6 +96,52 @@ def test_px4_velocity_pi_takes_its_gains_from_the_ulog_parameters(tmp_path, caps
     nominal = header["feature_definition"]["nominal_model"]["params"]
     assert nominal["vel_p_xy"] == pytest.approx(params["MPC_XY_VEL_P_ACC"])
     assert nominal["vel_i_z"] == pytest.approx(params["MPC_Z_VEL_I_ACC"])
+
+
+def test_px4_velocity_pi_reads_gains_a_ulog_records_under_their_pre_v1_11_names(tmp_path, capsys):
+    """PX4 up to v1.10 logs MPC_XY_VEL_P/I/D and MPC_Z_VEL_P/I/D (normalised thrust per m/s),
+    no MPC_*_VEL_*_ACC: fit-gp refused such a log as one without gains. The real POSCTL flight
+    with its gains written under the old names (old = new x MPC_THR_HOVER / g) fits with the
+    gains it flew."""
+    ulog = ULog(str(POSCTL))
+    params = ulog.initial_parameters
+    hover = params["MPC_THR_HOVER"]
+    flown = {new: params.pop(new) for new in OLD_TO_ACC.values()}
+    params.update({old: flown[new] * hover / GRAVITY_MPS2 for old, new in OLD_TO_ACC.items()})
+    old_names = tmp_path / "posctl_pre_v1_11_names.ulg"
+    ulog.write_ulog(str(old_names))
+    out = tmp_path / "pi"
+    argv = [str(old_names), "--nominal", "px4_velocity_pi", "--out", str(out), *FAST]
+    assert fit_gp_cli.main(argv) == 0, capsys.readouterr().err
+    assert (
+        f"velocity-loop gains of {old_names}: its PX4 parameters MPC_XY_VEL_P, MPC_XY_VEL_I, "
+        "MPC_XY_VEL_D, MPC_Z_VEL_P, MPC_Z_VEL_I, MPC_Z_VEL_D (before v1.11, normalised thrust "
+        "per m/s) x g / hover thrust 0.580 (MPC_THR_HOVER parameter)"
+    ) in capsys.readouterr().err
+    nominal = read_model_header(out)["feature_definition"]["nominal_model"]["params"]
+    assert nominal["vel_p_xy"] == pytest.approx(flown["MPC_XY_VEL_P_ACC"], rel=1e-6)
+    assert nominal["vel_i_z"] == pytest.approx(flown["MPC_Z_VEL_I_ACC"], rel=1e-6)
+
+
+def test_the_real_v1_9_gains_are_read_at_its_mpc_thr_hover_or_refused_saying_why():
+    """The real v1.9 flight: MPC_XY_VEL_P 0.12, MPC_Z_VEL_I 0.05 at MPC_THR_HOVER 0.5. Without
+    MPC_THR_HOVER and with no produced thrust (it logs the commanded one) nothing gives the
+    scale: one line says so instead of a guess."""
+    log = read_log(V1_9)
+    gains = logged_velocity_loop_gains([log])
+    assert gains["vel_p_xy"] == pytest.approx(0.12 * GRAVITY_MPS2 / 0.5, rel=1e-6)
+    assert gains["vel_i_z"] == pytest.approx(0.05 * GRAVITY_MPS2 / 0.5, rel=1e-6)
+    params = {k: v for k, v in log.metadata["px4_params"].items() if k != "MPC_THR_HOVER"}
+    no_hover = FlightLog(log.columns, {**log.metadata, "px4_params": params}, V1_9)
+    with pytest.raises(DatasetError) as err:
+        logged_velocity_loop_gains([no_hover])
+    assert str(err.value).startswith(
+        f"{V1_9}: it records MPC_XY_VEL_P, MPC_XY_VEL_I, MPC_XY_VEL_D, MPC_Z_VEL_P, "
+        "MPC_Z_VEL_I, MPC_Z_VEL_D under their names before PX4 v1.11 (normalised thrust per "
+        "m/s) and no hover thrust to scale them by (no MPC_THR_HOVER parameter, no produced "
+        "thrust while hovering); px4_velocity_pi needs"
+    )
+    assert "\n" not in str(err.value)
 
 
 def test_a_model_from_a_10_hz_ulog_says_the_companion_rate_it_flies_at(tmp_path, capsys):
