@@ -186,14 +186,16 @@ def _grid_rmse(
     search grid, ``inf`` for a value that cannot be the least: its replay stops as soon as its
     squared error exceeds the least one so far (:func:`.replay.replay_sse`; values tried in
     :func:`grid_order`), so the least value and where it is are those a replay of every value
-    in full gives."""
+    in full gives. A replay that diverged (a non-finite error) is ``inf`` too, never the least
+    (``np.argmin`` would pick a NaN)."""
     _, grid = search_grid(name)
     n_rows = max(sum(w.stop - w.anchor for w in train), 1)
     sse = np.full(len(grid), np.inf)
     least = np.inf
     for k in grid_order(name):
         # a margin of 1e-9: a value within rounding of the least is replayed in full
-        sse[k] = replay_sse(with_cause(config, name, grid[k]), logs, train, least * (1 + 1e-9))
+        value = replay_sse(with_cause(config, name, grid[k]), logs, train, least * (1 + 1e-9))
+        sse[k] = value if np.isfinite(value) else np.inf
         least = min(least, sse[k])
     return np.sqrt(sse / n_rows)
 
