@@ -9,7 +9,8 @@ where the path starts: the rover must be within ``START_TOLERANCE_M`` and
 rover is driven back (experiments.rover.drive_back) when ``drive_back`` says how, and
 otherwise, or when the drive back ends outside those tolerances, the run stops with a line
 saying where the rover is. Whatever ends a trial early
-ends the run: a pilot taking the rover out of OFFBOARD (nothing more is sent), a lost link, a
+ends the run: a pilot or a failsafe taking the rover out of OFFBOARD (nothing more is sent; a
+failsafe PX4 announced is named with its words), a lost link, a
 non-finite pose, a failed solve (zero velocity and Hold), or not reaching the end in time.
 """
 
@@ -22,6 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from companion.link import Link
+from companion.runner import failsafe_said
 from experiments.rover.drive_back import DriveBack
 from experiments.rover.link_drive import LinkDrive, drive_path, pose_of
 from gp.local_gp import LocalGP
@@ -149,6 +151,7 @@ def repeat_path(
             link, path, schedule, nmpc, timeout_s=timeout_s, gp=gp, connect=False,
             feedforward=feedforward,
         )  # fmt: skip
+        said = failsafe_said(link) if drive.left_offboard_for else ""
         trial = Trial(number, drive, schedule.copy(), len(gp))
         out.trials.append(trial)
         if scheduler is not None:
@@ -159,9 +162,10 @@ def repeat_path(
         on_trial(trial, out.schedule_mps)
         if drive.left_offboard_for:
             out.status = "handed_over"
+            why = f' (a PX4 failsafe: "{said}")' if said else ""
             out.detail = (
-                f"the rover left OFFBOARD for {drive.left_offboard_for} during trial {number}; "
-                "the run stopped there and sent nothing more"
+                f"the rover left OFFBOARD for {drive.left_offboard_for} during trial {number}"
+                f"{why}; the run stopped there and sent nothing more"
             )
             return out
         if drive.stopped_for:

@@ -12,7 +12,7 @@ refused, as the multirotor endpoint refuses it. Telemetry at
 GLOBAL_POSITION_INT (with the ground velocity, about a fixed origin, flat-earth), and at 1 Hz
 what else MAVSDK's health check wants (SYS_STATUS with healthy sensors and the pre-arm bit,
 GPS_RAW_INT and HOME_POSITION). Offboard without a setpoint for ``setpoint_timeout_s`` stops
-the rover and switches to Hold (PX4's offboard loss failsafe).
+the rover and switches to Hold (PX4's offboard loss failsafe), saying so in a STATUSTEXT.
 A malformed message never stops the endpoint: a mode that is not a number is DENIED, a setpoint
 with a non-finite speed or yaw rate, or without a velocity (a position setpoint, which this
 rover does not fly), is refused with a STATUSTEXT (and is no proof of life), an
@@ -124,6 +124,10 @@ class RoverMavlinkEndpoint:
             now = time.monotonic()
             if self.offboard and now - self._last_sp > self._timeout:
                 self._set_mode(_PX4_MAIN_AUTO, _PX4_SUB_AUTO_LOITER)  # offboard loss: Hold
+                if self._conn.mav is not None:  # said, as PX4's failsafe says it
+                    self._conn.mav.statustext_send(
+                        _MAV.MAV_SEVERITY_CRITICAL, b"Failsafe: offboard lost, holding"
+                    )
             self.sim.step(min(now - t_prev, 0.1))
             t_prev = now
             if now >= next_tel and self._conn.mav is not None:

@@ -118,3 +118,41 @@ def test_the_ackermann_rovers_tuning_measures_its_turn_rate_penalty_from_the_pat
     drive = drive_path(link, path, 0.5, tuning.nmpc, 200.0, feedforward=tuning.feedforward)
     assert drive.reached_end
     assert np.max(np.abs(drive.e_lat_m)) < 0.025
+
+
+class _StallingLink(PymavlinkLink):
+    """The real pymavlink link on a companion whose computer stalls ``after_s`` into the drive:
+    from then on no setpoint leaves it (the link's own re-sending included)."""
+
+    def __init__(self, url: str, after_s: float) -> None:
+        super().__init__(url)
+        self.after_s, self.first_s = after_s, None
+
+    def _send_setpoint(self) -> None:
+        now_s = self.clock.now_s()
+        self.first_s = self.first_s if self.first_s is not None else now_s
+        if now_s - self.first_s < self.after_s:
+            super()._send_setpoint()
+
+
+@pytest.mark.slow
+def test_a_repeat_ended_by_the_offboard_loss_failsafe_names_it() -> None:
+    """The companion stops streaming mid-trial: the rover's offboard-loss failsafe holds it and
+    says so, and the repeat's detail names that failsafe with its words, not only the mode."""
+    from experiments.rover.repeat import repeat_path
+
+    port = free_udp_port()
+    sim = RoverSim(rover_preset("husky_50kg"), seed=2)
+    link = _StallingLink(f"udpin://127.0.0.1:{port}", after_s=3.0)
+    endpoint = RoverMavlinkEndpoint(sim, port, setpoint_timeout_s=0.5, mode="udpout")
+    endpoint.start()
+    try:
+        link.connect(30.0)
+        path = _path()
+        out = repeat_path(link, path, 1, learner.make_history_gp(), np.full(len(path), 0.5))
+    finally:
+        link.close()
+        endpoint.close()
+    assert out.status == "handed_over", out.detail
+    assert out.detail.startswith("the rover left OFFBOARD for HOLD during trial 1"), out.detail
+    assert '(a PX4 failsafe: "Failsafe: offboard lost, holding")' in out.detail, out.detail

@@ -145,8 +145,9 @@ def _command(gcs: mavutil.mavfile, command: int, *params: float) -> int:
 def test_modes_hold_is_reported_other_auto_modes_refused_bad_setpoints_ignored() -> None:
     """PX4 reports Hold as AUTO_LOITER (main 4, sub 3) and refuses the AUTO modes a rover
     cannot fly here (RTL, mission, land, takeoff); an offboard stream that stops puts the rover
-    in Hold (PX4's failsafe); a setpoint with NaN speed is ignored, the endpoint keeps running;
-    GLOBAL_POSITION_INT carries the ground velocity (MAVSDK's velocity_ned reads it)."""
+    in Hold (PX4's failsafe, which says so); a setpoint with NaN speed is ignored, the endpoint
+    keeps running; GLOBAL_POSITION_INT carries the ground velocity (MAVSDK's velocity_ned reads
+    it)."""
     port = free_udp_port()
     ep = RoverMavlinkEndpoint(RoverSim(rover_preset("husky_50kg")), port, setpoint_timeout_s=0.5)
     ep.start()
@@ -184,7 +185,9 @@ def test_modes_hold_is_reported_other_auto_modes_refused_bad_setpoints_ignored()
         assert (hb.custom_mode >> 16 & 0xFF, hb.custom_mode >> 24) == (4, 3)
         stream(0.0, 0.2)
         assert _command(gcs, _MAV.MAV_CMD_DO_SET_MODE, 1, 6) == _MAV.MAV_RESULT_ACCEPTED
-        hb = _latest(gcs, "HEARTBEAT", 1.5)  # no setpoint for longer than the timeout
+        said = gcs.recv_match(type="STATUSTEXT", blocking=True, timeout=1.5)  # after the timeout
+        assert said is not None and said.text == "Failsafe: offboard lost, holding"
+        hb = _latest(gcs, "HEARTBEAT", 1.0)
         assert (hb.custom_mode >> 16 & 0xFF, hb.custom_mode >> 24) == (4, 3)
     finally:
         gcs.close()
