@@ -45,14 +45,15 @@ def run(module: str, prog: str) -> int:
 
 
 def _stdout_closed() -> bool:
-    """Whether standard output is a pipe whose reader has gone (poll reports an error on it);
-    False for an output that is no file (nothing of it can be broken)."""
+    """Whether standard output is a pipe or socket whose reader has gone (poll reports an
+    error or a hang-up on it); False for an output that is no file (nothing of it can be
+    broken)."""
     try:
         poller = select.poll()
         poller.register(sys.stdout.fileno(), select.POLLOUT)
     except (OSError, ValueError):
         return False
-    return any(events & select.POLLERR for _, events in poller.poll(0))
+    return any(events & (select.POLLERR | select.POLLHUP) for _, events in poller.poll(0))
 
 
 def vehicle_sim() -> int:
