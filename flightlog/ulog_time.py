@@ -46,10 +46,12 @@ def in_time_order(topics: Topics) -> tuple[dict[str, dict[str, np.ndarray]], int
 
 def _out_of_line(t: np.ndarray) -> np.ndarray:
     """Samples later than the next one while the next one is in order with the one before
-    (or, for the first sample, later than the next): one bad timestamp, not a stale block."""
+    (or, for the first sample, later than the next two: later than only the next, it is the
+    next that is out of line, too early, and the running maximum leaves that one out): one bad
+    timestamp, not a stale block."""
     bad = np.zeros(len(t), dtype=bool)
     if len(t) >= 2:
-        bad[0] = t[0] > t[1]
+        bad[0] = t[0] > t[1] and (len(t) == 2 or t[0] > t[2])
     if len(t) >= 3:
         bad[1:-1] = (t[1:-1] > t[2:]) & (t[2:] >= t[:-2])
     return bad

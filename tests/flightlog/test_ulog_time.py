@@ -33,3 +33,11 @@ def test_a_sound_topic_is_kept_whole_and_the_span_starts_at_the_data() -> None:
     start, end = data_span_us(kept, header_us=0.0)  # a header that recorded 0
     assert (start, end) == (408.9e6, 504.1e6)
     assert data_span_us(kept, header_us=409.2e6)[0] == 409.2e6  # the logging start
+
+
+def test_a_far_past_timestamp_second_is_left_out_not_the_sound_first_sample() -> None:
+    """[10, 0.5, 11, 12]: the 0.5 is the bad one (out of line with both neighbours); the first
+    sample, in order with the rest, is kept (it was left out, and the 0.5 kept as the start)."""
+    kept, left_out = in_time_order({"a": topic([10, 0.5, 11, 12])})
+    assert left_out == 1
+    np.testing.assert_array_equal(kept["a"]["x"], [0, 2, 3])
