@@ -208,6 +208,8 @@ def test_a_config_from_parameters_needs_a_multirotor_and_its_hover_thrust():
     assert parameters_give_a_config({"mav_type": 2, "px4_params": hover})
     assert not parameters_give_a_config({"mav_type": 2, "px4_params": {"MAV_TYPE": 2.0}})
     assert not parameters_give_a_config({"mav_type": 1, "px4_params": hover})  # fixed wing
+    zero = {"MPC_THR_HOVER": 0.0}  # no hover thrust: it made a massless vehicle
+    assert not parameters_give_a_config({"mav_type": 2, "px4_params": zero})
 
 
 def test_velocity_gains_logged_under_their_pre_v1_11_names_are_carried_over(tmp_path, capsys):
