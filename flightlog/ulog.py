@@ -136,12 +136,13 @@ def rows_left_out_note(log: FlightLog) -> str | None:
 
 
 def _out_of_order_clause(samples: int) -> str:
-    """What a damage note adds when ``samples`` samples went back in time and were left out."""
+    """What a damage note adds when ``samples`` samples out of time order were left out."""
     if not samples:
         return ""
     return (
-        f"; {samples} samples older than the data before them (blocks of older data read "
-        "after damage, e.g. left on the card) were left out"
+        f"; {samples} samples out of time order (older than the data before them: blocks of "
+        "older data read after damage, e.g. left on the card; or a lone timestamp out of line, "
+        "a bit flipped) were left out"
     )
 
 
