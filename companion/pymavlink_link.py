@@ -46,6 +46,7 @@ _VELOCITY_YAW_RATE_MASK = (
     | _MAV.POSITION_TARGET_TYPEMASK_YAW_IGNORE
 )
 _HEARTBEAT_LOST_S = 3.0
+_STATUSTEXT_CHARS = 50  # STATUSTEXT.text, a chunk of a longer text when full
 _MSG_LOCAL_POSITION_NED = _MAV.MAVLINK_MSG_ID_LOCAL_POSITION_NED
 _MSG_ATTITUDE_QUATERNION = _MAV.MAVLINK_MSG_ID_ATTITUDE_QUATERNION
 
@@ -119,6 +120,7 @@ class PymavlinkLink:
         self._params: dict[str, float] = {}
         self._status_texts: deque[StatusText] = deque(maxlen=STATUS_TEXTS_KEPT)
         self._texts_received = 0
+        self._open_chunk: tuple[int, int] | None = None  # (id, chunk_seq) of a full last chunk
         self._pos = np.full(3, np.nan)
         self._vel = np.full(3, np.nan)
         self._q = np.full(4, np.nan)
@@ -337,9 +339,19 @@ class PymavlinkLink:
         self._obstacle_distances = obstacle_distances_of(msg, self._pos.copy(), self._clock.now_s())
 
     def _on_status_text(self, msg: MAVLink_message) -> None:
-        text = msg.text.decode() if isinstance(msg.text, bytes) else msg.text
-        self._status_texts.append(StatusText(self._clock.now_s(), text.rstrip("\x00")))
-        self._texts_received += 1
+        """A text of more than STATUSTEXT's 50 characters comes in chunks (PX4 sends its texts
+        of up to 127 so): MAVLink 2's ``id`` and ``chunk_seq``, each chunk but the last full.
+        A chunk that continues the last text (its id, the next chunk_seq, after a full chunk)
+        is joined to it, so the text is kept, timed and counted once, whole."""
+        text = (msg.text.decode() if isinstance(msg.text, bytes) else msg.text).rstrip("\x00")
+        chunk = (getattr(msg, "id", 0), getattr(msg, "chunk_seq", 0))
+        last = self._status_texts[-1] if self._status_texts else None
+        if last is not None and self._open_chunk == (chunk[0], chunk[1] - 1):
+            self._status_texts[-1] = StatusText(self._clock.now_s(), last.text + text)
+        else:
+            self._status_texts.append(StatusText(self._clock.now_s(), text))
+            self._texts_received += 1
+        self._open_chunk = chunk if len(text) == _STATUSTEXT_CHARS else None
 
     _HANDLERS = {
         "HEARTBEAT": _on_heartbeat,

@@ -55,7 +55,9 @@ controller on its own processor (experiments.sim_endpoint)."""
 
 
 _MANUAL_MODES = ("MANUAL", "STABILIZED", "ACRO", "ALTCTL", "POSCTL")
-"""Modes only a pilot's sticks fly: PX4's failsafes never choose them."""
+"""Modes a pilot's sticks fly. PX4's failsafes choose them only as the offboard-loss fallback
+with sticks present (COM_OBL_RC_ACT, Position mode by default), and then say so ("Failsafe
+activated"), which failsafe_said hears first."""
 
 
 FAILSAFE_TEXT_RECENT_S = 3.0
@@ -63,14 +65,16 @@ FAILSAFE_TEXT_RECENT_S = 3.0
 
 
 def failsafe_said(link: Link) -> str:
-    """The vehicle's newest text naming a failsafe ("Failsafe: data link lost, returning") in
-    the last FAILSAFE_TEXT_RECENT_S, or "" when it said none."""
+    """The vehicle's newest text naming a failsafe in the last FAILSAFE_TEXT_RECENT_S, or ""
+    when it said none. PX4 v1.14+ says "Failsafe activated" (or "..., entering Hold for 5
+    seconds"), v1.13 "Failsafe enabled: no datalink", each ending in a tab (PX4's mark of a
+    text its events protocol says too), which is left out here, as surrounding blanks are."""
     now_s = link.clock.now_s()
     for said in reversed(link.status_texts()):
         if now_s - said.t_s > FAILSAFE_TEXT_RECENT_S:
             break
         if "failsafe" in said.text.lower():
-            return said.text
+            return said.text.strip()
     return ""
 
 

@@ -44,6 +44,7 @@ from flightlog import px4
 from flightlog.schema import FlightLog, FlightLogError, validate_flight_log
 from flightlog.ulog_integrity import ULogDamage, find_damage
 from flightlog.ulog_time import data_span_us, in_time_order
+from flightlog.velocity_loop_gains import is_hover_thrust
 
 Topics = Mapping[str, Mapping[str, np.ndarray]]
 ULOG_MAGIC = b"ULog\x01\x12\x35"
@@ -135,12 +136,13 @@ def rows_left_out_note(log: FlightLog) -> str | None:
 
 
 def _out_of_order_clause(samples: int) -> str:
-    """What a damage note adds when ``samples`` samples went back in time and were left out."""
+    """What a damage note adds when ``samples`` samples out of time order were left out."""
     if not samples:
         return ""
     return (
-        f"; {samples} samples older than the data before them (blocks of older data read "
-        "after damage, e.g. left on the card) were left out"
+        f"; {samples} samples out of time order (older than the data before them: blocks of "
+        "older data read after damage, e.g. left on the card; or a lone timestamp out of line, "
+        "a bit flipped) were left out"
     )
 
 
@@ -277,10 +279,16 @@ def summarise_ulog(path: str | Path) -> dict[str, object]:
 
 def parameters_give_a_config(summary: Mapping[str, object]) -> bool:
     """Whether a ULog the mapping refuses still gives a sim config from its PX4 parameters
-    alone (vehicle-sim config-from-log): a multirotor by MAV_TYPE that logged MPC_THR_HOVER.
-    ``summary`` is :func:`summarise_ulog`'s."""
+    alone (vehicle-sim config-from-log): a multirotor by MAV_TYPE that logged MPC_THR_HOVER,
+    a hover thrust (:func:`flightlog.velocity_loop_gains.is_hover_thrust`: 0 would make a
+    massless vehicle). ``summary`` is :func:`summarise_ulog`'s."""
     params = summary.get("px4_params") or {}
-    return summary.get("mav_type") in px4.MAV_TYPE_MULTIROTOR and "MPC_THR_HOVER" in params
+    hover = params.get("MPC_THR_HOVER")
+    return (
+        summary.get("mav_type") in px4.MAV_TYPE_MULTIROTOR
+        and hover is not None
+        and is_hover_thrust(float(hover))
+    )
 
 
 def logger_dropouts(ulog) -> list[float]:

@@ -10,7 +10,10 @@ every earlier sample of their topic are kept: the log's own time line, and what 
 time once the stale block is over. Stale data is not sorted back in: it may be another flight's
 or another boot's. A single sample out of line with its neighbours, which are in order (a bit
 flipped in its timestamp: ULog carries no checksum), is left out first, so that a far-future
-timestamp does not take the rest of its topic with it.
+timestamp does not take the rest of its topic with it. A topic's last sample, which has no
+next one, is out of line when it is more than twice as late (after boot) as all the log's other
+data: a sound log's topics all run to its end, and the real v1.15 POSCTL flight with bit 40 of
+its last local position's timestamp flipped read as 12.7 days long.
 
 The span starts at the later of the file header's timestamp (the logging start) and the first
 non-zero data timestamp: some files record 0 in the header (a v1.17 flight logged from 408.9 s
@@ -28,14 +31,20 @@ Topics = Mapping[str, Mapping[str, np.ndarray]]
 
 def in_time_order(topics: Topics) -> tuple[dict[str, dict[str, np.ndarray]], int]:
     """``topics`` (name -> field -> array, ``timestamp`` in us) with, in each topic, only the
-    samples not earlier than every sample before them; and how many samples were left out."""
+    samples not earlier than every sample before them, less a lone sample out of line (module
+    docstring); and how many samples were left out."""
     kept: dict[str, dict[str, np.ndarray]] = {}
     left_out = 0
+    keeps = {}
     for name, topic in topics.items():
         t = np.asarray(topic["timestamp"], dtype=float)
         keep = ~_out_of_line(t)
         running_max = np.maximum.accumulate(np.where(keep, t, -np.inf))
         keep[1:] &= t[1:] >= running_max[:-1]
+        keeps[name] = (t, keep)
+    _leave_out_lone_last_samples(keeps)
+    for name, topic in topics.items():
+        keep = keeps[name][1]
         if keep.all():
             kept[name] = dict(topic)
             continue
@@ -44,12 +53,31 @@ def in_time_order(topics: Topics) -> tuple[dict[str, dict[str, np.ndarray]], int
     return kept, left_out
 
 
+def _leave_out_lone_last_samples(keeps: dict[str, tuple[np.ndarray, np.ndarray]]) -> None:
+    """In ``keeps`` (topic -> (timestamps, kept mask)), un-keep each topic's last kept sample
+    that is more than twice as late as every other kept sample of the log (one per topic)."""
+    lasts = {}
+    for name, (_, keep) in keeps.items():
+        kept_at = np.flatnonzero(keep)
+        if len(kept_at):
+            lasts[name] = kept_at[-1]
+    for name, last in lasts.items():
+        t, keep = keeps[name]
+        before = t[np.flatnonzero(keep)[-2]] if keep.sum() >= 2 else -np.inf
+        others = [keeps[o][0][i] for o, i in lasts.items() if o != name]
+        latest_other = max([before, *others])
+        if latest_other > 0 and t[last] > 2.0 * latest_other:
+            keep[last] = False
+
+
 def _out_of_line(t: np.ndarray) -> np.ndarray:
     """Samples later than the next one while the next one is in order with the one before
-    (or, for the first sample, later than the next): one bad timestamp, not a stale block."""
+    (or, for the first sample, later than the next two: later than only the next, it is the
+    next that is out of line, too early, and the running maximum leaves that one out): one bad
+    timestamp, not a stale block."""
     bad = np.zeros(len(t), dtype=bool)
     if len(t) >= 2:
-        bad[0] = t[0] > t[1]
+        bad[0] = t[0] > t[1] and (len(t) == 2 or t[0] > t[2])
     if len(t) >= 3:
         bad[1:-1] = (t[1:-1] > t[2:]) & (t[2:] >= t[:-2])
     return bad

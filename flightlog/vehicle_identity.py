@@ -81,12 +81,17 @@ def _close(a: float, b: float, rel_tol: float) -> bool:
     return abs(a - b) <= rel_tol * max(abs(a), abs(b))
 
 
+def same_gains(a: Mapping[str, float], b: Mapping[str, float]) -> bool:
+    """The same velocity-loop gains: the same names, each value within GAIN_REL_TOL."""
+    return a.keys() == b.keys() and all(_close(a[k], b[k], GAIN_REL_TOL) for k in a)
+
+
 def _same(a: object, b: object) -> bool:
     """Equal identity values: masses within MASS_REL_TOL, gains each within GAIN_REL_TOL."""
     if isinstance(a, float) and isinstance(b, float):
         return _close(a, b, MASS_REL_TOL)
-    if isinstance(a, dict) and isinstance(b, dict) and a.keys() == b.keys():
-        return all(_close(a[k], b[k], GAIN_REL_TOL) for k in a)
+    if isinstance(a, dict) and isinstance(b, dict):
+        return same_gains(a, b)
     return a == b
 
 

@@ -72,7 +72,9 @@ class LoggedGains:
 def estimated_hover_thrust(log: FlightLog) -> float | None:
     """The hover thrust (normalised, 0-1) the flight shows: the median produced thrust
     (``thrust_norm`` of a ``produced`` thrust source) over the rows slower than
-    HOVER_SPEED_MPS and not landed, when there are 10 or more; else None."""
+    HOVER_SPEED_MPS and not landed, when there are 10 or more and it is a thrust a vehicle
+    hovers at (:func:`is_hover_thrust`: not the zero of motors idle on the ground in a log
+    that does not say it landed); else None."""
     source = log.metadata.get("thrust_source")
     produced = isinstance(source, Mapping) and source.get("kind") == "produced"
     if not (produced and log.has("thrust_norm")):
@@ -81,17 +83,27 @@ def estimated_hover_thrust(log: FlightLog) -> float | None:
     rows = speed < HOVER_SPEED_MPS
     if log.has("landed"):
         rows &= log["landed"] == 0
-    return float(np.median(log["thrust_norm"][rows])) if rows.sum() >= 10 else None
+    if rows.sum() < 10:
+        return None
+    hover = float(np.median(log["thrust_norm"][rows]))
+    return hover if is_hover_thrust(hover) else None
+
+
+def is_hover_thrust(value: float) -> bool:
+    """A normalised thrust in (0, 1]: one a hover thrust can be (0 would make every gain
+    scaled by it infinite)."""
+    return 0.0 < value <= 1.0
 
 
 def hover_thrust_for_gains(
     params: Mapping[str, float], estimated: float | None
 ) -> tuple[float | None, str]:
-    """(hover thrust, its source) that scales old gains: MPC_THR_HOVER in ``params``, else
-    ``estimated`` (the flight's, :func:`estimated_hover_thrust`); (None, "") with neither."""
-    if "MPC_THR_HOVER" in params:
+    """(hover thrust, its source) that scales old gains: MPC_THR_HOVER in ``params`` when
+    a hover thrust (:func:`is_hover_thrust`), else ``estimated`` (the flight's,
+    :func:`estimated_hover_thrust`) when one; (None, "") with neither."""
+    if "MPC_THR_HOVER" in params and is_hover_thrust(float(params["MPC_THR_HOVER"])):
         return float(params["MPC_THR_HOVER"]), HOVER_PARAMETER
-    if estimated is not None:
+    if estimated is not None and is_hover_thrust(estimated):
         return estimated, HOVER_ESTIMATED
     return None, ""
 
@@ -128,8 +140,8 @@ def velocity_loop_gains(log: FlightLog) -> LoggedGains:
         return LoggedGains(
             None,
             f"it records {', '.join(old)} under their names before PX4 v1.11 (normalised thrust "
-            "per m/s) and no hover thrust to scale them by (no MPC_THR_HOVER parameter, no "
-            "produced thrust while hovering)",
+            "per m/s) and no hover thrust to scale them by (no MPC_THR_HOVER parameter in (0, 1], "
+            "no produced thrust while hovering)",
         )
     acc = {**params, **(acceleration_gains(params, hover) if old else {})}
     missing = [n for n in VELOCITY_LOOP_PARAMS if VELOCITY_LOOP_PARAMS[n] not in acc]

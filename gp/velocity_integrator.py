@@ -28,6 +28,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from flightlog.schema import FlightLog
+from flightlog.vehicle_identity import same_gains
 from flightlog.velocity_loop_gains import VELOCITY_LOOP_PARAMS, velocity_loop_gains
 from gp.errors import DatasetError
 
@@ -52,7 +53,8 @@ def logged_velocity_loop_gains(logs: Sequence[FlightLog]) -> dict[str, float]:
     """The autopilot's velocity-loop gains (px4_velocity_pi's parameter names) recorded with
     ``logs`` (flightlog.velocity_loop_gains: the sidecar's, else the PX4 parameters a ULog
     records, under their names since v1.11 or before); every log must carry them, and the same
-    ones.
+    ones (flightlog.vehicle_identity.same_gains: a float32 read over MAVLink is the same gain
+    as the float64 in process). The first log's are returned.
 
     Raises:
         DatasetError: a log without them, or logs with different gains (one line each).
@@ -66,10 +68,10 @@ def logged_velocity_loop_gains(logs: Sequence[FlightLog]) -> dict[str, float]:
                 "MPC_*_VEL_*_ACC gains: fly with a companion that records them, or give them "
                 "with --nominal-param vel_p_xy=... (all six)"
             )
-        if gains is not None and logged.gains != gains:
+        if gains is not None and not same_gains(logged.gains, gains):
             raise DatasetError(
                 f"{log.where}: velocity-loop gains {logged.gains} differ from the other logs' "
                 f"{gains}; fit logs flown with one tuning at a time"
             )
-        gains = logged.gains
+        gains = gains or logged.gains
     return gains or {}

@@ -8,13 +8,16 @@ exit 130, as a Ctrl-C later on does; nothing has been done yet.
 
 A reader of the output that stops early (``flightlog info LOG | head``) closes the pipe: the
 next write was a BrokenPipeError traceback. The command ends there quietly, as a program that
-SIGPIPE stops does (exit 141): its reader has what it wanted.
+SIGPIPE stops does (exit 141): its reader has what it wanted. Only then: a BrokenPipeError of
+anything else (a pipe or socket of the command's own) while its standard output is still read
+is the failure it is, not a quiet exit.
 """
 
 from __future__ import annotations
 
 import importlib
 import os
+import select
 import sys
 
 EXIT_INTERRUPTED = 130
@@ -33,10 +36,24 @@ def run(module: str, prog: str) -> int:
         code = main()
         sys.stdout.flush()
     except BrokenPipeError:
+        if not _stdout_closed():
+            raise
         # What is still buffered would fail again when Python flushes it on exit.
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return EXIT_BROKEN_PIPE
     return code
+
+
+def _stdout_closed() -> bool:
+    """Whether standard output is a pipe or socket whose reader has gone (poll reports an
+    error or a hang-up on it); False for an output that is no file (nothing of it can be
+    broken)."""
+    try:
+        poller = select.poll()
+        poller.register(sys.stdout.fileno(), select.POLLOUT)
+    except (OSError, ValueError):
+        return False
+    return any(events & (select.POLLERR | select.POLLHUP) for _, events in poller.poll(0))
 
 
 def vehicle_sim() -> int:

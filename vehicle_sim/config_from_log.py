@@ -34,6 +34,7 @@ from flightlog.velocity_loop_gains import (
     acceleration_gains,
     estimated_hover_thrust,
     hover_thrust_for_gains,
+    is_hover_thrust,
 )
 from vehicle_sim.config import GRAVITY_MPS2, config_from_mapping, load_sim_config
 from vehicle_sim.params import PX4_PARAMS
@@ -59,8 +60,8 @@ def config_from_log(log: FlightLog, preset: str = "iris") -> ConfigFromLog:
     hover, hover_how = _hover_thrust(log, params)
     if hover is None:
         raise ValueError(
-            f"{log.where}: no MPC_THR_HOVER parameter and no produced thrust while "
-            "hovering; use a PX4 ULog (it records parameters) or log actuator_motors"
+            f"{log.where}: no MPC_THR_HOVER parameter in (0, 1] and no produced thrust "
+            "while hovering; use a PX4 ULog (it records parameters) or log actuator_motors"
         )
     vehicle = log.metadata.get("vehicle")
     kind = vehicle.get("type") if isinstance(vehicle, Mapping) else None
@@ -231,10 +232,11 @@ def _clamp_to_px4_ranges(tuned: dict[str, float]) -> list[str]:
 
 
 def _hover_thrust(log: FlightLog, params: Mapping[str, float]) -> tuple[float | None, str]:
-    """Hover thrust (normalised): measured if the log has produced thrust, else MPC_THR_HOVER."""
+    """Hover thrust (normalised): measured if the log has produced thrust, else MPC_THR_HOVER
+    when a hover thrust (in (0, 1]: 0 would make a massless vehicle and infinite gains)."""
     measured = estimated_hover_thrust(log)
     if measured is not None:
         return measured, HOVER_ESTIMATED
-    if "MPC_THR_HOVER" in params:
+    if "MPC_THR_HOVER" in params and is_hover_thrust(float(params["MPC_THR_HOVER"])):
         return float(params["MPC_THR_HOVER"]), HOVER_PARAMETER
     return None, ""

@@ -586,6 +586,8 @@ class _SaidLink:
     [
         ([(9.0, "Failsafe: battery critical, returning")], "Failsafe: battery critical, returning"),
         ([(9.0, "failsafe activated"), (9.5, "Takeoff detected")], "failsafe activated"),
+        ([(9.5, "Failsafe activated\t")], "Failsafe activated"),  # PX4's own, with its tab
+        ([(9.5, "Failsafe enabled: no datalink\t")], "Failsafe enabled: no datalink"),  # v1.13
         ([(10.0 - FAILSAFE_TEXT_RECENT_S - 0.1, "Failsafe: data link lost, returning")], ""),
         ([(9.9, "Offboard control lost")], ""),
         ([], ""),

@@ -189,7 +189,8 @@ def test_older_data_read_after_the_damage_is_left_out_not_interpolated(tmp_path)
     assert stale.metadata["duration_s"] < 0.6 * whole.metadata["duration_s"]
     note = damage_note(stale)
     assert note is not None and "\n" not in note
-    assert "samples older than the data before them" in note and "were left out" in note
+    assert "samples out of time order (older than the data before them" in note
+    assert "were left out" in note
     summary = summarise_ulog(path)
     assert min(summary["rates_hz"].values()) > 0 and summary["duration_s"] < 40.0
 
@@ -220,3 +221,30 @@ def test_convert_and_config_from_log_of_a_damaged_ulog_say_it_is_damaged(tmp_pat
     err = capsys.readouterr().err
     assert f"from the log: damaged.ulg is corrupt at byte {offset}" in err
     assert f"#   damaged.ulg is corrupt at byte {offset}" in toml.read_text()
+
+
+def test_a_bit_flipped_in_the_last_local_position_time_does_not_stretch_the_log(tmp_path):
+    """The real POSCTL flight with bit 40 of its last vehicle_local_position timestamp flipped
+    (ULog has no checksum): that sample is left out and said, and the log keeps its length;
+    it read as 12.7 days long."""
+    from tests.flightlog.ulog_damage import POSCTL, message_headers
+
+    data = bytearray(POSCTL.read_bytes())
+    headers = message_headers(bytes(data))
+    # 'A' payload: multi_id (1 byte), msg_id (2), name; 'D' payload: msg_id (2), then the
+    # topic's fields, its timestamp (uint64, little-endian) first
+    (msg_id,) = (
+        data[o + 4 : o + 6]
+        for o, size, kind in headers
+        if kind == "A"
+        and data[o + 6 : o + 3 + size] == b"vehicle_local_position"
+        and data[o + 3] == 0
+    )
+    last = [o for o, _, kind in headers if kind == "D" and data[o + 3 : o + 5] == msg_id][-1]
+    data[last + 5 + 5] ^= 0x01  # the timestamp's byte 5: bit 40
+    path = tmp_path / "flipped.ulg"
+    path.write_bytes(bytes(data))
+    whole, flipped = read_ulog(POSCTL), read_ulog(path)
+    assert flipped.metadata["samples_out_of_time_order"] == 1
+    assert flipped.metadata["duration_s"] == pytest.approx(whole.metadata["duration_s"], abs=0.2)
+    assert "1 samples out of time order" in (damage_note(flipped) or "")

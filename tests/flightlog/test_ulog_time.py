@@ -33,3 +33,23 @@ def test_a_sound_topic_is_kept_whole_and_the_span_starts_at_the_data() -> None:
     start, end = data_span_us(kept, header_us=0.0)  # a header that recorded 0
     assert (start, end) == (408.9e6, 504.1e6)
     assert data_span_us(kept, header_us=409.2e6)[0] == 409.2e6  # the logging start
+
+
+def test_a_far_past_timestamp_second_is_left_out_not_the_sound_first_sample() -> None:
+    """[10, 0.5, 11, 12]: the 0.5 is the bad one (out of line with both neighbours); the first
+    sample, in order with the rest, is kept (it was left out, and the 0.5 kept as the start)."""
+    kept, left_out = in_time_order({"a": topic([10, 0.5, 11, 12])})
+    assert left_out == 1
+    np.testing.assert_array_equal(kept["a"]["x"], [0, 2, 3])
+
+
+def test_a_far_future_last_sample_is_left_out_and_a_late_sound_one_kept() -> None:
+    """A last sample has no next one to be out of line with: one more than twice as late as
+    the rest of the log is left out (it made the span 9e6 s); a topic's late last sample
+    within that is kept (a landing detected after a long gap)."""
+    topics = {"a": topic([10, 11, 12, 9e6]), "b": topic([10, 11, 12.1])}
+    kept, left_out = in_time_order(topics)
+    assert left_out == 1 and len(kept["a"]["x"]) == 3 and len(kept["b"]["x"]) == 3
+    assert data_span_us(kept, header_us=10e6) == (10e6, 12.1e6)
+    late = {"landed": topic([10, 60]), "b": topic([10, 50, 100])}
+    assert in_time_order(late)[1] == 0

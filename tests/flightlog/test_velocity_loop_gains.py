@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from flightlog.schema import FlightLog
@@ -34,4 +35,26 @@ def test_without_mpc_thr_hover_old_gains_are_scaled_by_the_measured_hover_thrust
     assert logged.gains["vel_p_xy"] == pytest.approx(flown * 0.5 / hover, rel=1e-9)
     assert logged.source.endswith(
         f"x g / hover thrust {hover:.3f} (median produced thrust in hover)"
+    )
+
+
+def test_a_hover_thrust_of_zero_scales_no_gain() -> None:
+    """MPC_THR_HOVER 0 (no hover thrust: PX4's range is 0.1-0.8) is passed over for the
+    flight's, and a flight whose produced thrust in hover is 0 (motors idle on the ground in a
+    log that does not say it landed) gives none: old gains were divided by 0
+    (ZeroDivisionError out of fit-gp and config-from-log)."""
+    log = read_ulog(POSCTL)
+    params = dict(log.metadata["px4_params"])
+    params |= {old: params.pop(new) * 0.5 / GRAVITY_MPS2 for old, new in OLD_TO_ACC.items()}
+    params["MPC_THR_HOVER"] = 0.0
+    logged = velocity_loop_gains(FlightLog(log.columns, {**log.metadata, "px4_params": params}))
+    assert logged.gains is not None
+    assert logged.source.endswith("(median produced thrust in hover)")
+    idle = {**log.columns, "thrust_norm": np.zeros(log.n_rows)}
+    idle_log = FlightLog(idle, {**log.metadata, "px4_params": params})
+    assert estimated_hover_thrust(idle_log) is None
+    refused = velocity_loop_gains(idle_log)
+    assert refused.gains is None
+    assert "no MPC_THR_HOVER parameter in (0, 1], no produced thrust while hovering" in (
+        refused.source
     )

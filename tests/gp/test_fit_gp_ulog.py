@@ -138,8 +138,8 @@ def test_the_real_v1_9_gains_are_read_at_its_mpc_thr_hover_or_refused_saying_why
     assert str(err.value).startswith(
         f"{V1_9}: it records MPC_XY_VEL_P, MPC_XY_VEL_I, MPC_XY_VEL_D, MPC_Z_VEL_P, "
         "MPC_Z_VEL_I, MPC_Z_VEL_D under their names before PX4 v1.11 (normalised thrust per "
-        "m/s) and no hover thrust to scale them by (no MPC_THR_HOVER parameter, no produced "
-        "thrust while hovering); px4_velocity_pi needs"
+        "m/s) and no hover thrust to scale them by (no MPC_THR_HOVER parameter in (0, 1], no "
+        "produced thrust while hovering); px4_velocity_pi needs"
     )
     assert "\n" not in str(err.value)
 

@@ -153,7 +153,7 @@ def test_log_without_thrust_or_parameters_refused(tmp_path, capsys):
     assert vehicle_sim_cli.main(["config-from-log", str(csv), "--out", str(out)]) == 2
     (line,) = capsys.readouterr().err.strip().splitlines()
     assert (
-        "no MPC_THR_HOVER parameter and no produced thrust" in line
+        "no MPC_THR_HOVER parameter in (0, 1] and no produced thrust" in line
         and "log actuator_motors" in line
     )
     assert not out.exists()
@@ -208,6 +208,8 @@ def test_a_config_from_parameters_needs_a_multirotor_and_its_hover_thrust():
     assert parameters_give_a_config({"mav_type": 2, "px4_params": hover})
     assert not parameters_give_a_config({"mav_type": 2, "px4_params": {"MAV_TYPE": 2.0}})
     assert not parameters_give_a_config({"mav_type": 1, "px4_params": hover})  # fixed wing
+    zero = {"MPC_THR_HOVER": 0.0}  # no hover thrust: it made a massless vehicle
+    assert not parameters_give_a_config({"mav_type": 2, "px4_params": zero})
 
 
 def test_velocity_gains_logged_under_their_pre_v1_11_names_are_carried_over(tmp_path, capsys):
@@ -226,3 +228,20 @@ def test_velocity_gains_logged_under_their_pre_v1_11_names_are_carried_over(tmp_
     assert "VEL_P_ACC" not in assumed and "VEL_I_ACC" not in assumed
     assert "logged as MPC_*_VEL_P/I/D (PX4 before v1.11" in err
     assert dict(load_sim_config(out).px4_params)["MPC_XY_VEL_P_ACC"] == params["MPC_XY_VEL_P_ACC"]
+
+
+def test_a_log_whose_mpc_thr_hover_is_0_is_refused_as_without_one(tmp_path, capsys):
+    """MPC_THR_HOVER 0 and no produced thrust: refused in one line as a log without a hover
+    thrust; it made a massless vehicle, or a ZeroDivisionError with pre-v1.11 gains."""
+    from flightlog.schema import FlightLog, write_flight_log
+
+    log = read_log(AUTO)
+    cols = {k: v for k, v in log.columns.items() if k != "thrust_norm"}
+    params = {"MPC_THR_HOVER": 0.0, "MPC_XY_VEL_P": 0.1}
+    meta = {"source": "csv", "px4_params": params}
+    csv = write_flight_log(tmp_path / "zero.csv", FlightLog(cols, meta))
+    out = tmp_path / "v.toml"
+    assert vehicle_sim_cli.main(["config-from-log", str(csv), "--out", str(out)]) == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert "no MPC_THR_HOVER parameter in (0, 1] and no produced thrust" in line
+    assert not out.exists()
