@@ -22,8 +22,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from companion.handover import failsafe_said
 from companion.link import Link
-from companion.runner import failsafe_said
 from experiments.rover.drive_back import DriveBack
 from experiments.rover.link_drive import LinkDrive, drive_path, pose_of
 from gp.local_gp import LocalGP

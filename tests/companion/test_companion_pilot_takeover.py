@@ -18,6 +18,7 @@ import time
 import numpy as np
 import pytest
 
+from companion.handover import FAILSAFE_TEXT_RECENT_S, failsafe_said
 from companion.inprocess_link import InProcessLink
 from companion.link import CommandOutcome, StatusText, VelocityCommand
 from companion.mavsdk_link import MavsdkLink
@@ -26,10 +27,8 @@ from companion.mission_reference import reference_of
 from companion.planner_registry import make_planner
 from companion.pymavlink_link import PymavlinkLink
 from companion.runner import (
-    FAILSAFE_TEXT_RECENT_S,
     FlightOutcome,
     RunnerConfig,
-    failsafe_said,
     fly_mission,
     mission_beyond_vehicle_limits,
 )
