@@ -16,9 +16,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.signal import savgol_filter
 
-from flightlog.schema import FlightLog
+from flightlog.schema import GRAVITY_MPS2, FlightLog
 
-GRAVITY_MPS2 = 9.80665
 MIN_AIRBORNE_ALT_M = 0.01  # rows lower than this count as on the ground
 SAVGOL_WINDOW_S = 0.25  # differentiation window when no acceleration is logged [s]
 

@@ -24,6 +24,8 @@ import numpy as np
 from flightlog.atomic_output import write_text_atomic
 
 SCHEMA_VERSION = 1
+GRAVITY_MPS2 = 9.80665
+"""Standard gravity [m/s^2], the one g of every part (PX4's CONSTANTS_ONE_G)."""
 
 REQUIRED_COLUMNS: tuple[str, ...] = (
     "t_s",

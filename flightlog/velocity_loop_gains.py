@@ -29,9 +29,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flightlog.schema import FlightLog
+from flightlog.schema import GRAVITY_MPS2, FlightLog
 
-GRAVITY_MPS2 = 9.80665
 HOVER_SPEED_MPS = 0.3  # rows slower than this (and not landed) count as hovering
 HOVER_PARAMETER = "MPC_THR_HOVER parameter"  # the hover thrust's source, when a parameter
 HOVER_ESTIMATED = "median produced thrust in hover"  # its source, when estimated from the flight

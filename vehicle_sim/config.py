@@ -18,10 +18,10 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+from flightlog.schema import GRAVITY_MPS2
 from vehicle_sim.effects import EFFECT_CLASSES, EFFECT_NAMES, Effect, make_effect
 from vehicle_sim.effects.base import SimConfigError
 
-GRAVITY_MPS2 = 9.80665
 PRESET_DIR = Path(__file__).with_name("presets")
 PRESET_NAMES: tuple[str, ...] = tuple(sorted(p.stem for p in PRESET_DIR.glob("*.toml")))
 FLIGHT_LOG_SUFFIXES = (".ulg", ".csv")  # logs config-from-log reads, passed as a config by mistake
