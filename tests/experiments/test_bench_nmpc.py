@@ -25,6 +25,9 @@ def test_quick_nmpc_part_reports_augmented_acados_and_model_ready_figures():
         "nmpc_augmented_cpu_p99_ms",
         "nmpc_augmented_normal_priority_median_ms",
         "nmpc_augmented_normal_priority_p99_ms",
+        "nmpc_augmented_paced_code_warm_median_ms",
+        "nmpc_augmented_ipopt_over_fast_paced",
+        "nmpc_augmented_ipopt_over_fast_back_to_back",
         "nmpc_model_ready_s",
     ):
         assert math.isfinite(figures[name]) and figures[name] > 0, name
