@@ -14,9 +14,12 @@ the attitude lag, again when it began to fit the run's start integral by output 
 (diagnosis.warm_up), and again when windows began to be scored after their nuisance
 (diagnosis.window_nuisance), and the mission's flight when LAND took PX4's descent
 profile (MPC_Z_V_AUTO_DN above MPC_LAND_ALT1, MPC_LAND_SPEED below MPC_LAND_ALT2), the rest
-unchanged. The test allows a relative 1e-9
-(RTOL): NumPy picks its vectorised maths by the CPU's features, so another machine may differ
-in the last bits, but no change of behaviour hides below that. Record it again only for an
+unchanged. The test allows a relative 1e-7
+(RTOL): NumPy picks its vectorised maths by the CPU's features, so another machine differs in
+the last bits (measured on a second machine: the noisy log's velocities by 3e-14 relative),
+and the replay's output-error fit of the start integral carries that to its tolerance's scale
+(the simulated velocities by up to 1e-9 m/s, the SSE by 1.5e-9 relative, over the 1e-9 this
+test first allowed); no change of behaviour hides below 1e-7. Record it again only for an
 intended change of the numbers:
 ``np.savez(REFERENCE, **computed())``.
 """
@@ -50,7 +53,7 @@ HIDDEN = {
     "command_delay": {"delay_s": 0.08},
 }
 RATE_HZ = 25.0
-RTOL = 1e-9  # relative; absolute floor RTOL too (for values near 0)
+RTOL = 1e-7  # relative; absolute floor RTOL too (for values near 0)
 
 
 def excited_log(duration_s: float = 14.0) -> FlightLog:
