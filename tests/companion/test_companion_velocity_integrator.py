@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from companion.autopilot_gains import VELOCITY_LOOP_PARAMS, velocity_loop_gains
+from companion.autopilot_gains import velocity_loop_gains
 from companion.inprocess_link import InProcessLink
 from companion.nmpc_planner import INTEGRATOR_GAP_S, CompanionNmpc, NmpcSettings
 from gp.exact_gp import ExactGP
@@ -18,6 +18,7 @@ from gp.model_io import ResidualModel
 from planners.bspline import BSplineReference
 from planners.nominal_models import INTEGRATOR_STATES
 from planners.reference import PlannerState
+from vehicle_sim import Simulator, load_sim_config
 
 SEED = 20261123
 
@@ -80,8 +81,19 @@ def test_integrator_is_integrated_from_the_commands_and_measured_velocity(model_
 
 
 def test_gains_are_the_autopilots_parameters():
-    link = InProcessLink.from_vehicle("iris_study", 0)
-    gains = dict(velocity_loop_gains(link))
-    assert set(gains) == set(VELOCITY_LOOP_PARAMS)
-    for name, param in VELOCITY_LOOP_PARAMS.items():
-        assert gains[name] == link.read_param(param)
+    """Each gain comes from its own PX4 parameter ([PX4-params]): values drawn within PX4's
+    ranges, set on the autopilot, come back under px4_velocity_pi's names."""
+    rng = np.random.default_rng(SEED)
+    drawn = {
+        "MPC_XY_VEL_P_ACC": ("vel_p_xy", rng.uniform(1.2, 5.0)),
+        "MPC_XY_VEL_I_ACC": ("vel_i_xy", rng.uniform(0.0, 5.0)),
+        "MPC_XY_VEL_D_ACC": ("vel_d_xy", rng.uniform(0.1, 2.0)),
+        "MPC_Z_VEL_P_ACC": ("vel_p_z", rng.uniform(2.0, 15.0)),
+        "MPC_Z_VEL_I_ACC": ("vel_i_z", rng.uniform(0.2, 3.0)),
+        "MPC_Z_VEL_D_ACC": ("vel_d_z", rng.uniform(0.0, 2.0)),
+    }
+    sim = Simulator(load_sim_config("iris_study"), seed=0)
+    for param, (_, value) in drawn.items():
+        sim.set_param(param, value)
+    gains = dict(velocity_loop_gains(InProcessLink(sim)))
+    assert gains == pytest.approx(dict(drawn.values()), rel=1e-6)

@@ -12,6 +12,7 @@ from diagnosis.closed_loop import NEAR_GROUND_ALT_M, closed_loop, segments
 from diagnosis.excitation import schedule_from_mapping
 from diagnosis.fly_schedule import fly_schedule
 from diagnosis.replay import windows
+from flightlog.schema import FlightLog
 from vehicle_sim import load_sim_config
 
 SCHEDULE = schedule_from_mapping(
@@ -31,10 +32,34 @@ def flight():
     return fly_schedule(load_sim_config("iris"), SCHEDULE)
 
 
-def test_segments_split_at_the_ground_hold_altitude(flight):
-    alt = -flight["pos_d_m"]
-    for start, stop, near_ground in segments(flight):
-        assert np.all((alt[start:stop] < NEAR_GROUND_ALT_M) == near_ground)
+def _hold_alt_m(rng: np.random.Generator, low: bool, n: int) -> np.ndarray:
+    """``n`` altitudes [m] drawn below (``low``) or above the ground-hold altitude."""
+    band = (0.05, NEAR_GROUND_ALT_M - 0.05) if low else (NEAR_GROUND_ALT_M + 0.05, 3.0)
+    return rng.uniform(*band, size=n)
+
+
+def test_segments_split_at_the_ground_hold_altitude():
+    """Two airborne runs (a 2 s dropout between them, on the same side of the ground-hold
+    altitude) of holds drawn at random, alternating above and below it: each hold is one
+    segment, flagged by its side, and none spans the dropout; a 2-row dip inside the first
+    hold joins the piece before it."""
+    rng = np.random.default_rng(17)
+    alt, t, expected, row, t0_s = [], [], [], 0, 0.0
+    low = bool(rng.integers(2))
+    for run in [rng.integers(6, 40, size=n) for n in rng.integers(3, 7, size=2)]:
+        for n in run:
+            alt.append(_hold_alt_m(rng, low, n))
+            expected.append((row, row + int(n), low))
+            row, low = row + int(n), not low
+        t.append(t0_s + 0.1 * np.arange(run.sum()))
+        t0_s = t[-1][-1] + 2.0  # the dropout: no rows for 2 s
+        low = not low  # the next run starts on the side this one ended
+    first_stop, first_low = expected[0][1:]
+    alt[0][1:3] = _hold_alt_m(rng, not first_low, 2)  # the dip: rows 1 and 2
+    expected[0:1] = [(0, 3, first_low), (3, first_stop, first_low)]
+    mode = np.full(row, "OFFBOARD")
+    log = FlightLog({"t_s": np.concatenate(t), "pos_d_m": -np.concatenate(alt), "mode": mode})
+    assert segments(log) == expected
 
 
 def test_a_vehicle_that_cannot_fly_the_segment_is_reanchored_and_not_scored(flight):

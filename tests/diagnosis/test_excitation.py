@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from diagnosis.excitation import ExcitationError, load_schedule, schedule_from_mapping
@@ -33,10 +34,18 @@ def test_velocity_segment_points_along_heading_and_climbs_up():
 
 
 def test_altitude_segment_steers_towards_its_altitude_with_a_speed_limit():
-    s = schedule_from_mapping({"segment": [{"kind": "altitude", "duration_s": 5.0, "alt_m": 0.1}]})
-    assert s.setpoint(0.0, alt_m=0.3)[0][2] > 0.0  # too high: descend (down positive)
-    assert s.setpoint(0.0, alt_m=0.05)[0][2] < 0.0
-    assert s.setpoint(0.0, alt_m=10.0)[0][2] == pytest.approx(0.6)
+    """P control at 1 /s towards the segment's altitude (drawn), down positive, capped at
+    0.6 m/s either way; no horizontal motion and no yaw."""
+    rng = np.random.default_rng(6)
+    target_m = rng.uniform(0.05, 0.3)
+    s = schedule_from_mapping(
+        {"segment": [{"kind": "altitude", "duration_s": 5.0, "alt_m": target_m}]}
+    )
+    for error_m in rng.uniform(-0.5, 0.5, 5):  # within the cap: proportional
+        (vn, ve, vd), yaw_rate = s.setpoint(1.0, alt_m=target_m + error_m)
+        assert vd == pytest.approx(1.0 * error_m) and (vn, ve, yaw_rate) == (0.0, 0.0, 0.0)
+    assert s.setpoint(0.0, alt_m=target_m + 10.0)[0][2] == pytest.approx(0.6)
+    assert s.setpoint(0.0, alt_m=target_m - 2.0)[0][2] == pytest.approx(-0.6)
 
 
 def test_segments_follow_each_other_and_the_last_one_holds():

@@ -38,6 +38,34 @@ def test_without_mpc_thr_hover_old_gains_are_scaled_by_the_measured_hover_thrust
     )
 
 
+def test_the_hover_thrust_is_the_median_over_the_slow_airborne_rows_only() -> None:
+    """A drawn hover thrust on the slow airborne rows (a tenth of them spikes to full thrust),
+    more rows flown fast at more thrust and more rows landed at idle, shuffled: the estimate is
+    the hover thrust, which neither the fast rows, the landed ones nor the spikes move."""
+    rng = np.random.default_rng(29)
+    hover = rng.uniform(0.3, 0.7)
+    n_hover, n_fast, n_landed = 60, 80, 70
+    hovering = hover + rng.normal(0.0, 0.002, n_hover)
+    hovering[rng.choice(n_hover, n_hover // 10, replace=False)] = 1.0
+    thrust = np.r_[hovering, rng.uniform(1.2, 1.5, n_fast) * hover, np.full(n_landed, 0.05)]
+    speed = np.r_[
+        rng.uniform(0.0, 0.25, n_hover), rng.uniform(1.0, 5.0, n_fast), np.zeros(n_landed)
+    ]
+    heading = rng.uniform(-np.pi, np.pi, speed.size)
+    landed = np.r_[np.zeros(n_hover + n_fast), np.ones(n_landed)]
+    order = rng.permutation(speed.size)
+    cols = {
+        "t_s": 0.1 * np.arange(speed.size),
+        "vel_n_mps": (speed * np.cos(heading))[order],
+        "vel_e_mps": (speed * np.sin(heading))[order],
+        "vel_d_mps": np.zeros(speed.size),
+        "thrust_norm": thrust[order],
+        "landed": landed[order],
+    }
+    log = FlightLog(cols, {"thrust_source": {"kind": "produced"}})
+    assert estimated_hover_thrust(log) == pytest.approx(hover, abs=0.002)
+
+
 def test_a_hover_thrust_of_zero_scales_no_gain() -> None:
     """MPC_THR_HOVER 0 (no hover thrust: PX4's range is 0.1-0.8) is passed over for the
     flight's, and a flight whose produced thrust in hover is 0 (motors idle on the ground in a

@@ -4,7 +4,12 @@ import numpy as np
 import pytest
 
 from gp.errors import GPInputError
-from gp.inducing import InducingConfig, histogram_medians, select_inducing_points
+from gp.inducing import (
+    InducingConfig,
+    histogram_medians,
+    low_speed_weights,
+    select_inducing_points,
+)
 
 
 def test_histogram_medians_are_bin_medians_over_the_range():
@@ -41,10 +46,17 @@ def test_low_speed_puts_more_points_at_low_speed_than_cluster(d):
 
 
 def test_low_speed_uses_only_the_speed_columns():
+    """A velocity column [m/s] beside a large other one (100-200, say an altitude): the weight
+    is the Cauchy weight of the velocity alone, and nine in ten points sit at its low speeds
+    (the norm of both columns taken for the speed puts half there, random picks three in
+    eight)."""
     rng = np.random.default_rng(3)
     X = np.column_stack([rng.uniform(-4, 4, 3000), rng.uniform(100, 200, 3000)])
+    scale_mps = rng.uniform(0.5, 2.0)
+    weights = low_speed_weights(X, (0,), scale_mps)
+    np.testing.assert_allclose(weights, 1.0 / (1.0 + (X[:, 0] / scale_mps) ** 2), rtol=1e-12)
     Z = select_inducing_points(X, InducingConfig("low_speed", m=20, speed_columns=(0,)), 0)
-    assert np.sum(np.abs(Z[:, 0]) < 1.5) >= 8
+    assert np.sum(np.abs(Z[:, 0]) < 1.5) >= 18, np.sort(Z[:, 0])
 
 
 def test_bad_config_lists_the_valid_choices():
