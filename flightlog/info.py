@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from flightlog import px4
 from flightlog.reader import NEEDS_HZ, log_rates_hz, rate_shortfalls
 from flightlog.schema import FlightLog
 from flightlog.ulog import damage_note, parameters_give_a_config
@@ -106,7 +107,9 @@ def describe_unusable_ulog(summary: dict, reason: str) -> list[str]:
     command can use its flight, and, for a multirotor, that config-from-log can use its
     parameters."""
     lines = ["source: px4_ulog"]
-    if summary.get("vehicle"):
+    if px4.no_airframe_set(summary["px4_params"]):
+        lines.append("vehicle: unknown (no airframe set: SYS_AUTOSTART 0, MAV_TYPE 0)")
+    elif summary.get("vehicle"):
         lines.append(f"vehicle: {summary['vehicle']}")
     lines += _firmware_and_dropouts(summary)
     lines.append(f"log duration: {summary['duration_s']:.1f} s")

@@ -7,6 +7,8 @@ firmware versions carry which field is written beside each use in flightlog/ulog
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import numpy as np
 
 # vehicle_status.nav_state, v1.9 to v1.16 [PX4-msgs] vehicle_status.msg at each release tag.
@@ -82,6 +84,13 @@ MAV_TYPE_NAMES: dict[int, str] = {
     11: "surface boat", 12: "submarine", 19: "VTOL tailsitter duo", 20: "VTOL tailsitter quad",
     21: "VTOL tiltrotor", 22: "VTOL standard", 23: "VTOL tailsitter",
 }  # fmt: skip
+
+
+def no_airframe_set(params: Mapping[str, float]) -> bool:
+    """Whether PX4 parameters are those of a board never given an airframe: SYS_AUTOSTART 0 and
+    MAV_TYPE 0 ([PX4-params]). Such a log says nothing of the vehicle: MAV_TYPE 0 is then no
+    "generic vehicle" but PX4's default."""
+    return params.get("SYS_AUTOSTART") == 0 and params.get("MAV_TYPE") == 0
 
 
 def vehicle_name(mav_type: int | None) -> str | None:

@@ -417,7 +417,7 @@ def _vehicle(topics: Topics, params: Mapping[str, float], where: str) -> dict[st
                                 (px4.VEHICLE_TYPE_ROVER, "ground rover")):  # fmt: skip
             if np.all(vt == kind):
                 refuse, name = True, name or kind_name
-    if refuse and mav_type == 0 and params.get("SYS_AUTOSTART") == 0:  # a board never set up
+    if refuse and px4.no_airframe_set(params):
         raise FlightLogError(
             f"{where}: no airframe set (SYS_AUTOSTART 0, MAV_TYPE 0): set the airframe "
             "(QGroundControl: Vehicle Setup > Airframe) and log again"

@@ -30,7 +30,8 @@ not at the start is refused in one line.
 Exit codes: 0 done; 1 failed (no vehicle or position, link lost, refused, a teach pass too
 short or not finite, a trial stopped or not at its end in time: the rover was sent a zero
 velocity and Hold); 2 bad input (options, path or experience file); 3 handed over (someone
-switched the rover out of OFFBOARD: nothing more was sent); 130 Ctrl-C, 143 SIGTERM (Hold).
+switched the rover out of OFFBOARD: nothing more was sent); 130 Ctrl-C, 143 SIGTERM (Hold, or
+nothing sent before the first trial arms the rover).
 """
 
 from __future__ import annotations
@@ -327,13 +328,17 @@ def repeat(args: argparse.Namespace) -> int:
         back = DriveBack(args.drive_back, min(args.speed or DEFAULT_SPEED_MPS, DEFAULT_SPEED_MPS))
     outcome = RepeatOutcome("interrupted", "Ctrl-C before any vehicle answered; nothing sent")
     code = EXIT_INTERRUPTED
+
+    def driving() -> None:  # Ctrl-C from here on is answered with Hold
+        outcome.detail = "Ctrl-C; the rover was sent Hold"
+
     try:
         link.connect(timeout_s=30.0)
-        outcome = RepeatOutcome("interrupted", "Ctrl-C; the rover was sent Hold")
+        outcome.detail = "Ctrl-C before the first trial drove; nothing was sent to the rover"
         require_a_rover(link)
         outcome = repeat_path(
             link, path, args.trials, gp, schedule, scheduler, memory.trials_done + 1, back,
-            trial_done, _say, rover_tuning.nmpc, rover_tuning.feedforward,
+            trial_done, _say, rover_tuning.nmpc, rover_tuning.feedforward, on_drive=driving,
         )  # fmt: skip
         code = {"completed": EXIT_OK, "handed_over": EXIT_HANDED_OVER}.get(
             outcome.status, EXIT_FAILED

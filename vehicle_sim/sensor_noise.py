@@ -16,7 +16,7 @@ no I/O, the same seed gives the same log.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -45,6 +45,13 @@ class SensorNoise:
     thrust_fraction: float = 0.02
     time_jitter_s: float = 0.001
     log_rate_hz: float = 50.0
+
+    @classmethod
+    def none(cls) -> SensorNoise:
+        """No noise and every row kept: :func:`add_sensor_noise` gives the log back exact. The
+        start for noise on one measurement alone, e.g.
+        ``dataclasses.replace(SensorNoise.none(), thrust_fraction=0.05)``."""
+        return cls(**{level.name: 0.0 for level in fields(cls)})
 
 
 def draw_sensor_noise(rng: np.random.Generator, acc_mps2: float | None = None) -> SensorNoise:

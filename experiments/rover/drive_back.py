@@ -26,8 +26,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from companion.link import ZERO_VELOCITY, Link, LinkError, VelocityCommand
-from experiments.rover.link_drive import state_pose, stop_rover
+from companion.link import Link, LinkError, VelocityCommand
+from experiments.rover.link_drive import start_driving, state_pose, stop_rover
 from planners.rover.path import TaughtPath
 
 ARRIVED_M = 0.05
@@ -229,11 +229,7 @@ def _drive(
     """Arm, OFFBOARD, and stream ``control``'s commands every ``dt_s`` until it returns None:
     see :func:`drive_back` for what is returned and raised; ``late`` ends the deadline's
     reason."""
-    link.send_velocity(ZERO_VELOCITY)
-    for what, outcome in (("arm", link.arm), ("offboard", link.start_offboard)):
-        result = outcome()
-        if not result.accepted:
-            raise LinkError(f"rover refused {what}: {result.detail or 'no reason given'}")
+    start_driving(link)
     clock = link.clock
     t_end = clock.now_s() + timeout_s
     t_next, seen_offboard = clock.now_s(), False

@@ -123,11 +123,7 @@ def drive_path(
     clock, dt = link.clock, nmpc.dt_s
     if connect:
         link.connect(timeout_s=min(timeout_s, 30.0))
-    link.send_velocity(ZERO_VELOCITY)
-    for what, outcome in (("arm", link.arm), ("offboard", link.start_offboard)):
-        result = outcome()
-        if not result.accepted:
-            raise LinkError(f"rover refused {what}: {result.detail or 'no reason given'}")
+    start_driving(link)
     solver = UnicycleNmpc(nmpc)
     K, N = nmpc.horizon, len(path)
     curvature = path.curvature_1pm()
@@ -217,6 +213,24 @@ def drive_path(
         arr["t"], arr["s"], arr["el"], arr["eh"], arr["w"], worst["el"], worst["eh"], worst["w"],
         reached, left_for, stopped_for,
     )  # fmt: skip
+
+
+def start_driving(link: Link) -> None:
+    """A zero velocity, arm and OFFBOARD: how every drive of the rover starts. Ctrl-C meanwhile
+    stops the rover (zero velocity and Hold: it may be armed already) and is raised on.
+
+    Raises:
+        LinkError: the rover refused arming or OFFBOARD (its reason in the message).
+    """
+    try:
+        link.send_velocity(ZERO_VELOCITY)
+        for what, outcome in (("arm", link.arm), ("offboard", link.start_offboard)):
+            result = outcome()
+            if not result.accepted:
+                raise LinkError(f"rover refused {what}: {result.detail or 'no reason given'}")
+    except KeyboardInterrupt:
+        stop_rover(link)
+        raise
 
 
 def stop_rover(link: Link) -> bool:

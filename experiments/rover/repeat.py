@@ -101,13 +101,17 @@ def repeat_path(
     progress: Callable[[str], None] = lambda _m: None,
     nmpc: UnicycleNmpcConfig = UnicycleNmpcConfig(),  # noqa: B008 (frozen)
     feedforward: bool = False,
+    on_drive: Callable[[], None] = lambda: None,
 ) -> RepeatOutcome:
     """Drive ``trials`` trials from ``schedule_mps`` (N,) [m/s] on the connected ``link``,
     its NMPC tuned by ``nmpc`` and ``feedforward`` (link_drive.drive_path; the rover's are
     experiments.rover.scenarios.tuning_for's).
 
     ``on_trial(trial, next_schedule)`` is called as each trial ends (e.g. to save the
-    experience). With ``scheduler`` each trial's records set the next trial's speeds.
+    experience); ``on_drive()`` just before each drive (a trial's, or back to the start) arms
+    the rover: from then on Ctrl-C stops the rover with Hold (link_drive.start_driving), and
+    each drive ends in Hold or hands the rover over. With ``scheduler`` each trial's records
+    set the next trial's speeds.
 
     Raises:
         LinkError: the rover refused arming or OFFBOARD.
@@ -127,6 +131,7 @@ def repeat_path(
                 )
                 return out
             progress(f"trial {number}: driving back to the start, {where}")
+            on_drive()
             left_for, stopped_for = drive_back(link, path)
             if left_for or stopped_for:
                 out.status = "handed_over" if left_for else "stopped"
@@ -147,6 +152,7 @@ def repeat_path(
                 return out
         schedule = out.schedule_mps
         timeout_s = 4.0 * path.length_m / float(np.min(schedule)) + 30.0
+        on_drive()
         drive = drive_path(
             link, path, schedule, nmpc, timeout_s=timeout_s, gp=gp, connect=False,
             feedforward=feedforward,

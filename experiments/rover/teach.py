@@ -20,9 +20,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from companion.link import ZERO_VELOCITY, Link, LinkError, VelocityCommand
+from companion.link import Link, LinkError, VelocityCommand
 from companion.runner import Terminated
-from experiments.rover.link_drive import require_a_rover, stop_rover
+from experiments.rover.link_drive import require_a_rover, start_driving, stop_rover
 from planners.rover.path import TaughtPath
 
 MIN_TEACH_M = 1.0
@@ -117,11 +117,7 @@ def record_teach(
     clock = link.clock
     t_end = clock.now_s() + timeout_s
     if drive is not None:
-        link.send_velocity(ZERO_VELOCITY)
-        for what, outcome in (("arm", link.arm), ("offboard", link.start_offboard)):
-            result = outcome()
-            if not result.accepted:
-                raise LinkError(f"rover refused {what}: {result.detail or 'no reason given'}")
+        start_driving(link)
         progress(f"driving the teach pattern at {drive_speed_mps:g} m/s")
     points: list[np.ndarray] = []
     driven, last, armed_seen, seen_offboard, ended = 0.0, None, False, False, ""

@@ -48,8 +48,8 @@ def test_vertical_integral_interval_holds_the_truth_and_widens_with_thrust_noise
     5 % thrust-telemetry noise (the top of issue 18's range) widens it."""
     gains = {"MPC_Z_VEL_P_ACC": 5.6, "MPC_Z_VEL_I_ACC": 1.1}
     log = fly_schedule(load_sim_config("iris"), schedule(), seed=3, params=gains)
-    quiet = SensorNoise(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)  # noise on the thrust alone
-    noisy = add_sensor_noise(log, dataclasses.replace(quiet, thrust_fraction=0.05), seed=3)
+    thrust_only = dataclasses.replace(SensorNoise.none(), thrust_fraction=0.05)
+    noisy = add_sensor_noise(log, thrust_only, seed=3)
     config = load_sim_config("iris")
     exact = refit_vertical_integral([log], config, _train(log), gains)
     low, high = exact.interval()

@@ -5,6 +5,7 @@ run as an acceleration bias."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -16,15 +17,7 @@ from tests.vehicle_sim.sim_flying import hovering, record_offboard
 from vehicle_sim import VelocitySetpoint, load_sim_config
 from vehicle_sim.sensor_noise import SensorNoise, add_sensor_noise
 
-ATTITUDE_ONLY = SensorNoise(
-    acc_mps2=0.0,
-    acc_bias_walk_mps2_per_sqrt_s=0.0,
-    vel_mps=0.0,
-    attitude_deg=1.0,
-    thrust_fraction=0.0,
-    time_jitter_s=0.0,
-    log_rate_hz=0.0,
-)
+ATTITUDE_ONLY = dataclasses.replace(SensorNoise.none(), attitude_deg=1.0)
 
 
 def hover_log(duration_s: float = 9.0, rate_hz: float = 20.0) -> FlightLog:

@@ -3,6 +3,8 @@ anchor's measured velocity explain, and only that: a command-path difference sta
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -161,5 +163,5 @@ def test_a_thinned_log_that_lost_its_opening_step_replays_with_its_own_config(ra
         return VelocitySetpoint((min(1.0 + t, 2.5), 0.3 * np.sin(t), -0.2 * np.sin(0.7 * t)))
 
     log = record_offboard(hovering(settle_s=2.0), command_at, 9.0, 250.0)
-    thinned = add_sensor_noise(log, SensorNoise(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, rate_hz), 0)
+    thinned = add_sensor_noise(log, dataclasses.replace(SensorNoise.none(), log_rate_hz=rate_hz), 0)
     assert replay(load_sim_config("iris"), [thinned], windows([thinned])).rmse_mps() < bound_mps

@@ -150,15 +150,22 @@ def test_a_fixed_wing_log_is_not_offered_to_config_from_log(capsys):
     assert "not a multirotor" in out and "config-from-log" not in out
 
 
-def test_a_log_of_a_board_with_no_airframe_set_says_so(tmp_path, capsys):
-    """A board never given an airframe logs SYS_AUTOSTART 0 and MAV_TYPE 0; every command
-    called its log 'a generic vehicle log (MAV_TYPE 0), not a multirotor' and asked for a
-    quadcopter's log, though the vehicle may be one: the airframe is what is missing. The real
-    POSCTL flight with those two parameters stands for such a log."""
+@pytest.fixture
+def no_airframe_log(tmp_path) -> Path:
+    """The real POSCTL flight with SYS_AUTOSTART 0 and MAV_TYPE 0: a board never given an
+    airframe."""
     ulog = ULog(str(FIXTURES / "quad_posctl_v1_15.ulg"))
     ulog.initial_parameters.update({"SYS_AUTOSTART": 0, "MAV_TYPE": 0})
     log = tmp_path / "no_airframe.ulg"
     ulog.write_ulog(str(log))
+    return log
+
+
+def test_a_log_of_a_board_with_no_airframe_set_says_so(no_airframe_log, tmp_path, capsys):
+    """A board never given an airframe logs SYS_AUTOSTART 0 and MAV_TYPE 0; every command
+    called its log 'a generic vehicle log (MAV_TYPE 0), not a multirotor' and asked for a
+    quadcopter's log, though the vehicle may be one: the airframe is what is missing."""
+    log = no_airframe_log
     said = "no airframe set (SYS_AUTOSTART 0, MAV_TYPE 0): set the airframe"
     assert flightlog_cli.main(["info", str(log)]) == 0
     assert f"cannot use this log: {said}" in capsys.readouterr().out
@@ -172,6 +179,16 @@ def test_a_log_of_a_board_with_no_airframe_set_says_so(tmp_path, capsys):
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and err[0].startswith(prog) and said in err[0], err
         assert "not a multirotor" not in err[0] and "generic vehicle" not in err[0]
+
+
+def test_info_on_a_log_with_no_airframe_set_calls_the_vehicle_unknown(no_airframe_log, capsys):
+    """info said 'vehicle: generic vehicle' above its refusal for want of an airframe: MAV_TYPE 0
+    is PX4's default there, not a type the log states."""
+    assert flightlog_cli.main(["info", str(no_airframe_log)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    vehicle = [s for s in lines if s.startswith("vehicle:")]
+    assert vehicle == ["vehicle: unknown (no airframe set: SYS_AUTOSTART 0, MAV_TYPE 0)"]
+    assert any("cannot use this log: no airframe set" in s for s in lines)
 
 
 @pytest.mark.parametrize("name", ["quad_posctl_v1_15.ulg", "quad_offboard_v1_16.ulg"])

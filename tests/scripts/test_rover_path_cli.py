@@ -423,3 +423,53 @@ def test_a_multicopter_on_the_link_is_refused_and_sent_nothing(tmp_path, capsys,
 )
 def test_repeat_drives_with_the_rovers_own_tuning(options, tuning) -> None:
     assert parse_args(["repeat", "--path", "p.csv", *options]).tuning == tuning
+
+
+@pytest.fixture
+def sent_to_rover(monkeypatch: pytest.MonkeyPatch) -> list[str]:
+    """The names of the Link calls that command the in-process rover, in the order sent."""
+    from companion.inprocess_rover_link import InProcessRoverLink
+
+    sent: list[str] = []
+
+    def recorded(name: str) -> Callable[..., object]:
+        call = getattr(InProcessRoverLink, name)
+
+        def record(link: InProcessRoverLink, *args: object) -> object:
+            sent.append(name)
+            return call(link, *args)
+
+        return record
+
+    for name in ("send_velocity", "arm", "start_offboard", "hold"):
+        monkeypatch.setattr(InProcessRoverLink, name, recorded(name))
+    return sent
+
+
+def _ctrl_c(*_args: object) -> None:
+    raise KeyboardInterrupt
+
+
+@pytest.mark.parametrize(
+    ("pressed_in", "sent", "said"),
+    [
+        ("read_state", [], "Ctrl-C before the first trial drove; nothing was sent to the rover"),
+        ("start_offboard", ["send_velocity", "arm", "send_velocity", "hold"],
+         "Ctrl-C; the rover was sent Hold"),
+    ],
+)  # fmt: skip
+def test_ctrl_c_after_connecting_says_whether_the_rover_was_sent_hold(
+    files: dict[str, Path], tmp_path: Path, capsys, monkeypatch, sent_to_rover,
+    pressed_in: str, sent: list[str], said: str,
+) -> None:  # fmt: skip
+    """Ctrl-C once the rover answered but before the first trial drove (while checking it is a
+    rover) was reported as 'the rover was sent Hold', and nothing was sent; Ctrl-C while
+    arming and switching to OFFBOARD sent no Hold though the rover was armed."""
+    from companion.inprocess_rover_link import InProcessRoverLink
+
+    monkeypatch.setattr(InProcessRoverLink, pressed_in, _ctrl_c)
+    argv = ["repeat", "--link", "inprocess", "--path", str(files["loop"]), "--trials", "1",
+            "--experience", str(tmp_path / "e.npz"), "--out", str(tmp_path / "rep")]  # fmt: skip
+    assert main(argv) == 130
+    assert capsys.readouterr().err.strip().splitlines()[-1] == f"rover-path: interrupted: {said}"
+    assert sent_to_rover == sent

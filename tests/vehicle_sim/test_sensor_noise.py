@@ -59,22 +59,20 @@ def test_drawn_levels_stay_in_the_realistic_ranges():
         assert 25.0 <= n.log_rate_hz <= 50.0
 
 
-QUIET = SensorNoise(
-    acc_mps2=0.0,
-    acc_bias_walk_mps2_per_sqrt_s=0.0,
-    vel_mps=0.0,
-    attitude_deg=0.0,
-    thrust_fraction=0.0,
-    time_jitter_s=0.0,
-    log_rate_hz=0.0,
-)
+def test_no_noise_gives_the_log_back_exact():
+    log = _smooth_log()
+    quiet = add_sensor_noise(log, SensorNoise.none(), seed=3)
+    assert quiet.columns.keys() == log.columns.keys()
+    assert all(np.array_equal(quiet[k], log[k]) for k in log.columns)
 
 
 def test_the_acceleration_bias_is_a_random_walk_from_zero():
     """A walk of intensity w = 0.01 m/s^2/sqrt(s) sampled every 10 ms: increments of std
     w sqrt(0.01 s) = 0.001 m/s^2, independent, starting at zero."""
     log = _smooth_log(n=20000)
-    noisy = add_sensor_noise(log, replace(QUIET, acc_bias_walk_mps2_per_sqrt_s=0.01), seed=4)
+    noisy = add_sensor_noise(
+        log, replace(SensorNoise.none(), acc_bias_walk_mps2_per_sqrt_s=0.01), seed=4
+    )
     bias = noisy["acc_n_mps2"] - log["acc_n_mps2"]
     assert bias[0] == 0.0
     steps = np.diff(bias)
@@ -90,7 +88,9 @@ def test_attitude_noise_keeps_a_unit_quaternion_a_small_rotation_away():
     cols = dict(log.columns)
     cols.update({k: np.full(log.n_rows, q[i]) for i, k in enumerate(("q_x", "q_y", "q_z"))})
     cols["q_w"] = np.full(log.n_rows, q[3])
-    noisy = add_sensor_noise(FlightLog(cols, log.metadata), replace(QUIET, attitude_deg=0.8), 5)
+    noisy = add_sensor_noise(
+        FlightLog(cols, log.metadata), replace(SensorNoise.none(), attitude_deg=0.8), 5
+    )
     wxyz = noisy.stack("q_w", "q_x", "q_y", "q_z")
     assert np.allclose(np.linalg.norm(wxyz, axis=1), 1.0)
     exact = Rotation.from_quat(q)
@@ -100,15 +100,15 @@ def test_attitude_noise_keeps_a_unit_quaternion_a_small_rotation_away():
 
 def test_time_jitter_larger_than_the_row_spacing_keeps_times_in_order():
     log = _smooth_log(n=2000)  # 10 ms apart
-    noisy = add_sensor_noise(log, replace(QUIET, time_jitter_s=0.05), seed=6)
+    noisy = add_sensor_noise(log, replace(SensorNoise.none(), time_jitter_s=0.05), seed=6)
     assert np.all(np.diff(noisy["t_s"]) > 0.0)
-    two = add_sensor_noise(log.slice(0, 2), replace(QUIET, time_jitter_s=0.05), seed=6)
+    two = add_sensor_noise(log.slice(0, 2), replace(SensorNoise.none(), time_jitter_s=0.05), seed=6)
     assert not np.array_equal(two["t_s"], log["t_s"][:2])  # two rows are jittered too
 
 
 def test_thinning_to_half_the_rate_keeps_every_other_row():
     log = _smooth_log(n=1000)  # 100 Hz
-    thinned = add_sensor_noise(log, replace(QUIET, log_rate_hz=50.0), seed=0)
+    thinned = add_sensor_noise(log, replace(SensorNoise.none(), log_rate_hz=50.0), seed=0)
     assert np.array_equal(thinned["t_s"], log["t_s"][::2])
 
 
