@@ -118,8 +118,8 @@ def teach_from_track(
         more = f", and {len(folds) - 1} more time{'s' if len(folds) > 2 else ''}"
         a, b, one_way_m = longest_one_way(t, folds, xy)
         fix = f"pass --start-s {a:.1f} --end-s {b:.1f}, its longest one-way stretch ("
-        if one_way_m < need:
-            fix = "no stretch between its turns is long enough (the longest: "
+        if one_way_m < need or not _teaches(track, spacing_m, a, b):
+            fix = "no stretch between its turns gives a path (the longest: "
         raise TeachError(
             f"{where}: the drive turns back on itself at t={t[i + 1]:.1f} s (by {turn:.0f} deg: "
             f"backing up, a three-point turn, a turn in place){more if len(folds) > 1 else ''}; "
@@ -130,6 +130,16 @@ def teach_from_track(
     except ValueError as exc:
         raise TeachError(f"{where}: the positions give no path: {exc}") from None
     return LogTeach(path, span, span_from, driven, notes)
+
+
+def _teaches(track: ULogTrack, spacing_m: float, start_s: float, end_s: float) -> bool:
+    """Whether the span teaches a path: the samples kept from another first one can be
+    shorter, or fold where the whole drive's did not."""
+    try:
+        teach_from_track(track, spacing_m, start_s, end_s)
+    except TeachError:
+        return False
+    return True
 
 
 def _moving_samples(xy: np.ndarray, spacing_m: float) -> np.ndarray:

@@ -70,14 +70,24 @@ def test_backing_up_is_refused_naming_the_one_way_stretch_that_teaches() -> None
         start, end = map(float, re.search(r"--start-s (\S+) --end-s (\S+),", str(exc)).groups())
     assert teach_from_track(track, 0.25, start, end).path.length_m == pytest.approx(5.0, abs=0.3)
     shuttle = _track([(0.5, 0.0, 1.6), (-0.5, 0.0, 1.2), (0.5, 0.0, 1.6)])
-    with pytest.raises(TeachError, match=r"no stretch between its turns .* \(the longest: 0.8 m"):
+    too_short = r"no stretch between its turns gives a path \(the longest: 0\.8 m\)"
+    with pytest.raises(TeachError, match=too_short):
         teach_from_track(shuttle)
 
 
 def test_a_real_flight_out_and_back_is_refused() -> None:
     track = read_ulog_track(FIXTURES / "quad_offboard_v1_16.ulg")
-    with pytest.raises(TeachError, match=r"0\.0-61\.3 s: the drive turns back on itself at t=19"):
-        teach_from_track(track)
+    said = r"0\.0-61\.3 s: the drive turns back on itself at t=19.*no stretch between its turns"
+    with pytest.raises(TeachError, match=said):
+        teach_from_track(track)  # 1.4 m out, a hover, 1.4 m back: no stretch gives a path
+
+
+def test_the_longest_one_way_stretch_of_a_real_flight_teaches() -> None:
+    track = read_ulog_track(FIXTURES / "quad_mission_rtl_v1_9_esc.ulg")
+    with pytest.raises(TeachError, match=r"at t=21\.0 s .* --start-s 0\.7 --end-s 20\.9, its"):
+        teach_from_track(track)  # the mission, then a sharp turn into the return
+    path = teach_from_track(track, 0.25, 0.7, 20.9).path
+    assert (len(path), round(path.length_m, 1)) == (301, 75.0)
 
 
 def test_a_span_without_motion_is_refused_as_a_live_teach_is() -> None:
