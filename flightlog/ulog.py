@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import contextlib
 import io
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -71,35 +71,55 @@ def is_ulog(path: str | Path) -> bool:
         return False
 
 
-def _parse(path: Path):
-    """pyulog's ULog of ``path`` read for :data:`TOPICS`, with what pyulog prints about a
-    corrupt file (a line per unknown message id, on stdout) kept off the user's terminal: the
-    caller says what is wrong in one line."""
+def parse_ulog(path: Path, topics: Sequence[str] = TOPICS):
+    """pyulog's ULog of ``path`` read for ``topics``, with what pyulog prints about a corrupt
+    file (a line per unknown message id, on stdout) kept off the user's terminal: the caller
+    says what is wrong in one line."""
     from pyulog import ULog  # imported here: the CSV path needs no pyulog
 
     with contextlib.redirect_stdout(io.StringIO()):
-        return ULog(str(path), message_name_filter_list=list(TOPICS))
+        return ULog(str(path), message_name_filter_list=list(topics))
 
 
 def damage_note(log: FlightLog) -> str | None:
     """One sentence for a report's headline when ``log`` was read from a truncated or a corrupt
     ULog (:mod:`flightlog.ulog_integrity`), or had samples out of time order left out
     (:mod:`flightlog.ulog_time`), else None."""
-    name = log.metadata.get("ulog", "the ULog")
-    duration = f"{log.metadata.get('duration_s', float('nan')):.1f} s"
-    stale = _out_of_order_clause(int(log.metadata.get("samples_out_of_time_order", 0)))
-    cut = log.metadata.get("truncated_at_byte")
+    return damage_note_of(log.metadata)
+
+
+def damage_metadata(damage: ULogDamage | None, out_of_order: int) -> dict[str, object]:
+    """The metadata keys :func:`damage_note_of` reads, for a file with ``damage`` (or None)
+    and ``out_of_order`` samples out of time order left out."""
+    meta: dict[str, object] = {}
+    if out_of_order:
+        meta["samples_out_of_time_order"] = out_of_order
+    if damage is not None and damage.kind == "truncated":
+        meta["truncated_at_byte"] = [damage.at_byte, damage.file_bytes]
+    elif damage is not None:
+        meta["corrupt_at_byte"] = [damage.at_byte, damage.file_bytes]
+        meta["corrupt_header"] = damage.detail
+    return meta
+
+
+def damage_note_of(metadata: Mapping[str, object]) -> str | None:
+    """:func:`damage_note` from a log's metadata (``ulog``, ``duration_s`` and
+    :func:`damage_metadata`'s keys), for a reader that maps no FlightLog."""
+    name = metadata.get("ulog", "the ULog")
+    duration = f"{metadata.get('duration_s', float('nan')):.1f} s"
+    stale = _out_of_order_clause(int(metadata.get("samples_out_of_time_order", 0)))
+    cut = metadata.get("truncated_at_byte")
     if cut:
         return (
             f"{name} is truncated (last message incomplete at byte {cut[0]} of {cut[1]}: logging "
             f"stopped mid-message, as a crash or power loss leaves it); its complete part, "
             f"{duration}, was read{stale}"
         )
-    bad = log.metadata.get("corrupt_at_byte")
+    bad = metadata.get("corrupt_at_byte")
     if bad:
         return (
             f"{name} is corrupt at byte {bad[0]} of {bad[1]} "
-            f"({log.metadata.get('corrupt_header', 'an invalid message header')}: the file was "
+            f"({metadata.get('corrupt_header', 'an invalid message header')}: the file was "
             f"damaged, e.g. by the SD card or the copy, not cut short); {duration} of data were "
             f"read{stale}; messages after the damage may be missing; copy the .ulg again from "
             "the vehicle"
@@ -156,6 +176,43 @@ def _damage_clause(damage: ULogDamage, duration_s: float, out_of_order: int = 0)
     return f"the file is {where}: {duration_s:.1f} s of data could be read{stale}"
 
 
+def open_ulog(path: Path, topics: Sequence[str] = TOPICS, or_else: str = "a schema-v1 CSV"):
+    """pyulog's ULog of ``path`` read for ``topics``, the file's damage (or None), and the first
+    instance of each topic in time order with the number of samples that were not
+    (:func:`flightlog.ulog_time.in_time_order`); ``or_else`` is what else the user could pass.
+
+    Raises:
+        FlightLogError: no such file, not a ULog, unreadable, or damaged before any local
+            position (one line naming the file and the fix).
+    """
+    alternative = f" or {or_else}" if or_else else ""
+    if not path.is_file():
+        raise FlightLogError(f"{path}: no such file; pass a PX4 .ulg{alternative}")
+    if not is_ulog(path):
+        raise FlightLogError(
+            f"{path}: not a ULog file (it does not start with the ULog magic bytes); "
+            f"copy the .ulg again from the vehicle{alternative.replace(' or', ', or pass')}"
+        )
+    damage = find_damage(path)  # a crash, a power loss or a failing card leaves such a file
+    try:
+        ulog = parse_ulog(path, topics)
+    except Exception as exc:  # pyulog raises several types for corrupt files
+        raise FlightLogError(
+            f"{path}: not a readable ULog file ({type(exc).__name__}: {exc}); "
+            "copy the .ulg again from the vehicle's SD card"
+        ) from None
+    in_order, out_of_order = in_time_order(
+        {d.name: d.data for d in ulog.data_list if d.multi_id == 0}
+    )
+    if "vehicle_local_position" not in in_order and (damage or ulog.file_corruption):
+        what = f"{damage.kind} at byte {damage.at_byte}" if damage else "corrupt"
+        raise FlightLogError(
+            f"{path}: ULog is {what} and holds no local position; copy the .ulg again from the "
+            "vehicle"
+        )
+    return ulog, damage, in_order, out_of_order
+
+
 def read_ulog(path: str | Path) -> FlightLog:
     """Read a PX4 ULog file as a schema-v1 log.
 
@@ -168,30 +225,7 @@ def read_ulog(path: str | Path) -> FlightLog:
             ``corrupt_header`` (:func:`damage_note`).
     """
     path = Path(path)
-    if not path.is_file():
-        raise FlightLogError(f"{path}: no such file; pass a PX4 .ulg or a schema-v1 CSV")
-    if not is_ulog(path):
-        raise FlightLogError(
-            f"{path}: not a ULog file (it does not start with the ULog magic bytes); "
-            "copy the .ulg again from the vehicle, or pass a schema-v1 CSV"
-        )
-    damage = find_damage(path)  # a crash, a power loss or a failing card leaves such a file
-    try:
-        ulog = _parse(path)
-    except Exception as exc:  # pyulog raises several types for corrupt files
-        raise FlightLogError(
-            f"{path}: not a readable ULog file ({type(exc).__name__}: {exc}); "
-            "copy the .ulg again from the vehicle's SD card"
-        ) from None
-    topics, out_of_order = in_time_order(
-        {d.name: d.data for d in ulog.data_list if d.multi_id == 0}
-    )
-    if "vehicle_local_position" not in topics and (damage or ulog.file_corruption):
-        what = f"{damage.kind} at byte {damage.at_byte}" if damage else "corrupt"
-        raise FlightLogError(
-            f"{path}: ULog is {what} and holds no local position; copy the .ulg again from the "
-            "vehicle"
-        )
+    ulog, damage, topics, out_of_order = open_ulog(path)
     params = {k: float(v) for k, v in ulog.initial_parameters.items()}
     info = ulog.msg_info_dict
     meta = {
@@ -203,14 +237,8 @@ def read_ulog(path: str | Path) -> FlightLog:
             float(np.diff(data_span_us(topics, ulog.start_timestamp))[0]) * 1e-6, 3
         ),
         "logger_dropouts": logger_dropouts(ulog),
+        **damage_metadata(damage, out_of_order),
     }
-    if out_of_order:
-        meta["samples_out_of_time_order"] = out_of_order
-    if damage is not None and damage.kind == "truncated":
-        meta["truncated_at_byte"] = [damage.at_byte, damage.file_bytes]
-    elif damage is not None:
-        meta["corrupt_at_byte"] = [damage.at_byte, damage.file_bytes]
-        meta["corrupt_header"] = damage.detail
     where = str(path)
     if not topics:
         raise FlightLogError(
@@ -241,7 +269,7 @@ def summarise_ulog(path: str | Path) -> dict[str, object]:
     if not is_ulog(path):
         raise FlightLogError(f"{path}: not a ULog file (no ULog magic bytes)")
     try:
-        ulog = _parse(path)
+        ulog = parse_ulog(path)
     except Exception as exc:  # pyulog raises several types for corrupt files
         raise FlightLogError(f"{path}: not a readable ULog file ({type(exc).__name__})") from None
     firmware = px4.firmware_version(ulog.msg_info_dict.get("ver_sw_release"))
@@ -428,8 +456,9 @@ def _vehicle(topics: Topics, params: Mapping[str, float], where: str) -> dict[st
         raise FlightLogError(
             f"{where}: a {name} log{known}, not a multirotor; these tools model multirotors: "
             + (
-                "a PX4 rover's ULog is not read (the ground rovers are learned only on the "
-                "simulated ones: python -m scripts.rover --help)"
+                "a PX4 rover's ULog is not read here (the ground rovers are learned only on "
+                "the simulated ones: python -m scripts.rover --help); its drive gives a taught "
+                "path: rover-path teach --from-log LOG --out PATH.csv"
                 if rover
                 else "use a log of a quad/hexa/octocopter (or a VTOL in multicopter phase)"
             )

@@ -2,6 +2,7 @@
 
     rover-path teach --out PATH.csv [--url udpin://0.0.0.0:14540] [--max-distance M]
                      [--drive 3:0,4.7:0.67 --drive-speed 0.5] [--spacing 0.25]
+    rover-path teach --from-log DRIVE.ulg --out PATH.csv [--start-s S --end-s S]
     rover-path repeat --path PATH.csv [--experience EXP.npz] [--trials 3]
                       [--speed 0.5 | --scheduler experiment_2] [--drive-back [turn|reverse]]
                       [--tuning husky_50kg|roc6_150kg|dmrv_600kg] [--out DIR]
@@ -14,7 +15,10 @@ teach: records the rover's position while someone drives it (a pilot in MANUAL, 
 from arming until it disarms, --max-distance is driven, --timeout passes or Ctrl-C; with
 --drive the companion drives a pattern of LENGTH_M:CURVATURE_1PM segments itself in OFFBOARD
 (curvature > 0 turns left). Writes the path (CSV ``x_m,y_m``: metres north and west of the
-local origin, one row per vertex --spacing apart), atomically.
+local origin, one row per vertex --spacing apart), atomically. With --from-log it takes the
+drive from a PX4 ULog instead (its vehicle_local_position, over --start-s to --end-s seconds
+from the log's start, else the stretch it was armed): stops are left out, a drive that turns
+back on itself is refused naming its longest one-way stretch (experiments.rover.teach_from_log).
 
 repeat: drives the path --trials times in OFFBOARD with the LB-NMPC (tuned as [Ostafew16]'s
 experiment on the rover --tuning names; in process --vehicle's), learning from trial to
@@ -29,9 +33,9 @@ not at the start is refused in one line.
 
 Exit codes: 0 done; 1 failed (no vehicle or position, link lost, refused, a teach pass too
 short or not finite, a trial stopped or not at its end in time: the rover was sent a zero
-velocity and Hold); 2 bad input (options, path or experience file); 3 handed over (someone
-switched the rover out of OFFBOARD: nothing more was sent); 130 Ctrl-C, 143 SIGTERM (Hold, or
-nothing sent before the first trial arms the rover).
+velocity and Hold); 2 bad input (options, path, experience file or --from-log's log); 3
+handed over (someone switched the rover out of OFFBOARD: nothing more was sent); 130 Ctrl-C,
+143 SIGTERM (Hold, or nothing sent before the first trial arms the rover).
 """
 
 from __future__ import annotations
@@ -41,6 +45,7 @@ import json
 import math
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -58,6 +63,9 @@ from flightlog.atomic_output import (
 from scripts.one_line_parser import OneLineParser, output_path
 from scripts.stop_signals import stop_signals_answered
 
+if TYPE_CHECKING:
+    from planners.rover.path import TaughtPath
+
 PROG = "rover-path"
 LINKS = ("pymavlink", "mavsdk", "inprocess")
 DRIVE_BACK_WAYS = ("turn", "reverse")  # experiments.rover.drive_back.DriveBack.WAYS
@@ -74,6 +82,13 @@ def _positive(text: str) -> float:
     value = float(text)
     if not (math.isfinite(value) and value > 0):
         raise argparse.ArgumentTypeError(f"must be a finite number > 0, got {text}")
+    return value
+
+
+def _non_negative(text: str) -> float:
+    value = float(text)
+    if not (math.isfinite(value) and value >= 0):
+        raise argparse.ArgumentTypeError(f"must be a finite number >= 0, got {text}")
     return value
 
 
@@ -126,6 +141,16 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         help="drive this pattern in OFFBOARD (length [m]:curvature [1/m] per segment)",
     )  # fmt: skip
     teach.add_argument("--drive-speed", type=_positive, default=0.5, help="for --drive [m/s]")
+    teach.add_argument(
+        "--from-log", type=Path, default=None, metavar="DRIVE.ulg",
+        help="take the drive from this PX4 ULog (its local position) instead of a live one",
+    )  # fmt: skip
+    for edge in ("start", "end"):
+        teach.add_argument(
+            f"--{edge}-s", type=_non_negative, default=None,
+            help=f"--from-log: the span's {edge} [s from the log's start] (default: the stretch "
+            "it was armed, or the whole log when arming is not logged)",
+        )  # fmt: skip
     repeat.add_argument("--path", required=True, type=Path, help="path CSV from teach")
     repeat.add_argument(
         "--experience", type=output_path, default=None,
@@ -155,6 +180,8 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     repeat.add_argument("--out", type=output_path, default=Path("out/rover_path"),
                         help="folder for repeat.json and repeat.png")  # fmt: skip
     args = parser.parse_args(argv)
+    if args.command == "teach":
+        _check_from_log_options(parser, args)
     if args.command == "repeat" and args.trials < 1:
         parser.error(f"argument --trials: must be >= 1, got {args.trials}")
     for option, given in (("--vehicle", args.vehicle), ("--seed", args.seed)):
@@ -168,6 +195,23 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         args.tuning = args.vehicle
     args.seed = 0 if args.seed is None else args.seed
     return args
+
+
+def _check_from_log_options(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """--start-s/--end-s need --from-log; --from-log takes no live-teach option."""
+    if args.from_log is None:
+        for option, given in (("--start-s", args.start_s), ("--end-s", args.end_s)):
+            if given is not None:
+                parser.error(f"{option} cuts a span of --from-log DRIVE.ulg; pass --from-log")
+        return
+    live = (("--drive", args.drive), ("--max-distance", math.isfinite(args.max_distance) or None),
+            ("--timeout", math.isfinite(args.timeout) or None))  # fmt: skip
+    for option, given in live:
+        if given is not None:
+            parser.error(
+                f"{option} is for a live teach; --from-log takes the drive from the log "
+                "(cut it with --start-s/--end-s)"
+            )
 
 
 def _say(message: str) -> None:
@@ -203,10 +247,11 @@ def open_link(args: argparse.Namespace) -> Link:
 
 def teach(args: argparse.Namespace) -> int:
     from experiments.rover.link_drive import NotARover
-    from experiments.rover.repeat import end_gap_m, is_loop
     from experiments.rover.teach import HandedOver, TeachError, record_teach, turns_not_driven
     from planners.rover.path_file import path_csv_text
 
+    if args.from_log is not None:
+        return teach_from_log(args)
     if args.link == "inprocess" and args.drive is None:
         raise BadInput("--link inprocess: nobody drives a simulated rover in process; pass --drive")
     try:
@@ -236,14 +281,61 @@ def teach(args: argparse.Namespace) -> int:
         write_text_atomic(args.out, path_csv_text(path))
     except OutputError as exc:
         raise BadInput(f"--out {exc}") from None
-    gap = end_gap_m(path)
-    shape = "a loop" if is_loop(path) else f"open: its end is {gap:.1f} m from its start"
-    _say(
-        f"wrote {args.out}: {len(path)} vertices {path.spacing_m:.2f} m apart, "
-        f"{path.length_m:.1f} m ({shape}); recording ended: {taught.ended_for}"
-    )
+    _say(f"{_wrote(args.out, path)}; recording ended: {taught.ended_for}")
     for line in turns_not_driven(args.drive or (), path):
         _say(f"warning: {line}")
+    return EXIT_OK
+
+
+def _wrote(out: Path, path: TaughtPath) -> str:
+    """What a teach says it wrote: vertices, spacing, length, loop or open."""
+    from experiments.rover.repeat import end_gap_m, is_loop
+
+    gap = end_gap_m(path)
+    shape = "a loop" if is_loop(path) else f"open: its end is {gap:.1f} m from its start"
+    return (
+        f"wrote {out}: {len(path)} vertices {path.spacing_m:.2f} m apart, {path.length_m:.1f} m "
+        f"({shape})"
+    )
+
+
+def teach_from_log(args: argparse.Namespace) -> int:
+    """``teach --from-log``: the path of a recorded drive; a log it cannot use is bad input."""
+    from experiments.rover.teach import TeachError
+    from experiments.rover.teach_from_log import teach_from_track
+    from flightlog.schema import FlightLogError
+    from flightlog.ulog_track import read_ulog_track
+    from planners.rover.path_file import path_csv_text
+
+    try:
+        check_writable_file(args.out)
+        check_not_an_input(args.out, [args.from_log])
+    except OutputError as exc:
+        raise BadInput(f"--out {exc}") from None
+    try:
+        track = read_ulog_track(args.from_log)
+    except FlightLogError as exc:
+        raise BadInput(f"--from-log {exc}") from None
+    if track.damage:
+        _say(f"warning: {track.damage}")
+    try:
+        taught = teach_from_track(track, args.spacing, args.start_s, args.end_s)
+    except TeachError as exc:
+        raise BadInput(f"{exc}; nothing written") from None
+    path = taught.path
+    try:
+        write_text_atomic(args.out, path_csv_text(path))
+    except OutputError as exc:
+        raise BadInput(f"--out {exc}") from None
+    for note in taught.notes:
+        _say(note)
+    (a, b), origin = taught.span_s, track.origin_deg
+    vehicle = f", {track.vehicle}" if track.vehicle else ""
+    where = f"; local origin {origin[0]:.6f}, {origin[1]:.6f} deg" if origin else ""
+    _say(
+        f"{_wrote(args.out, path)}; from {track.name} {a:.1f}-{b:.1f} s "
+        f"({taught.span_from}{vehicle}){where}"
+    )
     return EXIT_OK
 
 

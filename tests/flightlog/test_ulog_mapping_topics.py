@@ -83,11 +83,12 @@ def test_estimator_invalid_rows_are_dropped_with_a_count(flight):
 
 def test_rover_log_refused_saying_rover_ulogs_are_not_read(flight):
     """A PX4 ground rover (MAV_TYPE 10, or vehicle_type ROVER when MAV_TYPE is not logged): one
-    line that says rover ULogs are not read and where the ground rovers are learned."""
+    line that says rover ULogs are not read, where the ground rovers are learned and what does
+    read a rover's drive."""
     topics = topics_of(flight)
     vehicle = flight_log_from_topics(topics).metadata["vehicle"]  # a multirotor's vehicle_type
     assert vehicle["type"] == "multirotor (MAV_TYPE not logged)"  # was labelled "fixed wing"
-    said = "a PX4 rover's ULog is not read .* python -m scripts.rover --help"
+    said = "a PX4 rover's ULog is not read here .* scripts.rover --help.* teach --from-log"
     with pytest.raises(FlightLogError, match=rf"a ground rover log \(MAV_TYPE 10\), .*{said}"):
         flight_log_from_topics(topics, params={"MAV_TYPE": 10})
     topics["vehicle_status"]["vehicle_type"] = np.full(

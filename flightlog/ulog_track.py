@@ -1,0 +1,115 @@
+"""The horizontal track a PX4 ULog recorded, of any vehicle: local position and arming.
+
+Where :func:`flightlog.ulog.read_ulog` maps a multirotor flight onto schema v1 (and refuses
+other vehicles, or a drive without a velocity command), this reads only what a recorded drive
+needs, from any vehicle type (a rover driven in MANUAL, a multirotor's track):
+``vehicle_local_position`` timestamp, x, y (NED, metres from the estimator's local origin),
+xy_valid, ref_lat/ref_lon (the origin, where xy_global says it is known) and ``vehicle_status``
+arming_state. Samples out of time order are left out as :mod:`flightlog.ulog_time` does, and
+a truncated or corrupt file is read as far as it goes and says so
+(:func:`flightlog.ulog.damage_note_of`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from flightlog import px4
+from flightlog.schema import FlightLogError
+from flightlog.ulog import damage_metadata, damage_note_of, open_ulog
+from flightlog.ulog_time import data_span_us
+
+TRACK_TOPICS = ("vehicle_local_position", "vehicle_status")
+
+
+@dataclass(frozen=True)
+class ULogTrack:
+    """A ULog's horizontal track.
+
+    Attributes:
+        name: the file's name.
+        t_s: sample times from the log's start (N,) [s] (the start as `flightlog info` has it:
+            the later of the logging start and the first data).
+        pos_ne_m: local position north, east (N, 2) [m], as logged (NaN possible).
+        xy_valid: the estimator's xy_valid flag (N,) (all True where the log has none).
+        duration_s: the log's data span [s].
+        armed_spans_s: (start_s, end_s) of each armed stretch; None when the log has no
+            vehicle_status (arming not logged).
+        origin_deg: (lat, lon) of the local origin, or None when the log does not know it.
+        vehicle: the vehicle type in words (MAV_TYPE), or None when not logged.
+        damage: one sentence when the file is truncated, corrupt or had samples out of time
+            order left out (:func:`flightlog.ulog.damage_note_of`), else None.
+    """
+
+    name: str
+    t_s: np.ndarray
+    pos_ne_m: np.ndarray
+    xy_valid: np.ndarray
+    duration_s: float
+    armed_spans_s: list[tuple[float, float]] | None
+    origin_deg: tuple[float, float] | None
+    vehicle: str | None
+    damage: str | None
+
+
+def read_ulog_track(path: str | Path) -> ULogTrack:
+    """The horizontal track of the ULog at ``path`` (module docstring).
+
+    Raises:
+        FlightLogError: no such file, not a ULog, unreadable, or no vehicle_local_position (one
+            line naming the file and the fix; a damaged file says where it is damaged).
+    """
+    path = Path(path)
+    ulog, damage, topics, out_of_order = open_ulog(path, TRACK_TOPICS, or_else="")
+    t0_us, t1_us = data_span_us(topics, ulog.start_timestamp)
+    duration_s = (t1_us - t0_us) * 1e-6
+    meta = {"ulog": path.name, "duration_s": duration_s, **damage_metadata(damage, out_of_order)}
+    pos = topics.get("vehicle_local_position")
+    if pos is None or len(pos["timestamp"]) == 0:
+        raise FlightLogError(
+            f"{path}: ULog holds no vehicle_local_position; log the drive with PX4's default "
+            "logging profile (SDLOG_PROFILE) and a position estimate (GPS or other)"
+        )
+    t_s = (np.asarray(pos["timestamp"], float) - t0_us) * 1e-6
+    pos_ne = np.column_stack([np.asarray(pos[f], float) for f in ("x", "y")])
+    valid = np.asarray(pos["xy_valid"]) > 0 if "xy_valid" in pos else np.ones(len(t_s), bool)
+    params = ulog.initial_parameters
+    mav_type = int(params["MAV_TYPE"]) if "MAV_TYPE" in params else None
+    return ULogTrack(
+        name=path.name,
+        t_s=t_s,
+        pos_ne_m=pos_ne,
+        xy_valid=valid,
+        duration_s=duration_s,
+        armed_spans_s=_armed_spans_s(topics.get("vehicle_status"), t0_us, duration_s),
+        origin_deg=_origin_deg(pos),
+        vehicle=px4.vehicle_name(mav_type),
+        damage=damage_note_of(meta),
+    )
+
+
+def _armed_spans_s(status, t0_us: float, duration_s: float) -> list[tuple[float, float]] | None:
+    """(start_s, end_s) of each run of armed vehicle_status samples, from the log's start
+    (a first sample stamped before it counts from 0; the last run ends at the log's end)."""
+    if status is None or len(status["timestamp"]) == 0:
+        return None
+    t = np.clip((np.asarray(status["timestamp"], float) - t0_us) * 1e-6, 0.0, duration_s)
+    armed = np.asarray(status["arming_state"]) == px4.ARMING_STATE_ARMED
+    edges = np.flatnonzero(np.diff(np.r_[0, armed.astype(int), 0]))
+    ends = np.r_[t, duration_s]
+    return [(float(t[a]), float(ends[b])) for a, b in zip(edges[::2], edges[1::2], strict=True)]
+
+
+def _origin_deg(pos) -> tuple[float, float] | None:
+    """(lat, lon) [deg] of the local origin from the last sample whose xy_global says it is
+    set, else None (no global reference, or fields not logged)."""
+    if not all(f in pos for f in ("xy_global", "ref_lat", "ref_lon")):
+        return None
+    known = np.flatnonzero(np.asarray(pos["xy_global"]) > 0)
+    if not len(known):
+        return None
+    i = known[-1]
+    return float(pos["ref_lat"][i]), float(pos["ref_lon"][i])

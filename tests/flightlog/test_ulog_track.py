@@ -1,0 +1,75 @@
+"""read_ulog_track on the real PX4 logs of tests/fixtures/ulog and on damaged copies: the
+local xy track, arming and origin of any vehicle, as pyulog reads them."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from pyulog import ULog
+
+from flightlog.schema import FlightLogError
+from flightlog.ulog_track import read_ulog_track
+from tests.flightlog.ulog_damage import FIXTURES, POSCTL, corrupt_copy
+
+
+def test_the_track_is_the_logged_local_position_from_the_log_start() -> None:
+    track = read_ulog_track(POSCTL)
+    pos = ULog(str(POSCTL), message_name_filter_list=["vehicle_local_position"]).get_dataset(
+        "vehicle_local_position"
+    )
+    np.testing.assert_array_equal(track.pos_ne_m[:, 0], pos.data["x"])
+    np.testing.assert_array_equal(track.pos_ne_m[:, 1], pos.data["y"])
+    assert track.t_s[0] == pytest.approx(0.0, abs=0.1)
+    assert track.duration_s == pytest.approx(76.1, abs=0.1)
+    assert track.xy_valid.all() and track.vehicle == "quadrotor" and track.damage is None
+
+
+@pytest.mark.parametrize(
+    ("name", "spans"),
+    [
+        ("quad_posctl_v1_15.ulg", [(0.0, 75.1)]),  # armed before logging, disarmed at the end
+        ("quad_sitl_v1_15_auto.ulg", [(14.9, 30.1)]),  # armed after the log starts
+        ("quad_manual_v1_6.ulg", []),  # never armed
+    ],
+)
+def test_armed_spans_from_vehicle_status(name: str, spans: list[tuple[float, float]]) -> None:
+    got = read_ulog_track(FIXTURES / name).armed_spans_s
+    assert got is not None and len(got) == len(spans)
+    np.testing.assert_allclose(np.array(got).reshape(-1, 2), np.array(spans).reshape(-1, 2),
+                               atol=0.05)  # fmt: skip
+
+
+def test_origin_only_where_the_log_has_a_global_reference() -> None:
+    lat, lon = read_ulog_track(FIXTURES / "quad_sitl_v1_15_auto.ulg").origin_deg
+    assert (lat, lon) == pytest.approx((47.3977, 8.5456), abs=1e-3)  # PX4 SITL's Zurich home
+    assert read_ulog_track(POSCTL).origin_deg is None
+
+
+@pytest.mark.parametrize(
+    ("make", "message"),
+    [
+        (lambda tmp: FIXTURES / "fixedwing_v1_17rc_status.ulg", "holds no vehicle_local_position"),
+        (lambda tmp: tmp / "missing.ulg", "no such file"),
+        (lambda tmp: Path(__file__), "not a ULog file"),
+        (lambda tmp: _head(tmp, 3000), "truncated at byte 2853 and holds no local position"),
+    ],
+)
+def test_refusals_are_one_line_with_the_fix(tmp_path: Path, make, message: str) -> None:
+    with pytest.raises(FlightLogError, match=message) as err:
+        read_ulog_track(make(tmp_path))
+    assert "\n" not in str(err.value)
+
+
+def test_a_damaged_log_is_read_as_far_as_it_goes_and_says_so(tmp_path: Path) -> None:
+    damaged, offset = corrupt_copy(tmp_path, "type")
+    track = read_ulog_track(damaged)
+    assert f"corrupt at byte {offset}" in track.damage and len(track.t_s) > 100
+    cut = read_ulog_track(_head(tmp_path, 550_000))
+    assert "is truncated" in cut.damage and cut.duration_s < 45.0
+
+
+def _head(tmp: Path, size: int) -> Path:
+    """The first ``size`` bytes of the POSCTL fixture, as a log cut by a power loss."""
+    path = tmp / f"cut_{size}.ulg"
+    path.write_bytes(POSCTL.read_bytes()[:size])
+    return path
