@@ -4,6 +4,7 @@ refused before take-off; never flown through."""
 from __future__ import annotations
 
 import json
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -68,11 +69,43 @@ def test_a_bad_world_file_is_refused_in_one_line(tmp_path):
         run_companion(config, lambda _m: None)
 
 
-def test_range_scans_reach_the_companion_through_the_link_at_the_sensor_rate():
-    world = load_world(REPO / "missions" / "forest_short_world.toml")
-    link = InProcessLink.from_vehicle("iris", 0, world)
+def _ray_to_trunks_m(origin_ne_m: np.ndarray, angles_rad: np.ndarray, world_file: Path):
+    """Naive reference: per beam (angle from north towards east), the distance [m] from the
+    origin to the nearest trunk surface along the ray (the smaller root of
+    |o + t d - c|^2 = r^2 for each cylinder of the TOML file), inf where no ray meets one."""
+    cylinders = tomllib.loads(world_file.read_text())["cylinder"]
+    out = np.full(angles_rad.shape, np.inf)
+    for k, angle in enumerate(angles_rad):
+        d = np.array([np.cos(angle), np.sin(angle)])
+        for cyl in cylinders:
+            rel = origin_ne_m - np.asarray(cyl["center_ne_m"])
+            b, c = rel @ d, rel @ rel - cyl["radius_m"] ** 2
+            if b * b - c >= 0.0 and -b - np.sqrt(b * b - c) > 0.0:
+                out[k] = min(out[k], -b - np.sqrt(b * b - c))
+    return out
+
+
+def test_range_scans_reach_the_companion_through_the_link_at_the_sensor_rate(tmp_path):
+    # trunks drawn round the start, some within the sensor's range, in a world file
+    rng = np.random.default_rng(11)
+    bearings, ranges = rng.uniform(0.0, 2 * np.pi, 6), rng.uniform(1.5, 8.0, 6)
+    world_file = tmp_path / "trunks.toml"
+    world_file.write_text(
+        'name = "drawn"\n'
+        + "".join(
+            f"[[cylinder]]\ncenter_ne_m = [{float(r * np.cos(b))!r}, {float(r * np.sin(b))!r}]\n"
+            f"radius_m = {float(rng.uniform(0.15, 0.5))!r}\n"
+            for b, r in zip(bearings, ranges, strict=True)
+        )
+    )
+    link = InProcessLink.from_vehicle("iris", 0, load_world(world_file))
     first = link.read_state().obstacle_distances
     assert first is not None and first.angles_rad.shape == (72,)
+    # the distances are the world's: each beam against a ray-circle reference from the file
+    expected = _ray_to_trunks_m(first.origin_ned_m[:2], first.angles_rad, world_file)
+    expected[expected > first.max_range_m] = np.inf
+    assert np.isfinite(expected).sum() >= 3, "the start must see some trunks for this test"
+    np.testing.assert_allclose(first.distances_m, expected, atol=0.02)
     assert link.read_state().obstacle_distances is first  # no new scan within 0.1 s
     link.clock.sleep_until(0.1)
     assert link.read_state().obstacle_distances.t_s == pytest.approx(0.1)
