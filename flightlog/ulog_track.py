@@ -4,10 +4,11 @@ Where :func:`flightlog.ulog.read_ulog` maps a multirotor flight onto schema v1 (
 other vehicles, or a drive without a velocity command), this reads only what a recorded drive
 needs, from any vehicle type (a rover driven in MANUAL, a multirotor's track):
 ``vehicle_local_position`` timestamp, x, y (NED, metres from the estimator's local origin),
-xy_valid, ref_lat/ref_lon (the origin, where xy_global says it is known) and ``vehicle_status``
-arming_state. Samples out of time order are left out as :mod:`flightlog.ulog_time` does, and
-a truncated or corrupt file is read as far as it goes and says so
-(:func:`flightlog.ulog.damage_note_of`).
+xy_valid, eph (the estimator's horizontal accuracy), xy_reset_counter with delta_xy (where the
+estimator shifted its position: [PX4-msgs] vehicle_local_position), ref_lat/ref_lon (the
+origin, where xy_global says it is known) and ``vehicle_status`` arming_state. Samples out of
+time order are left out as :mod:`flightlog.ulog_time` does, and a truncated or corrupt file is
+read as far as it goes and says so (:func:`flightlog.ulog.damage_note_of`).
 """
 
 from __future__ import annotations
@@ -42,6 +43,10 @@ class ULogTrack:
         vehicle: the vehicle type in words (MAV_TYPE), or None when not logged.
         damage: one sentence when the file is truncated, corrupt or had samples out of time
             order left out (:func:`flightlog.ulog.damage_note_of`), else None.
+        eph_m: the estimator's horizontal position accuracy per sample (N,) [m] (NaN where
+            the log has none).
+        xy_resets: (t_s, shift_m) of each reset of the horizontal position: when, and by how
+            far the estimate jumped (|delta_xy|) [s], [m].
     """
 
     name: str
@@ -53,6 +58,8 @@ class ULogTrack:
     origin_deg: tuple[float, float] | None
     vehicle: str | None
     damage: str | None
+    eph_m: np.ndarray | None = None
+    xy_resets: tuple[tuple[float, float], ...] = ()
 
 
 def read_ulog_track(path: str | Path) -> ULogTrack:
@@ -88,7 +95,18 @@ def read_ulog_track(path: str | Path) -> ULogTrack:
         origin_deg=_origin_deg(pos),
         vehicle=px4.vehicle_name(mav_type),
         damage=damage_note_of(meta),
+        eph_m=np.asarray(pos["eph"], float) if "eph" in pos else np.full(len(t_s), np.nan),
+        xy_resets=_xy_resets(pos, t_s),
     )
+
+
+def _xy_resets(pos, t_s: np.ndarray) -> tuple[tuple[float, float], ...]:
+    """(t_s, |delta_xy| [m]) wherever xy_reset_counter changes (none when not logged)."""
+    if not all(f in pos for f in ("xy_reset_counter", "delta_xy[0]", "delta_xy[1]")):
+        return ()
+    at = np.flatnonzero(np.diff(np.asarray(pos["xy_reset_counter"], int))) + 1
+    shift = np.hypot(np.asarray(pos["delta_xy[0]"], float), np.asarray(pos["delta_xy[1]"], float))
+    return tuple((float(t_s[i]), float(shift[i])) for i in at)
 
 
 def _armed_spans_s(status, t0_us: float, duration_s: float) -> list[tuple[float, float]] | None:

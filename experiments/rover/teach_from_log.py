@@ -22,6 +22,12 @@ robot drives along, one way):
   longest one-way stretch as a ``--start-s/--end-s`` that teaches it.
 - Samples the estimator marks xy-invalid are left out and counted; a NaN position it calls
   valid is refused, as a live teach refuses one.
+- What the estimator says of its own position is passed on: where its horizontal accuracy
+  (eph) grows past ``EPH_NOTE_SPACINGS`` vertex spacings in the span, and its resets of the
+  horizontal position in the span that shift it by more than ``RESET_NOTE_SPACINGS`` spacings
+  (the estimate, and so the path, jumps there), a note each;
+  the path is still taught (a rover's own log is what the user has), the notes say how far to
+  trust it.
 """
 
 from __future__ import annotations
@@ -36,6 +42,8 @@ from flightlog.ulog_track import ULogTrack
 from planners.rover.path import TaughtPath
 
 REVERSAL_RAD = math.radians(120.0)  # a turn between successive moves this sharp folds back
+EPH_NOTE_SPACINGS = 2.0  # an eph above this many vertex spacings is said (module docstring)
+RESET_NOTE_SPACINGS = 0.2  # a reset shifting the position by more than this many is said
 
 
 @dataclass(frozen=True)
@@ -92,6 +100,7 @@ def teach_from_track(
             f"{int(np.sum(in_span & ~track.xy_valid))} of {int(in_span.sum())} position samples "
             "in the span have xy_valid false (no position estimate) and were left out"
         )
+    notes.extend(_estimator_notes(track, valid, spacing_m))
     t, ne = track.t_s[valid], track.pos_ne_m[valid]
     bad = ~np.all(np.isfinite(ne), axis=1)
     if bad.any():
@@ -130,6 +139,37 @@ def teach_from_track(
     except ValueError as exc:
         raise TeachError(f"{where}: the positions give no path: {exc}") from None
     return LogTeach(path, span, span_from, driven, notes)
+
+
+def _estimator_notes(track: ULogTrack, rows: np.ndarray, spacing_m: float) -> list[str]:
+    """Notes on the estimator's own account of the position in the taught ``rows`` (N,) bool:
+    its horizontal accuracy past EPH_NOTE_SPACINGS spacings, its resets of the position past
+    RESET_NOTE_SPACINGS."""
+    notes = []
+    eph = np.full(len(track.t_s), np.nan) if track.eph_m is None else track.eph_m
+    eph = np.where(rows, eph, np.nan)
+    if np.isfinite(eph).any() and np.nanmax(eph) > EPH_NOTE_SPACINGS * spacing_m:
+        worst = int(np.nanargmax(eph))
+        notes.append(
+            f"the estimator's horizontal accuracy (eph) reached {eph[worst]:.2f} m at "
+            f"t={track.t_s[worst]:.1f} s (median {np.nanmedian(eph):.2f} m over the span): "
+            "the path is no more accurate than that there; a span where eph stays small "
+            "teaches a truer one"
+        )
+    t_rows = track.t_s[rows]
+    inside = [
+        (t, m)
+        for t, m in track.xy_resets
+        if t_rows[0] <= t <= t_rows[-1] and m > RESET_NOTE_SPACINGS * spacing_m
+    ]
+    if inside:
+        t_big, m_big = max(inside, key=lambda tm: tm[1])
+        notes.append(
+            f"the estimator reset its horizontal position {len(inside)} time"
+            f"{'s' if len(inside) > 1 else ''} in the span (the largest by {m_big:.2f} m at "
+            f"t={t_big:.1f} s): the path jumps with the estimate there"
+        )
+    return notes
 
 
 def _teaches(track: ULogTrack, spacing_m: float, start_s: float, end_s: float) -> bool:

@@ -73,3 +73,18 @@ def _head(tmp: Path, size: int) -> Path:
     path = tmp / f"cut_{size}.ulg"
     path.write_bytes(POSCTL.read_bytes()[:size])
     return path
+
+
+def test_the_estimators_accuracy_and_position_resets_are_read_as_logged() -> None:
+    path = FIXTURES / "quad_sitl_v1_15_auto.ulg"  # one reset of the horizontal position
+    track = read_ulog_track(path)
+    pos = ULog(str(path), message_name_filter_list=["vehicle_local_position"]).get_dataset(
+        "vehicle_local_position"
+    )
+    np.testing.assert_array_equal(track.eph_m, pos.data["eph"])
+    counter = pos.data["xy_reset_counter"].astype(int)
+    at = [i for i in range(1, len(counter)) if counter[i] != counter[i - 1]]
+    assert [t for t, _ in track.xy_resets] == pytest.approx(track.t_s[at].tolist())
+    shifts = [np.hypot(pos.data["delta_xy[0]"][i], pos.data["delta_xy[1]"][i]) for i in at]
+    assert [m for _, m in track.xy_resets] == pytest.approx(shifts)
+    assert len(at) == 1 and read_ulog_track(POSCTL).xy_resets == ()

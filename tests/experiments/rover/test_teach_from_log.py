@@ -2,6 +2,7 @@
 tests/fixtures/ulog (multirotors: their local xy track is still a recorded track) and on drives
 built to hold one stop, corner or reversal each."""
 
+import dataclasses
 import re
 
 import numpy as np
@@ -158,3 +159,22 @@ def test_the_path_is_resampled_as_a_live_teach_resamples() -> None:
     assert taught.spacing_m == pytest.approx(0.25, abs=0.01)
     gap = np.min(np.linalg.norm(taught.xy_m[:, None] - arc.xy_m[None], axis=2), axis=1)
     assert gap.max() < 0.01  # on the driven arc: x north, y west
+
+
+def test_a_failing_estimators_accuracy_is_said_beside_the_path() -> None:
+    failing = teach_from_track(read_ulog_track(FIXTURES / "quad_posctl_ekf_fail_v1_15.ulg"), 0.25,
+                               0.1, 71.9)  # fmt: skip
+    eph = [n for n in failing.notes if "horizontal accuracy (eph)" in n]
+    assert len(eph) == 1 and float(re.search(r"reached ([\d.]+) m", eph[0])[1]) > 1.0
+    assert not teach_from_track(read_ulog_track(POSCTL)).notes  # eph 3 cm: nothing to say
+
+
+def test_a_reset_of_the_position_in_the_span_is_said_a_tiny_or_outside_one_is_not() -> None:
+    rng = np.random.default_rng(7)
+    t_reset, shift_m = float(rng.uniform(4.0, 14.0)), float(rng.uniform(0.3, 2.0))
+    drive = _track([(0.5, 0.0, 20.0)])
+    resets = ((t_reset, shift_m), (t_reset + 0.5, 0.01), (40.0, 3.0))  # big, tiny, after
+    taught = teach_from_track(dataclasses.replace(drive, xy_resets=resets))
+    (note,) = [n for n in taught.notes if "reset" in n]
+    assert f"1 time in the span (the largest by {shift_m:.2f} m at t={t_reset:.1f} s)" in note
+    assert not teach_from_track(drive).notes
