@@ -89,6 +89,11 @@ def teach_from_track(
             f"{track.name}: the local position is invalid throughout the log (xy_valid false: "
             "no GPS fix or other position source); drive it again with a position estimate"
         )
+    if not in_span.any():
+        raise TeachError(
+            f"{where}: no position sample in the span (the log's {len(track.t_s)} lie from "
+            f"{track.t_s[0]:.1f} to {track.t_s[-1]:.1f} s); {_span_fix(track)}"
+        )
     if not valid.any():
         t_valid = track.t_s[track.xy_valid]
         raise TeachError(
