@@ -242,6 +242,8 @@ def _span_s(
             raise TeachError(
                 f"--end-s {b:g} is past the end of {log}; leave --end-s out for the log's end"
             )
+        if b <= a and start_s is None:
+            raise TeachError(f"--end-s {b:g} is the log's start; pass one after 0")
         if b <= a:
             raise TeachError(f"--end-s {b:g} is not after --start-s {a:g}; swap them")
         return (a, b), "--start-s/--end-s"

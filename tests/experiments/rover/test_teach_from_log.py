@@ -103,6 +103,7 @@ def test_a_span_without_motion_is_refused_as_a_live_teach_is() -> None:
         (100.0, None, r"--start-s 100 is outside quad_posctl_v1_15.ulg \(76.1 s of data\)"),
         (None, 80.0, r"--end-s 80 is past the end of .*leave --end-s out"),
         (30.0, 20.0, r"--end-s 20 is not after --start-s 30"),
+        (None, 0.0, r"^--end-s 0 is the log's start; pass one after 0$"),
         (10.0, 10.05, r"no position sample in the span \(the log's 762 lie from 0\.0 to 76\.1 s\); "
          r"pass --start-s/--end-s around the drive \(armed: 0\.0-75\.1 s\)"),
     ],
