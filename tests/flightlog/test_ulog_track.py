@@ -50,6 +50,7 @@ def test_origin_only_where_the_log_has_a_global_reference() -> None:
     [
         (lambda tmp: FIXTURES / "fixedwing_v1_17rc_status.ulg", "holds no vehicle_local_position"),
         (lambda tmp: tmp / "missing.ulg", "no such file"),
+        (lambda tmp: tmp, "a folder, not a flight log; pass a PX4 .ulg in it"),
         (lambda tmp: Path(__file__), "not a ULog file"),
         (lambda tmp: _head(tmp, 3000), "truncated at byte 2853 and holds no local position"),
     ],
