@@ -36,10 +36,22 @@ def describe_os_error(path: Path, exc: OSError) -> str:
     return f"{path}: cannot write ({reason})"
 
 
+def _refuse_a_special_file(path: Path) -> None:
+    """OutputError in one line when ``path`` is a device, a pipe or a socket: the rename that
+    puts the new file in place would replace the node itself (``--out /dev/null`` run as root
+    leaves /dev/null a regular file)."""
+    if path.exists() and not (path.is_file() or path.is_dir()):
+        raise OutputError(
+            f"{path}: not a regular file (a device, a pipe or a socket); writing there would "
+            "replace it: give a file name"
+        )
+
+
 def check_writable_file(path: str | Path) -> Path:
     """Make the parent folder and prove a file can be created there (before any flight or
     long computation); OutputError in one line otherwise."""
     path = Path(path)
+    _refuse_a_special_file(path)
     try:
         if path.is_dir():
             raise IsADirectoryError(21, "Is a directory")
@@ -122,6 +134,7 @@ def write_bytes_atomic(path: str | Path, data: bytes) -> Path:
     without the sync a power cut soon after, as a vehicle's companion computer sees, can leave
     ``path`` renamed but empty)."""
     path = Path(path)
+    _refuse_a_special_file(path)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")

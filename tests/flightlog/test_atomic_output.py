@@ -54,6 +54,18 @@ def test_a_file_in_the_way_is_one_line_naming_the_path(tmp_path, check) -> None:
     assert "\n" not in str(info.value) and "folder" in str(info.value)
 
 
+@pytest.mark.parametrize("write", [check_writable_file, lambda p: write_text_atomic(p, "x")])
+def test_a_pipe_is_refused_not_replaced_by_a_regular_file(tmp_path, write) -> None:
+    """The rename that puts a file in place replaced a device or a pipe given as the output
+    (--out /dev/null, run as root, left /dev/null a regular file): a named pipe stands in."""
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    with pytest.raises(OutputError, match="pipe: not a regular file .*give a file name") as info:
+        write(fifo)
+    assert "\n" not in str(info.value) and stat.S_ISFIFO(fifo.stat().st_mode)
+    assert [p.name for p in tmp_path.iterdir()] == ["pipe"]
+
+
 def test_a_file_is_replaced_atomically(tmp_path) -> None:
     path = write_text_atomic(tmp_path / "sub" / "f.txt", "one")
     write_text_atomic(path, "two")
