@@ -109,9 +109,11 @@ def teach_from_track(
     t, ne = track.t_s[valid], track.pos_ne_m[valid]
     bad = ~np.all(np.isfinite(ne), axis=1)
     if bad.any():
+        fix = "teach a span without them" if not bad.all() else "teach another span"
         raise TeachError(
-            f"{where}: the local position is not finite (NaN) at t={t[bad][0]:.1f} s while "
-            "the estimator calls it valid; teach a span without it (--start-s/--end-s)"
+            f"{where}: the local position is not finite (NaN) in {int(bad.sum())} of {len(t)} "
+            f"samples, from t={t[bad][0]:.1f} to {t[bad][-1]:.1f} s, while the estimator calls "
+            f"it valid; {fix} (--start-s/--end-s)"
         )
     xy = np.column_stack([ne[:, 0], -ne[:, 1]])  # north, west: the path frame
     keep = _moving_samples(xy, spacing_m)

@@ -140,9 +140,13 @@ def test_invalid_positions_are_left_out_and_a_nan_one_is_refused() -> None:
     assert "10 of 101 position samples" in gap.notes[0]
     assert gap.path.length_m == pytest.approx(5.0, abs=0.25)  # ends within a spacing
     ne = track.pos_ne_m.copy()
-    ne[40] = np.nan
-    with pytest.raises(TeachError, match=r"not finite \(NaN\) at t=4\.0 s"):
+    ne[[40, 47]] = np.nan
+    with pytest.raises(
+        TeachError, match=r"not finite \(NaN\) in 2 of 101 samples, from t=4\.0 to 4\.7 s"
+    ):
         teach_from_track(ULogTrack(**{**track.__dict__, "pos_ne_m": ne}))
+    with pytest.raises(TeachError, match=r"in 101 of 101 samples, .*; teach another span \("):
+        teach_from_track(ULogTrack(**{**track.__dict__, "pos_ne_m": ne * np.nan}))
 
 
 def test_a_log_without_a_position_estimate_is_refused() -> None:
