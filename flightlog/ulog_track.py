@@ -40,7 +40,9 @@ class ULogTrack:
         armed_spans_s: (start_s, end_s) of each armed stretch; None when the log has no
             vehicle_status (arming not logged).
         origin_deg: (lat, lon) of the local origin, or None when the log does not know it.
-        vehicle: the vehicle type in words (MAV_TYPE), or None when not logged.
+        vehicle: the vehicle type in words (MAV_TYPE), "no airframe set" for a board never
+            given one (:func:`flightlog.px4.no_airframe_set`: its MAV_TYPE 0 names no type),
+            or None when not logged.
         damage: one sentence when the file is truncated, corrupt or had samples out of time
             order left out (:func:`flightlog.ulog.damage_note_of`), else None.
         eph_m: the estimator's horizontal position accuracy per sample (N,) [m] (NaN where
@@ -93,7 +95,7 @@ def read_ulog_track(path: str | Path) -> ULogTrack:
         duration_s=duration_s,
         armed_spans_s=_armed_spans_s(topics.get("vehicle_status"), t0_us, duration_s),
         origin_deg=_origin_deg(pos),
-        vehicle=px4.vehicle_name(mav_type),
+        vehicle="no airframe set" if px4.no_airframe_set(params) else px4.vehicle_name(mav_type),
         damage=damage_note_of(meta),
         eph_m=np.asarray(pos["eph"], float) if "eph" in pos else np.full(len(t_s), np.nan),
         xy_resets=_xy_resets(pos, t_s),

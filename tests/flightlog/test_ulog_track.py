@@ -89,3 +89,15 @@ def test_the_estimators_accuracy_and_position_resets_are_read_as_logged() -> Non
     shifts = [np.hypot(pos.data["delta_xy[0]"][i], pos.data["delta_xy[1]"][i]) for i in at]
     assert [m for _, m in track.xy_resets] == pytest.approx(shifts)
     assert len(at) == 1 and read_ulog_track(POSCTL).xy_resets == ()
+
+
+def test_a_board_with_no_airframe_set_is_not_called_a_generic_vehicle(tmp_path: Path) -> None:
+    """SYS_AUTOSTART 0 and MAV_TYPE 0 are PX4's defaults on a board never given an airframe:
+    MAV_TYPE 0 says nothing of the vehicle there, as flightlog info says."""
+    ulog = ULog(str(POSCTL))
+    ulog.initial_parameters.update({"SYS_AUTOSTART": 0, "MAV_TYPE": 0})
+    ulog.write_ulog(str(tmp_path / "no_airframe.ulg"))
+    assert read_ulog_track(tmp_path / "no_airframe.ulg").vehicle == "no airframe set"
+    ulog.initial_parameters["SYS_AUTOSTART"] = 4001
+    ulog.write_ulog(str(tmp_path / "generic.ulg"))
+    assert read_ulog_track(tmp_path / "generic.ulg").vehicle == "generic vehicle"
