@@ -87,7 +87,8 @@ def test_bad_feature_set_lists_the_valid_ones():
 def test_holdout_split_uses_whole_blocks_and_evaluates_like_paper_000():
     """Segments of 399 and 299 rows in blocks of 69 (a tenth of the rows; each segment's
     remainder a shorter block): in each segment the rows held out lie in runs no shorter than
-    the shortest block (22 rows), and they make up a quarter of the rows within half a block."""
+    the shortest block (23 rows: 299 - 4 x 69), and they make up a quarter of the rows within
+    half a block."""
     data = residual_dataset([record_log(400, seed=1), record_log(300, seed=2)], _config())
     train, test = holdout_split(data, 0.25, seed=3)
     assert train.n_rows + test.n_rows == data.n_rows
@@ -99,7 +100,7 @@ def test_holdout_split_uses_whole_blocks_and_evaluates_like_paper_000():
     held[[row_of[(s, *x, *y)] for s, x, y in zip(test.segment, test.X, test.Y, strict=True)]] = 1
     for seg in np.unique(data.segment):
         runs = np.diff(np.flatnonzero(np.diff(np.r_[0, held[data.segment == seg], 0])))[::2]
-        assert np.all(runs >= 22), (seg, runs)
+        assert np.all(runs >= 23), (seg, runs)
     perfect = residual_rmse(test, test.Y)
     assert perfect["augmented_rmse_mps"] == [0.0, 0.0, 0.0]
     nominal = residual_rmse(test, np.zeros_like(test.Y))["nominal_rmse_mps"]
