@@ -6,9 +6,11 @@ needs, from any vehicle type (a rover driven in MANUAL, a multirotor's track):
 ``vehicle_local_position`` timestamp, x, y (NED, metres from the estimator's local origin),
 xy_valid, eph (the estimator's horizontal accuracy), xy_reset_counter with delta_xy (where the
 estimator shifted its position: [PX4-msgs] vehicle_local_position), ref_lat/ref_lon (the
-origin, where xy_global says it is known) and ``vehicle_status`` arming_state. Samples out of
-time order are left out as :mod:`flightlog.ulog_time` does, and a truncated or corrupt file is
-read as far as it goes and says so (:func:`flightlog.ulog.damage_note_of`).
+origin, where xy_global says it is known) and ``vehicle_status`` arming_state. Its times count
+from the start `flightlog info` gives a log it does not map, a rover's (the first data of
+:data:`flightlog.ulog.TOPICS`): the modes it lists there and a ``--start-s`` agree. Samples
+out of time order are left out as :mod:`flightlog.ulog_time` does, and a truncated or corrupt
+file is read as far as it goes and says so (:func:`flightlog.ulog.damage_note_of`).
 """
 
 from __future__ import annotations
@@ -20,10 +22,8 @@ import numpy as np
 
 from flightlog import px4
 from flightlog.schema import FlightLogError
-from flightlog.ulog import damage_metadata, damage_note_of, open_ulog
+from flightlog.ulog import TOPICS, damage_metadata, damage_note_of, open_ulog
 from flightlog.ulog_time import data_span_us
-
-TRACK_TOPICS = ("vehicle_local_position", "vehicle_status")
 
 
 @dataclass(frozen=True)
@@ -72,7 +72,7 @@ def read_ulog_track(path: str | Path) -> ULogTrack:
             line naming the file and the fix; a damaged file says where it is damaged).
     """
     path = Path(path)
-    ulog, damage, topics, out_of_order = open_ulog(path, TRACK_TOPICS, or_else="")
+    ulog, damage, topics, out_of_order = open_ulog(path, TOPICS, or_else="")  # all: info's start
     t0_us, t1_us = data_span_us(topics, ulog.start_timestamp)
     duration_s = (t1_us - t0_us) * 1e-6
     meta = {"ulog": path.name, "duration_s": duration_s, **damage_metadata(damage, out_of_order)}

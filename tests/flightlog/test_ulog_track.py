@@ -8,6 +8,7 @@ import pytest
 from pyulog import ULog
 
 from flightlog.schema import FlightLogError
+from flightlog.ulog import summarise_ulog
 from flightlog.ulog_track import read_ulog_track
 from tests.flightlog.ulog_damage import FIXTURES, POSCTL, corrupt_copy
 
@@ -37,6 +38,15 @@ def test_armed_spans_from_vehicle_status(name: str, spans: list[tuple[float, flo
     assert got is not None and len(got) == len(spans)
     np.testing.assert_allclose(np.array(got).reshape(-1, 2), np.array(spans).reshape(-1, 2),
                                atol=0.05)  # fmt: skip
+
+
+def test_times_count_from_the_start_flightlog_info_gives_the_log() -> None:
+    """The mission log's first position comes 0.5 s after its first other data: the track
+    counted from there, so --start-s read off `flightlog info`'s modes was 0.5 s off."""
+    path = FIXTURES / "quad_mission_rtl_v1_9_esc.ulg"
+    track, info = read_ulog_track(path), summarise_ulog(path)
+    assert track.duration_s == pytest.approx(info["duration_s"], abs=1e-9)
+    assert track.t_s[0] == pytest.approx(0.51, abs=0.01)
 
 
 def test_origin_only_where_the_log_has_a_global_reference() -> None:
