@@ -182,14 +182,21 @@ def open_ulog(path: Path, topics: Sequence[str] = TOPICS, or_else: str = "a sche
     (:func:`flightlog.ulog_time.in_time_order`); ``or_else`` is what else the user could pass.
 
     Raises:
-        FlightLogError: no such file, a folder, not a ULog, unreadable, or damaged before any
-            local position (one line naming the file and the fix).
+        FlightLogError: no such file, a folder, no read access, not a ULog, unreadable, or
+            damaged before any local position (one line naming the file and the fix).
     """
     alternative = f" or {or_else}" if or_else else ""
     if path.is_dir():
         raise FlightLogError(f"{path}: a folder, not a flight log; pass a PX4 .ulg in it")
     if not path.is_file():
         raise FlightLogError(f"{path}: no such file; pass a PX4 .ulg{alternative}")
+    try:
+        path.open("rb").close()
+    except OSError as exc:  # is_ulog would call it no ULog
+        raise FlightLogError(
+            f"{path}: cannot read it ({exc.strerror or exc}); make it readable to you "
+            "(chown or chmod, with sudo for a file root copied) and pass it again"
+        ) from None
     if not is_ulog(path):
         raise FlightLogError(
             f"{path}: not a ULog file (it does not start with the ULog magic bytes); "

@@ -71,6 +71,28 @@ def test_refusals_are_one_line_with_the_fix(tmp_path: Path, make, message: str) 
     assert "\n" not in str(err.value)
 
 
+def test_a_log_without_read_access_is_not_called_no_ulog(tmp_path: Path, monkeypatch) -> None:
+    """A .ulg copied off the SD card by root cannot be opened by its user: is_ulog reads no
+    magic bytes there, and the refusal said 'not a ULog file ... copy the .ulg again'."""
+    log = tmp_path / "root_only.ulg"
+    log.write_bytes(POSCTL.read_bytes()[:100])
+    real_open = Path.open
+
+    def denied(self: Path, *args, **kwargs):
+        if self == log:
+            raise PermissionError(13, "Permission denied")
+        return real_open(self, *args, **kwargs)
+
+    monkeypatch.setattr(Path, "open", denied)
+    with pytest.raises(
+        FlightLogError,
+        match=r"root_only.ulg: cannot read it \(Permission denied\); "
+        r"make it readable to you \(chown or chmod",
+    ) as err:
+        read_ulog_track(log)
+    assert "\n" not in str(err.value)
+
+
 def test_a_damaged_log_is_read_as_far_as_it_goes_and_says_so(tmp_path: Path) -> None:
     damaged, offset = corrupt_copy(tmp_path, "type")
     track = read_ulog_track(damaged)
