@@ -46,7 +46,7 @@ class ULogTrack:
         damage: one sentence when the file is truncated, corrupt or had samples out of time
             order left out (:func:`flightlog.ulog.damage_note_of`), else None.
         eph_m: the estimator's horizontal position accuracy per sample (N,) [m] (NaN where
-            the log has none).
+            the log has none; None for a track built without it).
         xy_resets: (t_s, shift_m) of each reset of the horizontal position: when, and by how
             far the estimate jumped (|delta_xy|) [s], [m].
     """

@@ -44,13 +44,11 @@ class TeachPass:
 
     Attributes:
         path: the taught path, resampled to the vertex spacing.
-        driven_m: distance the rover drove while recording [m].
         ended_for: why recording stopped (disarmed, distance, pattern done, Ctrl-C, SIGTERM,
             timeout).
     """
 
     path: TaughtPath
-    driven_m: float
     ended_for: str
 
 
@@ -195,4 +193,4 @@ def record_teach(
         path = TaughtPath.from_drive(np.array(points), spacing_m)
     except ValueError as exc:
         raise TeachError(f"the recorded positions give no path: {exc}; teach again") from None
-    return TeachPass(path, driven, ended)
+    return TeachPass(path, ended)

@@ -54,7 +54,6 @@ class LogTeach:
         path: the taught path, resampled to the vertex spacing, in the path frame.
         span_s: (start_s, end_s) of the log used, from its start [s].
         span_from: how the span was chosen ("--start-s/--end-s", "armed", "whole log").
-        driven_m: distance between the kept samples [m].
         notes: lines for the user (samples left out, other armed stretches; the log's damage
             is ``track.damage``, said on reading it).
     """
@@ -62,7 +61,6 @@ class LogTeach:
     path: TaughtPath
     span_s: tuple[float, float]
     span_from: str
-    driven_m: float
     notes: list[str]
 
 
@@ -145,7 +143,7 @@ def teach_from_track(
         path = TaughtPath.from_drive(xy, spacing_m)
     except ValueError as exc:
         raise TeachError(f"{where}: the positions give no path: {exc}") from None
-    return LogTeach(path, span, span_from, driven, notes)
+    return LogTeach(path, span, span_from, notes)
 
 
 def _estimator_notes(track: ULogTrack, rows: np.ndarray, spacing_m: float) -> list[str]:
