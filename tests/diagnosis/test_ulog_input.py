@@ -11,6 +11,7 @@ import pytest
 from diagnosis.diagnosis import diagnose
 from diagnosis.excitation import schedule_from_mapping
 from diagnosis.fly_schedule import fly_schedule
+from experiments.hidden_effects import draw
 from flightlog.schema import FlightLog, FlightLogError
 from flightlog.ulog import flight_log_from_topics, read_ulog
 from tests.flightlog.ulog_damage import corrupt_copy
@@ -70,14 +71,16 @@ def test_missing_topic_and_unreadable_file_are_one_line_errors(tmp_path):
 
 
 def test_payload_is_found_from_normalised_thrust():
-    config = load_sim_config("iris", {"payload": {"mass_ratio": 1.2}})
+    truth, _ = draw("payload", np.random.default_rng(12))
+    config = load_sim_config("iris", truth)
     log = fly_schedule(config, HOVER)
     v = config.vehicle
     cols = {k: c for k, c in log.columns.items() if k != "thrust_n"}
     cols["thrust_norm"] = log["thrust_n"] / (4 * v.max_rotor_thrust_n)
     result = diagnose([FlightLog(cols, log.metadata)], load_sim_config("iris"))
     assert result.verdict == ("payload",)
-    assert result.causes[0].params["mass_ratio"] == pytest.approx(1.2, rel=0.01)
+    fitted = result.causes[0].params["mass_ratio"]
+    assert fitted == pytest.approx(truth["payload"]["mass_ratio"], rel=0.01)
 
 
 def test_a_diagnosis_of_a_truncated_ulog_says_so_in_its_headline(tmp_path):
