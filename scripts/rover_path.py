@@ -128,8 +128,8 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         "repeat", help="drive a taught path trial after trial, learning", allow_abbrev=False
     )
     for p in (teach, repeat):
-        p.add_argument("--link", choices=LINKS, default="pymavlink", help="how to reach it")
-        p.add_argument("--url", default=DEFAULT_URL, help=f"MAVLink URL (default {DEFAULT_URL})")
+        p.add_argument("--link", choices=LINKS, help="how to reach it (default pymavlink)")
+        p.add_argument("--url", help=f"MAVLink URL (default {DEFAULT_URL})")
         p.add_argument("--vehicle", help="rover preset (--link inprocess; default husky_50kg)")
         p.add_argument("--seed", type=int, help="simulator seed (--link inprocess; default 0)")
         p.add_argument("--spacing", type=_positive, default=0.25, help="vertex spacing [m]")
@@ -182,6 +182,8 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     args = parser.parse_args(argv)
     if args.command == "teach":
         _check_from_log_options(parser, args)
+    args.link = args.link or "pymavlink"
+    args.url = args.url or DEFAULT_URL
     if args.command == "repeat" and args.trials < 1:
         parser.error(f"argument --trials: must be >= 1, got {args.trials}")
     for option, given in (("--vehicle", args.vehicle), ("--seed", args.seed)):
@@ -198,14 +200,16 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
 
 
 def _check_from_log_options(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
-    """--start-s/--end-s need --from-log; --from-log takes no live-teach option."""
+    """--start-s/--end-s need --from-log; --from-log takes no live-teach option (nor a link:
+    nothing is reached)."""
     if args.from_log is None:
         for option, given in (("--start-s", args.start_s), ("--end-s", args.end_s)):
             if given is not None:
                 parser.error(f"{option} cuts a span of --from-log DRIVE.ulg; pass --from-log")
         return
     live = (("--drive", args.drive), ("--max-distance", math.isfinite(args.max_distance) or None),
-            ("--timeout", math.isfinite(args.timeout) or None))  # fmt: skip
+            ("--timeout", math.isfinite(args.timeout) or None), ("--link", args.link),
+            ("--url", args.url), ("--vehicle", args.vehicle), ("--seed", args.seed))  # fmt: skip
     for option, given in live:
         if given is not None:
             parser.error(
