@@ -173,7 +173,7 @@ class Simulator:
         if not (math.isfinite(duration_s) and duration_s >= 0.0):
             raise ValueError(f"step duration {duration_s!r} s must be finite and >= 0")
         dt = self.physics_dt_s
-        remaining = round(duration_s / dt)
+        remaining = round(float(duration_s) / dt)  # (a NumPy scalar's round takes microseconds)
         plant, commander, aux = self._plant, self._commander, self._plant.aux
         self._refresh_control_params()
         while remaining > 0:
@@ -542,7 +542,7 @@ class Simulator:
         x = self._plant.x
         contact = self._plant.aux[ph.AUX_CONTACT] > 0.5
         self._commander.update(
-            self.t_s,
+            self._k * self.physics_dt_s,
             x[ph.POS : ph.POS + 3],
             fc.yaw_of(x),
             contact,
