@@ -51,7 +51,7 @@ class PlantBackend(Protocol):
 # Deliberately not cached: numba's cache cannot see changes in functions called from other
 # files, so a cached fused loop would keep running stale control or physics code after an edit.
 # Its callees are cached in their own modules; compiling this loop costs about half a second.
-@njit
+@njit(error_model="numpy")
 def run_closed_loop(n_steps, dt, x, cs, sp, cp, mix, pp, rp, spin, ep, noise, aux):
     """Flight control + physics for up to ``n_steps``; returns the steps done (see above)."""
     scratch = np.zeros((6, ph.N_DYN))

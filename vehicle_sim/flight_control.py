@@ -6,7 +6,8 @@ and tilt limit (vertical thrust has priority) -> quaternion attitude P (reduced 
 yaw weighted) -> body-rate PID -> mixer with saturation (roll/pitch before yaw) -> normalised
 motor thrust commands. It maps (state, setpoint, controller state, parameters) to motor commands
 and knows nothing of the physics, so any plant that provides the state layout of
-:mod:`vehicle_sim.physics` can be flown by it.
+:mod:`vehicle_sim.physics` can be flown by it. Its kernels use NumPy's error model, as the
+physics' do (see there).
 
 Arrays (all float64):
     setpoint ``sp`` (N_SP,): position NED [m] (NaN per axis = not controlled), velocity NED
@@ -66,7 +67,7 @@ N_CTRL = 16
 N_CP = 32
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def quat_mul(a0, a1, a2, a3, b0, b1, b2, b3):
     """Hamilton product a * b of two quaternions given as (w, x, y, z) scalars."""
     return (
@@ -77,19 +78,19 @@ def quat_mul(a0, a1, a2, a3, b0, b1, b2, b3):
     )
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def yaw_of(x):
     """Yaw [rad] of the attitude in state ``x``."""
     qw, qx, qy, qz = x[QUAT], x[QUAT + 1], x[QUAT + 2], x[QUAT + 3]
     return math.atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _wrap_pi(a):
     return (a + math.pi) % (2.0 * math.pi) - math.pi
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def reset_controller(x, cs):
     """Clear integrators and align the yaw setpoint with the current yaw."""
     for j in range(9):
@@ -101,7 +102,7 @@ def reset_controller(x, cs):
     cs[CS_YAW_SP] = yaw_of(x)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def velocity_control(x, acc, sp, cs, cp, dt, thr):
     """Position/velocity cascade: writes the normalised thrust vector (NED) into ``thr``."""
     vsp = np.empty(3)
@@ -177,7 +178,7 @@ def velocity_control(x, acc, sp, cs, cp, dt, thr):
         cs[CS_THR_SP + i] = thr[i]
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def attitude_rate_setpoint(x, thr, sp, cs, cp, dt, rsp):
     """Thrust vector + yaw setpoint -> body-rate setpoint ``rsp`` (3,) [rad/s]."""
     use_rate = not math.isfinite(sp[SP_YAW])
@@ -237,7 +238,7 @@ def attitude_rate_setpoint(x, thr, sp, cs, cp, dt, rsp):
         rsp[i] = min(max(rsp[i], -lim), lim)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _quat_from_columns(a0, a1, a2, b0, b1, b2, c0, c1, c2):
     """Quaternion (w, x, y, z) of the rotation matrix with columns a, b, c."""
     # matrix R[i][j]: column a = R[:, 0], b = R[:, 1], c = R[:, 2]
@@ -255,7 +256,7 @@ def _quat_from_columns(a0, a1, a2, b0, b1, b2, c0, c1, c2):
     return (a1 - b0) / s, (c0 + a2) / s, (c1 + b2) / s, 0.25 * s
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def rate_control(x, rsp, cs, cp, dt, torque):
     """Body-rate PID (D on the measured rate) -> normalised torque commands ``torque`` (3,)."""
     for i in range(3):
@@ -271,7 +272,7 @@ def rate_control(x, rsp, cs, cp, dt, torque):
         cs[CS_RATE_INT + i] = min(max(integ, -lim), lim)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def mix_motors(torque, thrust, mix, u):
     """Mixer with saturation: roll/pitch first (shifting thrust), then as much yaw as fits."""
     lo = 1e9
@@ -300,7 +301,7 @@ def mix_motors(torque, thrust, mix, u):
         u[i] = min(max(u[i] + k_yaw * mix[i, 2] * torque[2], 0.0), 1.0)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def control_step(x, acc, sp, cs, cp, mix, dt, u):
     """One flight-control step: state ``x``, acceleration ``acc`` (3,) -> motor thrusts ``u``.
 
