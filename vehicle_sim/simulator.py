@@ -50,6 +50,7 @@ from vehicle_sim.world_contact import (
 )
 
 NOISE_BLOCK_ROWS = 4096
+ATOMIC_TYPES = frozenset({bool, int, float, str, type(None)})  # deepcopy returns them as they are
 
 
 class Simulator:
@@ -111,13 +112,24 @@ class Simulator:
 
     def __deepcopy__(self, memo: dict[int, object]) -> Simulator:
         """An independent copy (``copy.deepcopy``): it shares the config (immutable) and its
-        generator continues from this one's state (the same gust noise from here on)."""
+        generator continues from this one's state (the same gust noise from here on).
+
+        A replay copies the vehicle for every window: the generator's state is set on a new
+        one (``copy.copy`` of a bit generator seeds it from the OS first), and attributes of
+        the types deepcopy returns unchanged (numbers, strings, None) are taken as they are.
+        """
         memo[id(self.config)] = self.config
-        bit_generator = copy.copy(self._rng.bit_generator)
+        bit_generator = type(self._rng.bit_generator)(0)  # its state is set next
+        bit_generator.state = self._rng.bit_generator.state
         memo[id(self._rng)] = np.random.Generator(bit_generator)
         clone = object.__new__(type(self))
         memo[id(self)] = clone
-        clone.__dict__.update(copy.deepcopy(self.__dict__, memo))
+        clone.__dict__.update(
+            {
+                name: value if type(value) in ATOMIC_TYPES else copy.deepcopy(value, memo)
+                for name, value in self.__dict__.items()
+            }
+        )
         return clone
 
     # --- the world ------------------------------------------------------------------------------
