@@ -19,7 +19,7 @@ from numba import njit
 from vehicle_sim import physics as ph
 from vehicle_sim.config import GRAVITY_MPS2, SimConfig
 from vehicle_sim.effects import pack_effects
-from vehicle_sim.flight_control import control_step
+from vehicle_sim.flight_control import N_CONTROL_WORK, control_step_in
 
 
 class PlantBackend(Protocol):
@@ -51,15 +51,16 @@ class PlantBackend(Protocol):
 # Deliberately not cached: numba's cache cannot see changes in functions called from other
 # files, so a cached fused loop would keep running stale control or physics code after an edit.
 # Its callees are cached in their own modules; compiling this loop costs about half a second.
-@njit
+@njit(error_model="numpy")
 def run_closed_loop(n_steps, dt, x, cs, sp, cp, mix, pp, rp, spin, ep, noise, aux):
     """Flight control + physics for up to ``n_steps``; returns the steps done (see above)."""
     scratch = np.zeros((6, ph.N_DYN))
     u = np.zeros(4)
     n_cmd = np.zeros(4)
+    work = np.empty(N_CONTROL_WORK)
     contact0 = aux[ph.AUX_CONTACT]
     for k in range(n_steps):
-        control_step(x, aux[ph.AUX_ACC : ph.AUX_ACC + 3], sp, cs, cp, mix, dt, u)
+        control_step_in(x, aux[ph.AUX_ACC : ph.AUX_ACC + 3], sp, cs, cp, mix, dt, u, work)
         for i in range(4):
             n_cmd[i] = math.sqrt(u[i])
             aux[ph.AUX_CMD + i] = u[i]

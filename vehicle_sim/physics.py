@@ -2,6 +2,10 @@
 
 Pure, jitted (numba) functions on flat float64 arrays, so a whole flight segment runs without
 returning to Python. Frames: NED world, FRD body, quaternion (w, x, y, z) body-to-NED.
+The kernels here and in :mod:`vehicle_sim.flight_control` use NumPy's error model: a float
+division by zero gives inf or NaN instead of raising, which spares a test and a branch at every
+division (about 15 % of a step; the numbers are the same). They divide only by validated
+positive quantities (mass, inertia, time constants, gains) or behind guards.
 
 State vector ``x`` (shape (N_STATE,)):
     [0:3] position NED [m], [3:6] velocity NED [m/s], [6:10] quaternion, [10:13] body rates
@@ -66,7 +70,7 @@ GUST_MIN_SPEED_MPS = 1.0
 MOTOR_STOPPED = 1e-9  # normalised rotor speed below which a rotor counts as stopped
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def field_weight(x, ep):
     """Share in [0, 1] of the wind field's peak air velocity at the position x[0:2]:
     exp(-(d / half_width)^2), d the horizontal distance [m] from the field's centre line."""
@@ -78,7 +82,7 @@ def field_weight(x, ep):
     return math.exp(-(d / w) * (d / w))
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def derivatives(x, n_cmd, pp, rp, spin, ep, gust, thrust_factor, dx):
     """Time derivative of the first N_DYN state entries into ``dx``; returns true thrust [N]."""
     qw, qx, qy, qz = x[6], x[7], x[8], x[9]
@@ -141,7 +145,7 @@ def derivatives(x, n_cmd, pp, rp, spin, ep, gust, thrust_factor, dx):
     return thrust
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def thrust_factor(x, ep):
     """Thrust multiplier of battery sag and ground effect for state ``x``."""
     f = 1.0 - ep[BATTERY_LOSS] * x[DISCHARGE] if ep[BATTERY_TIME] > 0.0 else 1.0
@@ -155,7 +159,7 @@ def thrust_factor(x, ep):
     return f
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def plant_step(x, n_cmd, pp, rp, spin, ep, noise, k, dt, scratch, aux):
     """Advance ``x`` by one RK4 step of ``dt`` with normalised rotor-speed commands ``n_cmd``.
 
@@ -213,7 +217,7 @@ def plant_step(x, n_cmd, pp, rp, spin, ep, noise, k, dt, scratch, aux):
     aux[AUX_THRUST_TRUE] = true_thrust
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _rest_on_ground(x):
     """Ground reaction: on the plane, at rest, level with the current yaw."""
     x[2] = 0.0
@@ -229,7 +233,7 @@ def _rest_on_ground(x):
         x[j] = 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def run_plant(n_steps, dt, x, n_cmd, pp, rp, spin, ep, noise, aux):
     """Open loop: ``n_steps`` physics steps with fixed rotor-speed commands ``n_cmd`` (4,)."""
     scratch = np.zeros((6, N_DYN))

@@ -50,6 +50,7 @@ from vehicle_sim.world_contact import (
 )
 
 NOISE_BLOCK_ROWS = 4096
+ATOMIC_TYPES = frozenset({bool, int, float, str, type(None)})  # deepcopy returns them as they are
 
 
 class Simulator:
@@ -111,13 +112,24 @@ class Simulator:
 
     def __deepcopy__(self, memo: dict[int, object]) -> Simulator:
         """An independent copy (``copy.deepcopy``): it shares the config (immutable) and its
-        generator continues from this one's state (the same gust noise from here on)."""
+        generator continues from this one's state (the same gust noise from here on).
+
+        A replay copies the vehicle for every window: the generator's state is set on a new
+        one (``copy.copy`` of a bit generator seeds it from the OS first), and attributes of
+        the types deepcopy returns unchanged (numbers, strings, None) are taken as they are.
+        """
         memo[id(self.config)] = self.config
-        bit_generator = copy.copy(self._rng.bit_generator)
+        bit_generator = type(self._rng.bit_generator)(0)  # its state is set next
+        bit_generator.state = self._rng.bit_generator.state
         memo[id(self._rng)] = np.random.Generator(bit_generator)
         clone = object.__new__(type(self))
         memo[id(self)] = clone
-        clone.__dict__.update(copy.deepcopy(self.__dict__, memo))
+        clone.__dict__.update(
+            {
+                name: value if type(value) in ATOMIC_TYPES else copy.deepcopy(value, memo)
+                for name, value in self.__dict__.items()
+            }
+        )
         return clone
 
     # --- the world ------------------------------------------------------------------------------
@@ -173,7 +185,7 @@ class Simulator:
         if not (math.isfinite(duration_s) and duration_s >= 0.0):
             raise ValueError(f"step duration {duration_s!r} s must be finite and >= 0")
         dt = self.physics_dt_s
-        remaining = round(duration_s / dt)
+        remaining = round(float(duration_s) / dt)  # (a NumPy scalar's round takes microseconds)
         plant, commander, aux = self._plant, self._commander, self._plant.aux
         self._refresh_control_params()
         while remaining > 0:
@@ -542,7 +554,7 @@ class Simulator:
         x = self._plant.x
         contact = self._plant.aux[ph.AUX_CONTACT] > 0.5
         self._commander.update(
-            self.t_s,
+            self._k * self.physics_dt_s,
             x[ph.POS : ph.POS + 3],
             fc.yaw_of(x),
             contact,
