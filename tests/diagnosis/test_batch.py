@@ -12,7 +12,7 @@ from experiments.hidden_effects import draw, fly_hidden
 from scripts.diagnose import main
 
 
-@pytest.mark.slow
+@pytest.mark.slow(expected_s=75)
 def test_batch_on_a_dask_cluster_equals_the_local_batch(tmp_path, capsys):
     distributed = pytest.importorskip("distributed")
     rng = np.random.default_rng(5)

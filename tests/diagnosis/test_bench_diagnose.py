@@ -10,7 +10,7 @@ from experiments.bench.diagnose import run
 from scripts.bench import PARTS
 
 
-@pytest.mark.slow
+@pytest.mark.slow(expected_s=80)
 def test_quick_bench_gives_finite_positive_figures():
     figures = run(progress=lambda msg: None, quick=True)
     assert PARTS["diagnose"] == "experiments.bench.diagnose"

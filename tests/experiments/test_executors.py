@@ -16,7 +16,7 @@ from planners.trajectory_generator import TrajectorySpec, generate_trajectories
 from scripts.study import main as study_main
 
 
-@pytest.mark.slow
+@pytest.mark.slow(expected_s=40)
 def test_flights_on_a_dask_cluster_equal_the_local_run():
     distributed = pytest.importorskip("distributed")
     refs = generate_trajectories(2, seed=7, spec=TrajectorySpec(length_range_m=(5.0, 6.0)))

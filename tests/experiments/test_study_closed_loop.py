@@ -118,7 +118,7 @@ def test_lines_name_where_the_models_were_flown(flights):
         compare_tracking("refit", flights["middle"], "first fit", moved, where)
 
 
-@pytest.mark.slow
+@pytest.mark.slow(expected_s=100)
 def test_wind_study_checks_its_models_in_closed_loop_on_training_seeds_only(tmp_path, capsys):
     """The smoke wind_field study (one refit round, the check on by its regime): every model
     that would fly is compared on the training seed with what it replaces, the verdict is in

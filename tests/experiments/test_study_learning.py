@@ -58,7 +58,7 @@ def test_regular_rows_drops_catch_up_ticks_only():
     np.testing.assert_array_equal(kept["x"], [0, 1, 3, 4, 6])
 
 
-@pytest.mark.slow
+@pytest.mark.slow(expected_s=90)
 def test_quick_study_runs_end_to_end_and_writes_report_and_plots(tmp_path, capsys):
     out = tmp_path / "study"
     args = ["--quick", "--out", str(out), "--workers", "2", "--refit-rounds", "1"]

@@ -13,7 +13,7 @@ from gp.model_io import load_model
 from scripts.study import main as study_main
 
 
-@pytest.mark.slow
+@pytest.mark.slow(expected_s=75)
 def test_wind_study_learns_on_the_pi_structure_beside_the_lag(tmp_path, capsys):
     out = tmp_path / "study"
     argv = ["--quick", "--regime", "wind_field", "--learned-model", "px4_velocity_pi"]

@@ -8,7 +8,7 @@ import pytest
 from experiments.bench import jsbsim as bench_jsbsim
 
 
-@pytest.mark.slow
+@pytest.mark.slow(expected_s=95)
 def test_quick_run_reports_a_realtime_factor(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)  # the bench writes under out/bench/ where it runs
     messages = []

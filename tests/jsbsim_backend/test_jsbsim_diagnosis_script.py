@@ -12,7 +12,7 @@ from vehicle_sim.jsbsim_backend import JsbsimF450Plant
 SPEED_MISSION = Path(__file__).resolve().parents[2] / "missions" / "excite_speed.toml"
 
 
-@pytest.mark.slow
+@pytest.mark.slow(expected_s=45)
 def test_a_short_excitation_on_jsbsim_is_diagnosed_with_a_gain(tmp_path, capsys):
     argv = ["--out", str(tmp_path), "--mission", str(SPEED_MISSION), "--max-s", "30"]
     assert main(argv) == 0
