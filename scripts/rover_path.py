@@ -183,6 +183,8 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     if args.command == "teach":
         _check_from_log_options(parser, args)
     args.link = args.link or "pymavlink"
+    if args.link == "inprocess" and args.url is not None:
+        parser.error("--url is for a MAVLink link; --link inprocess drives a rover simulated here")
     args.url = args.url or DEFAULT_URL
     if args.command == "repeat" and args.trials < 1:
         parser.error(f"argument --trials: must be >= 1, got {args.trials}")

@@ -73,6 +73,7 @@ def files(tmp_path: Path) -> dict[str, Path]:
         (["teach", "--out", "{tmp}"], "--out"),
         (["teach", "--out", "{tmp}/p.csv", "--vehicle", "dmrv_600kg"], "--vehicle is for --link"),
         (["repeat", "--path", "{loop}", "--seed", "3"], "--seed is for --link inprocess"),
+        (["repeat", "--path", "{loop}", "--link", "inprocess", "--url", "udp://:1"], "--url is"),
         (["repeat", "--path", "{open}", "--drive", "3:0"], "unrecognized arguments: --drive"),
         (["repeat", "--path", "{loop}", "--out", "{open}"], "error: --out "),
         (["repeat", "--path", "{loop}", "--experience", "{loop}"], "error: --experience "),
