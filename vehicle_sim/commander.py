@@ -535,8 +535,7 @@ class Commander:
         self._landed = contact
         self._height_m = float(self._home[2] - pos_ned_m[2])
         self._yaw_rad = float(yaw_rad)
-        if self._sticks_t is not None:
-            self._check_sticks_lost(t, pos_ned_m, yaw_rad)
+        self._check_sticks_lost(t, pos_ned_m, yaw_rad)
         if not self.armed:
             return
         if not contact:
