@@ -10,12 +10,17 @@ feeding the motor commands to its own model and writing its state back into ``x`
 
 from __future__ import annotations
 
+import hashlib
 import math
+from collections.abc import Callable
+from pathlib import Path
+from types import ModuleType
 from typing import Protocol
 
 import numpy as np
 from numba import njit
 
+from vehicle_sim import flight_control
 from vehicle_sim import physics as ph
 from vehicle_sim.config import GRAVITY_MPS2, SimConfig
 from vehicle_sim.effects import pack_effects
@@ -48,26 +53,47 @@ class PlantBackend(Protocol):
         Returns the number of steps done."""
 
 
-# Deliberately not cached: numba's cache cannot see changes in functions called from other
-# files, so a cached fused loop would keep running stale control or physics code after an edit.
-# Its callees are cached in their own modules; compiling this loop costs about half a second.
-@njit(error_model="numpy")
-def run_closed_loop(n_steps, dt, x, cs, sp, cp, mix, pp, rp, spin, ep, noise, aux):
-    """Flight control + physics for up to ``n_steps``; returns the steps done (see above)."""
-    scratch = np.zeros((6, ph.N_DYN))
-    u = np.zeros(4)
-    n_cmd = np.zeros(4)
-    work = np.empty(N_CONTROL_WORK)
-    contact0 = aux[ph.AUX_CONTACT]
-    for k in range(n_steps):
-        control_step_in(x, aux[ph.AUX_ACC : ph.AUX_ACC + 3], sp, cs, cp, mix, dt, u, work)
-        for i in range(4):
-            n_cmd[i] = math.sqrt(u[i])
-            aux[ph.AUX_CMD + i] = u[i]
-        ph.plant_step(x, n_cmd, pp, rp, spin, ep, noise, k, dt, scratch, aux)
-        if aux[ph.AUX_CONTACT] != contact0:
-            return k + 1
-    return n_steps
+def sources_sha256(*modules: ModuleType) -> str:
+    """sha256 (hex) of the source files of ``modules``, in order."""
+    digest = hashlib.sha256()
+    for module in modules:
+        digest.update(Path(module.__file__).read_bytes())
+    return digest.hexdigest()
+
+
+def fused_loop(callees_sha256: str) -> Callable[..., int]:
+    """The jitted closed loop (see :class:`PlantBackend`.advance), cached on disk by numba.
+
+    numba keys a cached function by its own file and bytecode only, so a cached loop would keep
+    running stale control or physics code after an edit of those files. Its callees' sources
+    enter the key here instead: numba hashes a closure's variables into the key
+    (``numba.core.caching._CacheImpl._index_key``), so the loop carries ``callees_sha256``.
+    Cached, a new process skips its compile (about 3 s of CPU on a slow machine).
+    """
+
+    @njit(cache=True, error_model="numpy")
+    def run_closed_loop(n_steps, dt, x, cs, sp, cp, mix, pp, rp, spin, ep, noise, aux):
+        """Flight control + physics for up to ``n_steps``; returns the steps done."""
+        _ = callees_sha256  # a closure variable: part of the cache key (see above)
+        scratch = np.zeros((6, ph.N_DYN))
+        u = np.zeros(4)
+        n_cmd = np.zeros(4)
+        work = np.empty(N_CONTROL_WORK)
+        contact0 = aux[ph.AUX_CONTACT]
+        for k in range(n_steps):
+            control_step_in(x, aux[ph.AUX_ACC : ph.AUX_ACC + 3], sp, cs, cp, mix, dt, u, work)
+            for i in range(4):
+                n_cmd[i] = math.sqrt(u[i])
+                aux[ph.AUX_CMD + i] = u[i]
+            ph.plant_step(x, n_cmd, pp, rp, spin, ep, noise, k, dt, scratch, aux)
+            if aux[ph.AUX_CONTACT] != contact0:
+                return k + 1
+        return n_steps
+
+    return run_closed_loop
+
+
+run_closed_loop = fused_loop(sources_sha256(ph, flight_control))
 
 
 class BuiltinPlant:
