@@ -45,6 +45,7 @@ from vehicle_sim.backends import BACKEND_NAMES
 from vehicle_sim.mavlink import (
     EndpointConfig,
     MavlinkEndpoint,
+    PortTakenError,
     SigningKeyError,
     load_signing_key,
     px4_sitl_links,
@@ -161,10 +162,30 @@ def parse_args(argv: Sequence[str] | None) -> VehicleSimCliConfig:
         "--speed", type=float, default=1.0, help="simulated seconds per wall-clock second"
     )
     parser.add_argument("--host", default="127.0.0.1", help="address to bind and send to")
-    parser.add_argument("--offboard-port", type=int, default=14540)
-    parser.add_argument("--gcs-port", type=int, default=14550)
-    parser.add_argument("--offboard-bind-port", type=int, default=14580)
-    parser.add_argument("--gcs-bind-port", type=int, default=18570)
+    parser.add_argument(
+        "--offboard-port",
+        type=int,
+        default=14540,
+        help="port the companion listens on, as PX4 SITL's offboard link (default 14540)",
+    )
+    parser.add_argument(
+        "--gcs-port",
+        type=int,
+        default=14550,
+        help="port a ground station listens on (default 14550)",
+    )
+    parser.add_argument(
+        "--offboard-bind-port",
+        type=int,
+        default=14580,
+        help="the simulator's own port on the offboard link (default 14580; 0: any free one)",
+    )
+    parser.add_argument(
+        "--gcs-bind-port",
+        type=int,
+        default=18570,
+        help="the simulator's own port on the GCS link (default 18570; 0: any free one)",
+    )
     parser.add_argument(
         "--signing-key",
         metavar="FILE",
@@ -394,6 +415,15 @@ def _run(config: VehicleSimCliConfig, stop: threading.Event) -> int:
     try:
         endpoint = build_endpoint(config)
         endpoint.start()
+    except PortTakenError as exc:
+        _undo_log(config.log_path, kept)
+        option = f"--{exc.link_name}-bind-port"
+        print(
+            f"{PROG}: error: {exc}; another vehicle-sim or PX4 SITL may hold it: pass "
+            f"{option} with a free port (0: any)",
+            file=sys.stderr,
+        )
+        return 2
     except (SimConfigError, SigningKeyError, ValueError, OSError) as exc:
         _undo_log(config.log_path, kept)
         print(f"{PROG}: error: {exc}", file=sys.stderr)

@@ -63,12 +63,20 @@ def test_unwritable_log_refused_before_serving(capsys, tmp_path, where):
     assert out.err.count("\n") == 1 and out.err.startswith(f"vehicle-sim: error: --log {log}")
 
 
-def test_taken_port_is_reported(capsys):
+@pytest.mark.parametrize("link", ["offboard", "gcs"])
+def test_taken_port_is_reported_with_the_option_that_moves_it(capsys, link):
+    """A port another simulator holds is one line naming the link, the port and the option
+    that picks another one."""
+    other = "gcs" if link == "offboard" else "offboard"
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as taken:
         taken.bind(("127.0.0.1", 0))
         port = taken.getsockname()[1]
-        assert main(["--offboard-bind-port", str(port), "--gcs-bind-port", "0"]) == 2
-    assert f"cannot bind link offboard to 127.0.0.1:{port}" in capsys.readouterr().err
+        argv = [f"--{link}-bind-port", str(port), f"--{other}-bind-port", "0"]
+        assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert f"cannot bind link {link} to 127.0.0.1:{port}" in err
+    assert f"pass --{link}-bind-port with a free port" in err
 
 
 def test_effect_flags_become_overrides():
