@@ -56,6 +56,7 @@ from vehicle_sim.rover import RoverSim, rover_preset
 from vehicle_sim.rover.mavlink_rover import RoverMavlinkEndpoint
 
 PROG = "vehicle-sim"
+MAX_UDP_PORT = 65535
 
 
 class UsageError(ValueError):
@@ -220,6 +221,14 @@ def parse_args(argv: Sequence[str] | None) -> VehicleSimCliConfig:
         raise UsageError(f"--duration-s {args.duration_s}: must be > 0")
     if args.seed < 0:
         raise UsageError(f"--seed {args.seed}: must be >= 0")
+    for option, port, lowest in (
+        ("--offboard-port", args.offboard_port, 1),
+        ("--gcs-port", args.gcs_port, 1),
+        ("--offboard-bind-port", args.offboard_bind_port, 0),
+        ("--gcs-bind-port", args.gcs_bind_port, 0),
+    ):
+        if not lowest <= port <= MAX_UDP_PORT:
+            raise UsageError(f"{option} {port}: must be a UDP port, {lowest}..{MAX_UDP_PORT}")
     if not 0 <= args.realtime_priority <= MAX_RT_PRIORITY:
         raise UsageError(
             f"--realtime-priority {args.realtime_priority}: must be 0 (off) or 1..{MAX_RT_PRIORITY}"

@@ -41,6 +41,10 @@ _BRIEF = ["--duration-s", "0.5"]  # a rover that were served would stop, not run
         (["--vehicle", "husky_50kg", "--gcs-port", "1", *_BRIEF], "--gcs-port: not for the rover"),
         (["--vehicle", "husky_50kg", "--offboard-bind-port", "0", *_BRIEF], "--offboard-bind-port"),
         (["--vehicle", "husky_50kg", "--gcs-bind-port", "0", *_BRIEF], "--gcs-bind-port: not for"),
+        # the rover's loop died on its first heartbeat (OverflowError) after it had announced
+        (["--vehicle", "husky_50kg", "--offboard-port", "99999", *_BRIEF], "--offboard-port 99999"),
+        (["--gcs-port", "0"], "--gcs-port 0: must be a UDP port, 1..65535"),
+        (["--offboard-bind-port", "-1"], "--offboard-bind-port -1: must be a UDP port, 0..65535"),
     ],
 )
 def test_bad_input_is_one_line_and_exit_2(capsys, argv, message):
