@@ -32,7 +32,11 @@ _BRIEF = ["--duration-s", "0.5"]  # a rover that were served would stop, not run
         (["--vehicle", "no_such_quad"], "no such config file or preset"),
         (["--effect", "lasers"], "unknown effect 'lasers'"),
         (["--effect", "rotor_drag.k_n_per_mps=[0.3,"], "not a TOML value"),
-        (["--signing-key", "missing.key"], "cannot read signing key file"),
+        (
+            ["--signing-key", "missing.key"],
+            "cannot read signing key file missing.key (No such file or directory); pass a text "
+            "file holding the key: 64 hex digits or a passphrase",
+        ),
         (["--frobnicate"], "unrecognized arguments"),
         (["--seed", "-1"], "--seed -1: must be >= 0"),
         (["--realtime-priority", "100"], "--realtime-priority 100: must be 0 (off) or 1..99"),
