@@ -12,7 +12,6 @@ replay and closed-loop velocity RMSE, baseline vs extended config). Exit codes: 
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import sys
@@ -23,8 +22,10 @@ from typing import Any
 
 from diagnosis.excitation import ExcitationError, ExcitationSchedule, load_schedule
 from diagnosis.fly_schedule import fly_schedule
+from flightlog.atomic_output import OutputError, check_writable_dir
 from flightlog.schema import write_flight_log
 from scripts import diagnose
+from scripts.one_line_parser import OneLineParser, output_path
 from vehicle_sim import SimConfigError, load_sim_config
 
 PROG = "jsbsim-diagnosis"
@@ -57,8 +58,8 @@ class JsbsimDiagnosisConfig:
 
 
 def parse_args(argv: Sequence[str] | None) -> JsbsimDiagnosisConfig:
-    parser = argparse.ArgumentParser(prog=PROG, description=__doc__.splitlines()[0])
-    parser.add_argument("--out", required=True, type=Path, help="output directory")
+    parser = OneLineParser(prog=PROG, description=__doc__.splitlines()[0])
+    parser.add_argument("--out", required=True, type=output_path, help="output directory")
     parser.add_argument(
         "--mission",
         action="append",
@@ -70,6 +71,8 @@ def parse_args(argv: Sequence[str] | None) -> JsbsimDiagnosisConfig:
     parser.add_argument("--max-s", type=float, help="truncate each mission to about this time")
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args(argv)
+    if args.max_s is not None and not 0.0 < args.max_s < math.inf:
+        parser.error(f"--max-s must be a finite time > 0 s, got {args.max_s}")
     defaults = JsbsimDiagnosisConfig(out_dir=args.out)
     return replace(
         defaults,
@@ -146,6 +149,11 @@ def _fmt(value: Any) -> str:
 
 def main(argv: Sequence[str] | None = None) -> int:
     config = parse_args(argv)
+    try:
+        check_writable_dir(config.out_dir)  # before minutes of flying, not after
+    except OutputError as exc:
+        print(f"{PROG}: error: --out {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     try:
         logs = fly_missions(config)
     except (ExcitationError, SimConfigError) as exc:

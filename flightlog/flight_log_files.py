@@ -8,7 +8,8 @@ it is kept as ``PATH-stem.1.csv`` (``.2``, ... the first free number), with its 
 back when the flight records no row (refused before take-off). Names are claimed by creating
 the file exclusively, so two companions started at once cannot pick the same one.
 ``vehicle-sim --log`` keeps an earlier onboard log the same way. A CSV log is never written
-under a ``.ulg`` name, which every reader would take for a damaged PX4 ULog.
+under a ``.ulg`` name, which every reader would take for a damaged PX4 ULog, nor under a
+``.json`` one, a sidecar's.
 """
 
 from __future__ import annotations
@@ -26,12 +27,19 @@ MAX_NAMES = 1000  # numbered names tried before giving up
 
 
 def check_csv_log_name(path: Path) -> None:
-    """Raise OutputError when a schema-v1 CSV log would be written under a ``.ulg`` name: every
-    reader would take it for a damaged PX4 ULog and refuse it."""
-    if Path(path).suffix.lower() == ".ulg":
+    """Raise OutputError when a schema-v1 CSV log would be written under a ``.ulg`` name (every
+    reader would take it for a damaged PX4 ULog and refuse it) or a ``.json`` one (a sidecar's
+    name: the log ``F.csv.json`` would move ``F.csv``'s sidecar aside as an earlier log)."""
+    suffix = Path(path).suffix.lower()
+    if suffix == ".ulg":
         raise OutputError(
             f"{path}: a .ulg name for a schema-v1 CSV log, which every command would then "
             "refuse as a damaged ULog; name it .csv"
+        )
+    if suffix == ".json":
+        raise OutputError(
+            f"{path}: a .json name for a schema-v1 CSV log, the name of a log's sidecar "
+            "(LOG.csv.json); name it .csv"
         )
 
 

@@ -34,6 +34,7 @@ In the NMPC, "vel" is the velocity the (augmented) model predicts for the vehicl
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
@@ -251,12 +252,20 @@ def feature_definition(
 ) -> FeatureDefinition:
     """A built-in feature set against a nominal model, its residual measured over
     ``residual_steps`` log steps (an INTERVAL lag becomes that many, a CHANGE lag minus that
-    many); bad names raise ValueError."""
+    many); bad names (of the set, the model or its parameters) and parameter values out of the
+    model's range raise ValueError."""
     if name not in FEATURE_SETS:
         raise ValueError(f"unknown feature set {name!r}; choose one of {', '.join(FEATURE_SETS)}")
     if nominal_model not in MODELS:
         raise ValueError(
             f"unknown nominal model {nominal_model!r}; choose one of {', '.join(MODELS)}"
+        )
+    taken = inspect.signature(MODELS[nominal_model]).parameters
+    unknown = sorted(set(nominal_params) - set(taken))
+    if unknown:
+        raise ValueError(
+            f"nominal model {nominal_model} has no parameter {', '.join(unknown)}; "
+            f"it takes {', '.join(taken) or 'none'}"
         )
     params = tuple(sorted((k, float(v)) for k, v in nominal_params.items()))
     resolve = {INTERVAL: residual_steps, CHANGE: -residual_steps}
@@ -268,10 +277,5 @@ def feature_definition(
         nominal_params=params,
         residual_steps=residual_steps,
     )
-    try:
-        definition.nominal()
-    except TypeError as exc:
-        raise ValueError(
-            f"bad parameters {dict(params)} for nominal model {nominal_model}: {exc}"
-        ) from None
+    definition.nominal()  # a value out of range raises the model's own ValueError
     return definition

@@ -342,13 +342,6 @@ def _fit(config: FitGpConfig, written: list[Path]) -> int:
             return 1
         lag = result.model.training.get("identified_lag")
         doubts = model_doubts(result.metrics, lag, result.gp_earns_its_place)
-        if result.flown == "structure":
-            structure = result.model.features.nominal_model
-            print(
-                f"fit-gp: the GP does not beat {structure} alone (see the check above): the "
-                f"companion flies {structure} without it (the file keeps the GP to inspect)",
-                file=sys.stderr,
-            )
         for doubt in doubts:
             print(f"fit-gp: warning: {doubt}", file=sys.stderr)
         if doubts and not config.force:
@@ -357,6 +350,13 @@ def _fit(config: FitGpConfig, written: list[Path]) -> int:
                 file=sys.stderr,
             )
             return EXIT_DOUBTFUL
+        if result.flown == "structure":  # said only of a file that is written
+            structure = result.model.features.nominal_model
+            print(
+                f"fit-gp: the GP does not beat {structure} alone (see the check above): the "
+                f"companion flies {structure} without it (the file keeps the GP to inspect)",
+                file=sys.stderr,
+            )
         model_file = save_model(config.out, result.model)
         written.append(model_file)
         progress(f"wrote {model_file}")

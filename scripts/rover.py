@@ -1,4 +1,5 @@
-"""Paper 004 on its own robots: `python -m scripts.rover --regime rover_exp1 --out DIR`.
+"""[Ostafew16]'s path-repeating experiments on its own robots:
+`python -m scripts.rover --regime rover_exp1 --out DIR`.
 
 Regimes ([Ostafew16] section 5; the robots are vehicle_sim.rover's presets):
   rover_exp1  30 m path at a fixed 0.4 m/s, 20 trials, 50 kg skid-steer (Husky)

@@ -135,7 +135,12 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         p.add_argument("--spacing", type=_positive, default=0.25, help="vertex spacing [m]")
     teach.add_argument("--out", required=True, type=output_path, help="path CSV to write")
     teach.add_argument("--max-distance", type=_positive, default=math.inf, help="stop after [m]")
-    teach.add_argument("--timeout", type=_positive, default=math.inf, help="stop after [s]")
+    teach.add_argument(
+        "--timeout",
+        type=_positive,
+        default=math.inf,
+        help="stop recording this long [s] after the rover answered (it is waited for up to 30 s)",
+    )
     teach.add_argument(
         "--drive", type=_pattern, default=None, metavar="L:C,...",
         help="drive this pattern in OFFBOARD (length [m]:curvature [1/m] per segment)",

@@ -45,6 +45,7 @@ from vehicle_sim.backends import BACKEND_NAMES
 from vehicle_sim.mavlink import (
     EndpointConfig,
     MavlinkEndpoint,
+    PortTakenError,
     SigningKeyError,
     load_signing_key,
     px4_sitl_links,
@@ -55,6 +56,7 @@ from vehicle_sim.rover import RoverSim, rover_preset
 from vehicle_sim.rover.mavlink_rover import RoverMavlinkEndpoint
 
 PROG = "vehicle-sim"
+MAX_UDP_PORT = 65535
 
 
 class UsageError(ValueError):
@@ -161,10 +163,30 @@ def parse_args(argv: Sequence[str] | None) -> VehicleSimCliConfig:
         "--speed", type=float, default=1.0, help="simulated seconds per wall-clock second"
     )
     parser.add_argument("--host", default="127.0.0.1", help="address to bind and send to")
-    parser.add_argument("--offboard-port", type=int, default=14540)
-    parser.add_argument("--gcs-port", type=int, default=14550)
-    parser.add_argument("--offboard-bind-port", type=int, default=14580)
-    parser.add_argument("--gcs-bind-port", type=int, default=18570)
+    parser.add_argument(
+        "--offboard-port",
+        type=int,
+        default=14540,
+        help="port the companion listens on, as PX4 SITL's offboard link (default 14540)",
+    )
+    parser.add_argument(
+        "--gcs-port",
+        type=int,
+        default=14550,
+        help="port a ground station listens on (default 14550)",
+    )
+    parser.add_argument(
+        "--offboard-bind-port",
+        type=int,
+        default=14580,
+        help="the simulator's own port on the offboard link (default 14580; 0: any free one)",
+    )
+    parser.add_argument(
+        "--gcs-bind-port",
+        type=int,
+        default=18570,
+        help="the simulator's own port on the GCS link (default 18570; 0: any free one)",
+    )
     parser.add_argument(
         "--signing-key",
         metavar="FILE",
@@ -199,6 +221,14 @@ def parse_args(argv: Sequence[str] | None) -> VehicleSimCliConfig:
         raise UsageError(f"--duration-s {args.duration_s}: must be > 0")
     if args.seed < 0:
         raise UsageError(f"--seed {args.seed}: must be >= 0")
+    for option, port, lowest in (
+        ("--offboard-port", args.offboard_port, 1),
+        ("--gcs-port", args.gcs_port, 1),
+        ("--offboard-bind-port", args.offboard_bind_port, 0),
+        ("--gcs-bind-port", args.gcs_bind_port, 0),
+    ):
+        if not lowest <= port <= MAX_UDP_PORT:
+            raise UsageError(f"{option} {port}: must be a UDP port, {lowest}..{MAX_UDP_PORT}")
     if not 0 <= args.realtime_priority <= MAX_RT_PRIORITY:
         raise UsageError(
             f"--realtime-priority {args.realtime_priority}: must be 0 (off) or 1..{MAX_RT_PRIORITY}"
@@ -394,6 +424,15 @@ def _run(config: VehicleSimCliConfig, stop: threading.Event) -> int:
     try:
         endpoint = build_endpoint(config)
         endpoint.start()
+    except PortTakenError as exc:
+        _undo_log(config.log_path, kept)
+        option = f"--{exc.link_name}-bind-port"
+        print(
+            f"{PROG}: error: {exc}; another vehicle-sim or PX4 SITL may hold it: pass "
+            f"{option} with a free port (0: any)",
+            file=sys.stderr,
+        )
+        return 2
     except (SimConfigError, SigningKeyError, ValueError, OSError) as exc:
         _undo_log(config.log_path, kept)
         print(f"{PROG}: error: {exc}", file=sys.stderr)

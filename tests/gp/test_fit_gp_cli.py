@@ -43,6 +43,15 @@ def test_fit_gp_writes_model_plots_and_reports_rmse(tmp_path, capsys):
         (["LOG", "--inducing", "kmeans"], "invalid choice: 'kmeans'"),
         (["LOG", "--holdout-fraction", "1.5"], "--holdout-fraction must be in (0, 1)"),
         (["LOG", "--nominal-param", "tau_s"], "expected NAME=NUMBER"),
+        # the parameter of another model: was a TypeError's text beside the implied residual_dt_s
+        (
+            ["LOG", "--nominal-param", "tau_s=0.5"],
+            "nominal model kinematic_4dof has no parameter tau_s; it takes residual_dt_s",
+        ),
+        (
+            ["LOG", "--nominal", "first_order_lag", "--nominal-param", "tau=0.5"],
+            "nominal model first_order_lag has no parameter tau; it takes tau_s, tau_d_s",
+        ),
         (
             ["LOG", "--nominal", "px4_velocity_pi"],
             "neither its sidecar's velocity_loop_gains nor its PX4 parameters",

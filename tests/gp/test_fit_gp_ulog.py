@@ -21,6 +21,7 @@ FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "ulog"
 AUTO = FIXTURES / "quad_sitl_v1_15_auto.ulg"
 POSCTL = FIXTURES / "quad_posctl_v1_15.ulg"  # a real vehicle
 V1_9 = FIXTURES / "quad_mission_rtl_v1_9_esc.ulg"  # a real vehicle, gains under pre-v1.11 names
+OFFBOARD = FIXTURES / "quad_offboard_v1_16.ulg"  # a real vehicle hovering in OFFBOARD
 FAST = ["--no-plots", "--m", "10", "--restarts", "1", "--force"]
 
 
@@ -45,6 +46,19 @@ def test_worse_than_nominal_warns_exits_3_and_writes_nothing(tmp_path, capsys):
     err = capsys.readouterr().err
     assert code == fit_gp_cli.EXIT_DOUBTFUL
     assert "the model is worse than nominal" in err and "pass --force" in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_refused_lag_says_nothing_of_a_file_it_did_not_write(tmp_path, capsys):
+    """README's own-vehicle command on a real hover: the GP does not beat the identified lag and
+    the lag's tau_d_s sits on its bound, so nothing is written; it said "the file keeps the GP
+    to inspect" before "no model written"."""
+    args = ["--nominal", "first_order_lag", "--mode", "OFFBOARD", "--check-horizon-s", "2"]
+    code = fit_gp_cli.main([str(OFFBOARD), *args, "--out", str(tmp_path / "m"), "--no-plots"])
+    err = capsys.readouterr().err
+    assert code == fit_gp_cli.EXIT_DOUBTFUL
+    assert "does NOT beat first_order_lag alone" in err and "sits on its bound" in err
+    assert "the file keeps" not in err
     assert list(tmp_path.iterdir()) == []
 
 

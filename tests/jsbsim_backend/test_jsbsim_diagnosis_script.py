@@ -40,6 +40,26 @@ def test_a_missing_mission_is_one_line_and_exit_2(tmp_path, capsys):
     assert "cannot read excitation mission" in err and not (tmp_path / "logs").exists()
 
 
+@pytest.mark.parametrize("max_s", ["nan", "-5"])
+def test_a_max_s_that_is_no_time_is_one_line_and_exit_2(tmp_path, capsys, max_s):
+    """--max-s nan flew the whole missions (no segment compares above nan)."""
+    with pytest.raises(SystemExit) as stop:
+        main(["--out", str(tmp_path / "out"), "--max-s", max_s])
+    assert stop.value.code == 2
+    err = capsys.readouterr().err
+    assert err.startswith("jsbsim-diagnosis: error: --max-s must be a finite time > 0 s")
+    assert err.count("\n") == 1 and not (tmp_path / "out").exists()
+
+
+def test_an_out_folder_that_cannot_be_made_is_one_line_before_flying(tmp_path, capsys):
+    """A file where the folder goes was a FileExistsError traceback."""
+    (tmp_path / "taken").write_text("")
+    assert main(["--out", str(tmp_path / "taken")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"jsbsim-diagnosis: error: --out {tmp_path / 'taken'}: a file stands")
+    assert err.count("\n") == 1
+
+
 def test_jsbsim_own_drag_coefficient_is_half_rho_s_cd():
     """The F450's DRAG axis: qbar * S * CD with S = 0.016129 m^2 and CD = 1 (its Aero.xml),
     at the density of Zurich's 488 m: about 0.0094 N/(m/s)^2."""

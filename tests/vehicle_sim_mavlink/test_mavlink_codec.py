@@ -118,3 +118,7 @@ def test_key_file_formats(tmp_path):
         load_signing_key(empty)
     with pytest.raises(SigningKeyError, match="cannot read signing key file"):
         load_signing_key(tmp_path / "missing.key")
+    binary = tmp_path / "binary.key"
+    binary.write_bytes(b"\xff\xfe\x00")
+    with pytest.raises(SigningKeyError, match=r"binary.key \(not UTF-8 text\); pass a text file"):
+        load_signing_key(binary)

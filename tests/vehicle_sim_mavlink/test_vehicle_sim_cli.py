@@ -32,7 +32,11 @@ _BRIEF = ["--duration-s", "0.5"]  # a rover that were served would stop, not run
         (["--vehicle", "no_such_quad"], "no such config file or preset"),
         (["--effect", "lasers"], "unknown effect 'lasers'"),
         (["--effect", "rotor_drag.k_n_per_mps=[0.3,"], "not a TOML value"),
-        (["--signing-key", "missing.key"], "cannot read signing key file"),
+        (
+            ["--signing-key", "missing.key"],
+            "cannot read signing key file missing.key (No such file or directory); pass a text "
+            "file holding the key: 64 hex digits or a passphrase",
+        ),
         (["--frobnicate"], "unrecognized arguments"),
         (["--seed", "-1"], "--seed -1: must be >= 0"),
         (["--realtime-priority", "100"], "--realtime-priority 100: must be 0 (off) or 1..99"),
@@ -41,6 +45,10 @@ _BRIEF = ["--duration-s", "0.5"]  # a rover that were served would stop, not run
         (["--vehicle", "husky_50kg", "--gcs-port", "1", *_BRIEF], "--gcs-port: not for the rover"),
         (["--vehicle", "husky_50kg", "--offboard-bind-port", "0", *_BRIEF], "--offboard-bind-port"),
         (["--vehicle", "husky_50kg", "--gcs-bind-port", "0", *_BRIEF], "--gcs-bind-port: not for"),
+        # the rover's loop died on its first heartbeat (OverflowError) after it had announced
+        (["--vehicle", "husky_50kg", "--offboard-port", "99999", *_BRIEF], "--offboard-port 99999"),
+        (["--gcs-port", "0"], "--gcs-port 0: must be a UDP port, 1..65535"),
+        (["--offboard-bind-port", "-1"], "--offboard-bind-port -1: must be a UDP port, 0..65535"),
     ],
 )
 def test_bad_input_is_one_line_and_exit_2(capsys, argv, message):
@@ -63,12 +71,20 @@ def test_unwritable_log_refused_before_serving(capsys, tmp_path, where):
     assert out.err.count("\n") == 1 and out.err.startswith(f"vehicle-sim: error: --log {log}")
 
 
-def test_taken_port_is_reported(capsys):
+@pytest.mark.parametrize("link", ["offboard", "gcs"])
+def test_taken_port_is_reported_with_the_option_that_moves_it(capsys, link):
+    """A port another simulator holds is one line naming the link, the port and the option
+    that picks another one."""
+    other = "gcs" if link == "offboard" else "offboard"
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as taken:
         taken.bind(("127.0.0.1", 0))
         port = taken.getsockname()[1]
-        assert main(["--offboard-bind-port", str(port), "--gcs-bind-port", "0"]) == 2
-    assert f"cannot bind link offboard to 127.0.0.1:{port}" in capsys.readouterr().err
+        argv = [f"--{link}-bind-port", str(port), f"--{other}-bind-port", "0"]
+        assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert f"cannot bind link {link} to 127.0.0.1:{port}" in err
+    assert f"pass --{link}-bind-port with a free port" in err
 
 
 def test_effect_flags_become_overrides():

@@ -5,7 +5,7 @@ from the command line with ``vehicle-sim``.
 """
 
 from vehicle_sim.mavlink.config import EndpointConfig, LinkConfig, px4_sitl_links
-from vehicle_sim.mavlink.endpoint import MavlinkEndpoint, SetpointActuation
+from vehicle_sim.mavlink.endpoint import MavlinkEndpoint, PortTakenError, SetpointActuation
 from vehicle_sim.mavlink.geodetic import GeodeticOrigin
 from vehicle_sim.mavlink.signing import SigningKeyError, load_signing_key
 from vehicle_sim.mavlink.stats import EndpointStats
@@ -16,6 +16,7 @@ __all__ = [
     "GeodeticOrigin",
     "LinkConfig",
     "MavlinkEndpoint",
+    "PortTakenError",
     "SetpointActuation",
     "SigningKeyError",
     "load_signing_key",

@@ -68,6 +68,15 @@ TRACE_LENGTH = 4096
 HEARTBEAT_ID = mavlink2.MAVLINK_MSG_ID_HEARTBEAT
 
 
+class PortTakenError(OSError):
+    """A link's own UDP port could not be bound (another simulator or PX4 SITL may hold it);
+    ``link_name`` is the LinkConfig's name ("offboard", "gcs")."""
+
+    def __init__(self, link_name: str, message: str) -> None:
+        super().__init__(message)
+        self.link_name = link_name
+
+
 @dataclass(frozen=True)
 class SetpointActuation:
     """When a setpoint, received in OFFBOARD, was first acted on by the simulation.
@@ -122,9 +131,9 @@ class MavlinkEndpoint:
     # -- lifecycle ----------------------------------------------------------------------------
 
     def start(self) -> MavlinkEndpoint:
-        """Bind the sockets (OSError naming the link if a port is taken), run one physics step
-        (the simulator's first step compiles its kernels, which may take seconds; done here,
-        the real-time loop starts without lag) and start the loop."""
+        """Bind the sockets (PortTakenError naming the link if a port is taken), run one physics
+        step (the simulator's first step compiles its kernels, which may take seconds; done
+        here, the real-time loop starts without lag) and start the loop."""
         if self._thread is not None:
             raise RuntimeError("endpoint already started")
         for link_config in self.config.links:
@@ -132,9 +141,10 @@ class MavlinkEndpoint:
                 self._links.append(UdpLink(link_config))
             except OSError as exc:
                 self._close_links()
-                raise OSError(
+                raise PortTakenError(
+                    link_config.name,
                     f"cannot bind link {link_config.name} to "
-                    f"{link_config.bind_host}:{link_config.bind_port}: {exc.strerror or exc}"
+                    f"{link_config.bind_host}:{link_config.bind_port}: {exc.strerror or exc}",
                 ) from None
         self._state = self.sim.step(self.sim.physics_dt_s)
         self._thread = threading.Thread(target=self._run, name="mavlink-endpoint", daemon=True)

@@ -40,7 +40,11 @@ def load_signing_key(path: str | Path) -> bytes:
     try:
         text = file.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as exc:
-        raise SigningKeyError(f"cannot read signing key file {file}: {exc}") from None
+        reason = "not UTF-8 text" if isinstance(exc, UnicodeDecodeError) else exc.strerror
+        raise SigningKeyError(
+            f"cannot read signing key file {file} ({reason or exc}); pass a text file holding "
+            "the key: 64 hex digits or a passphrase"
+        ) from None
     try:
         return key_from_text(text)
     except SigningKeyError as exc:
