@@ -87,6 +87,14 @@ def test_taken_port_is_reported_with_the_option_that_moves_it(capsys, link):
     assert f"pass --{link}-bind-port with a free port" in err
 
 
+def test_an_address_this_machine_lacks_is_not_blamed_on_a_taken_port(capsys):
+    argv = ["--host", "192.0.2.1", "--offboard-bind-port", "0", "--gcs-bind-port", "0"]
+    assert main(argv) == 2  # 192.0.2.1: TEST-NET-1 (RFC 5737), no interface has it
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "cannot bind link offboard to 192.0.2.1:0" in err
+    assert "bind-port with a free port" not in err
+
+
 def test_effect_flags_become_overrides():
     config = parse_args(
         [

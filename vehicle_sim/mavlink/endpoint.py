@@ -23,6 +23,7 @@ In-process use (tests, benchmarks)::
 
 from __future__ import annotations
 
+import errno
 import math
 import select
 import threading
@@ -131,7 +132,8 @@ class MavlinkEndpoint:
     # -- lifecycle ----------------------------------------------------------------------------
 
     def start(self) -> MavlinkEndpoint:
-        """Bind the sockets (PortTakenError naming the link if a port is taken), run one physics
+        """Bind the sockets (PortTakenError naming the link if its port is taken, OSError naming it
+        for another failure, e.g. an address this machine does not have), run one physics
         step (the simulator's first step compiles its kernels, which may take seconds; done
         here, the real-time loop starts without lag) and start the loop."""
         if self._thread is not None:
@@ -141,11 +143,13 @@ class MavlinkEndpoint:
                 self._links.append(UdpLink(link_config))
             except OSError as exc:
                 self._close_links()
-                raise PortTakenError(
-                    link_config.name,
+                what = (
                     f"cannot bind link {link_config.name} to "
-                    f"{link_config.bind_host}:{link_config.bind_port}: {exc.strerror or exc}",
-                ) from None
+                    f"{link_config.bind_host}:{link_config.bind_port}: {exc.strerror or exc}"
+                )
+                if exc.errno == errno.EADDRINUSE:
+                    raise PortTakenError(link_config.name, what) from None
+                raise OSError(what) from None
         self._state = self.sim.step(self.sim.physics_dt_s)
         self._thread = threading.Thread(target=self._run, name="mavlink-endpoint", daemon=True)
         self._thread.start()
