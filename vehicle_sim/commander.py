@@ -154,9 +154,6 @@ class _StretchParams:
             p("COM_RC_LOSS_T"),
         )
 
-    def __deepcopy__(self, memo: dict[int, object]) -> _StretchParams:
-        return self  # immutable: numbers
-
 
 def _earlier(deadline: float, candidate: float) -> float:
     """``candidate`` if it is earlier than ``deadline``, else ``deadline`` (as ``min`` over the
@@ -221,8 +218,6 @@ class Commander:
         self.failsafes = FailsafeMonitor(params)
         self._pending: tuple[FailsafeAction, float] | None = None  # action and when it runs
         self.mode_epoch = 0  # increments on every mode change (the simulator resets yaw then)
-        self._stretch_params_version = -1  # params.version _stretch_params was read at
-        self._stretch_params: _StretchParams | None = None
         self._sticks_t: float | None = None  # when sticks last arrived (None: never)
         self._sticks_lost = False
         self._stick_cmd: StickCommand | None = None  # None: no live sticks
@@ -719,10 +714,7 @@ class Commander:
 
     def _params_now(self) -> _StretchParams:
         """The parameters read at every stretch, read again only after a parameter set."""
-        if self._stretch_params_version != self.params.version:
-            self._stretch_params = _StretchParams.of(self.params)
-            self._stretch_params_version = self.params.version
-        return self._stretch_params
+        return self.params.derived(_StretchParams.of)
 
     # --- helpers ------------------------------------------------------------------------------
     def _climbed(self, pos_ned_m: np.ndarray, contact: bool) -> bool:

@@ -63,9 +63,6 @@ class _Limits:
             int(p("COM_LOW_BAT_ACT")),
         )
 
-    def __deepcopy__(self, memo: dict[int, object]) -> _Limits:
-        return self  # immutable: numbers
-
 
 @dataclass(frozen=True)
 class Trigger:
@@ -83,8 +80,6 @@ class FailsafeMonitor:
         self._last_gcs_s: float | None = None
         self._link_lost = False
         self._battery_level = 0  # 0 ok, 1 low, 2 critical, 3 emergency
-        self._limits_version = -1  # params.version _limits was read at
-        self._limits: _Limits | None = None
 
     def gcs_heartbeat(self, t_s: float) -> None:
         """A ground-station heartbeat arrived (the data link is alive)."""
@@ -105,7 +100,7 @@ class FailsafeMonitor:
         """Warnings to announce and the failsafe that fires now (None if none)."""
         warnings: list[str] = []
         trigger = None
-        limits = self._limits_now()
+        limits = self._params.derived(_Limits.of)
         action = limits.datalink_action
         silent_s = None if self._last_gcs_s is None else t_s - self._last_gcs_s
         if (
@@ -135,14 +130,7 @@ class FailsafeMonitor:
         """When the data link would count as lost, if it is being watched."""
         if self._last_gcs_s is None or self._link_lost:
             return None
-        limits = self._limits_now()
+        limits = self._params.derived(_Limits.of)
         if limits.datalink_action == 0:
             return None
         return max(t_s, self._last_gcs_s + limits.datalink_loss_s)
-
-    def _limits_now(self) -> _Limits:
-        """The parameters read at every stretch, read again only after a parameter set."""
-        if self._limits_version != self._params.version:
-            self._limits = _Limits.of(self._params)
-            self._limits_version = self._params.version
-        return self._limits
