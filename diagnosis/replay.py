@@ -26,7 +26,7 @@ from diagnosis import sim_anchor
 from diagnosis.warm_up import LEAD_IN_S, start_integral
 from diagnosis.window_nuisance import RunNuisance
 from flightlog.schema import FlightLog
-from vehicle_sim import AnchorState, SimConfig, VelocitySetpoint
+from vehicle_sim import AnchorState, CheckedSetpoint, SimConfig, VelocitySetpoint
 
 STATE_COLUMNS = (
     "pos_n_m", "pos_e_m", "pos_d_m", "vel_n_mps", "vel_e_mps", "vel_d_mps",
@@ -230,7 +230,7 @@ class LogArrays:
         self.t = log["t_s"]
         self.state = np.hstack([log.stack(*STATE_COLUMNS), rates])
         self.setpoint = [
-            VelocitySetpoint(tuple(float(v) for v in row), float(yaw_rate))
+            _setpoint(tuple(float(v) for v in row), float(yaw_rate))
             for row, yaw_rate in zip(
                 log.stack(*CMD_COLUMNS), log["cmd_yaw_rate_radps"], strict=True
             )
@@ -278,3 +278,12 @@ class LogArrays:
                 acc_ned_mps2=self.acc[j] if lead else None,
             )
         return state
+
+
+def _setpoint(vel_ned_mps: tuple[float, ...], yaw_rate_radps: float) -> VelocitySetpoint:
+    """A logged command as the setpoint replays set, checked once here (a replay sets each
+    one thousands of times); one the vehicle refuses stays unchecked, to be refused when set."""
+    try:
+        return CheckedSetpoint(vel_ned_mps, yaw_rate_radps)
+    except ValueError:
+        return VelocitySetpoint(vel_ned_mps, yaw_rate_radps)

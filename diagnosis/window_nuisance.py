@@ -31,14 +31,14 @@ from functools import lru_cache
 import numpy as np
 
 from diagnosis import sim_anchor
-from vehicle_sim import AnchorState, SimConfig, VelocitySetpoint
+from vehicle_sim import AnchorState, CheckedSetpoint, SimConfig
 
 HORIZON_S = 2.5  # a 2 s window's last compared row: within 2 s of its anchor plus a row gap
 GRID_S = 0.02  # the responses' time step (interpolated linearly between; rows 20-40 ms apart)
 _HORIZON_STEPS = int(round(HORIZON_S / GRID_S))
 _STEP_MPS2 = 0.1  # integral perturbation of the finite differences [m/s^2]
 _STEP_MPS = 0.1  # start-velocity perturbation of the finite differences [m/s]
-_HOVER = VelocitySetpoint((0.0, 0.0, 0.0))
+_HOVER = CheckedSetpoint((0.0, 0.0, 0.0))
 
 
 @lru_cache(maxsize=sim_anchor.TEMPLATES_KEPT)

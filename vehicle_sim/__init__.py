@@ -18,6 +18,7 @@ from vehicle_sim.effects import EFFECT_NAMES, SimConfigError
 from vehicle_sim.manual_control import Sticks
 from vehicle_sim.simulator import Simulator
 from vehicle_sim.vehicle_types import (
+    CheckedSetpoint,
     FlightMode,
     LandedState,
     VehicleState,
@@ -27,6 +28,7 @@ from vehicle_sim.vehicle_types import (
 __all__ = [
     "EFFECT_NAMES",
     "AnchorState",
+    "CheckedSetpoint",
     "CommandResult",
     "FlightMode",
     "LandedState",

@@ -107,9 +107,11 @@ class ActiveSetpoint:
 
 
 @dataclass(frozen=True)
-class _SetpointParams:
-    """The parameters the setpoint vector is built from (velocities [m/s], tilt [rad],
-    acceleration [m/s^2]), read once per parameter version."""
+class _StretchParams:
+    """The parameters read around every stretch of physics: those the setpoint vector is built
+    from (velocities [m/s], tilt [rad], acceleration [m/s^2]) and the timeouts [s] of
+    :meth:`Commander.update` and :meth:`Commander.next_deadline`; read once per parameter
+    version."""
 
     tilt_rad: float
     xy_cruise: float
@@ -124,9 +126,13 @@ class _SetpointParams:
     land_alt2: float
     acc_hor: float
     vel_manual: float
+    disarm_prflt_s: float
+    disarm_land_s: float
+    offboard_loss_s: float
+    rc_loss_s: float
 
     @classmethod
-    def of(cls, params: Px4Params) -> _SetpointParams:
+    def of(cls, params: Px4Params) -> _StretchParams:
         p = params.get
         return cls(
             math.radians(p("MPC_TILTMAX_AIR")),
@@ -142,10 +148,11 @@ class _SetpointParams:
             p("MPC_LAND_ALT2"),
             p("MPC_ACC_HOR"),
             p("MPC_VEL_MANUAL"),
+            p("COM_DISARM_PRFLT"),
+            p("COM_DISARM_LAND"),
+            p("COM_OF_LOSS_T"),
+            p("COM_RC_LOSS_T"),
         )
-
-    def __deepcopy__(self, memo: dict[int, object]) -> _SetpointParams:
-        return self  # immutable: numbers
 
 
 def _earlier(deadline: float, candidate: float) -> float:
@@ -154,7 +161,7 @@ def _earlier(deadline: float, candidate: float) -> float:
     return candidate if candidate < deadline else deadline
 
 
-def _land_speed_mps(p: _SetpointParams, height_m: float) -> float:
+def _land_speed_mps(p: _StretchParams, height_m: float) -> float:
     """PX4's landing descent speed [m/s] at ``height_m`` above home (FlightTaskAuto,
     math::gradual): MPC_Z_V_AUTO_DN above MPC_LAND_ALT1, MPC_LAND_SPEED below MPC_LAND_ALT2,
     linear between."""
@@ -211,8 +218,6 @@ class Commander:
         self.failsafes = FailsafeMonitor(params)
         self._pending: tuple[FailsafeAction, float] | None = None  # action and when it runs
         self.mode_epoch = 0  # increments on every mode change (the simulator resets yaw then)
-        self._sp_params_version = -1  # params.version _sp_params was read at
-        self._sp_params: _SetpointParams | None = None
         self._sticks_t: float | None = None  # when sticks last arrived (None: never)
         self._sticks_lost = False
         self._stick_cmd: StickCommand | None = None  # None: no live sticks
@@ -533,7 +538,7 @@ class Commander:
         over for it either (it has none to lose; it only refuses the manual modes, which the
         simulator lets a ground station enter to hold)."""
         self._landed = contact
-        self._height_m = float(self._home[2] - pos_ned_m[2])
+        self._height_m = float(self._home[2]) - float(pos_ned_m[2])  # (NumPy scalars: slower)
         self._yaw_rad = float(yaw_rad)
         self._check_sticks_lost(t, pos_ned_m, yaw_rad)
         if not self.armed:
@@ -545,11 +550,12 @@ class Commander:
             self._touchdown_t = t
             self.events.append((SEVERITY_INFO, "Landing detected"))
         eps = 1e-9
-        prflt = self.params.get("COM_DISARM_PRFLT")
+        p = self._params_now()
+        prflt = p.disarm_prflt_s
         if not self._took_off and prflt > 0 and t - self._t_armed >= prflt - eps:
             self._disarm(f"Disarmed: no takeoff within {prflt:g} s of arming", SEVERITY_NOTICE)
             return
-        land_t = self.params.get("COM_DISARM_LAND")
+        land_t = p.disarm_land_s
         if self._touchdown_t is not None and land_t > 0 and t - self._touchdown_t >= land_t - eps:
             self._disarm("Disarmed after landing", SEVERITY_INFO)
             return
@@ -573,7 +579,7 @@ class Commander:
         a flying vehicle NAV_RCL_ACT runs (see :meth:`update`)."""
         if self._sticks_t is None or self._sticks_lost:
             return
-        if t - self._sticks_t < self.params.get("COM_RC_LOSS_T") - 1e-9:
+        if t - self._sticks_t < self._params_now().rc_loss_s - 1e-9:
             return
         self._sticks_lost = True
         self._stick_cmd = None
@@ -604,11 +610,11 @@ class Commander:
         if not self.armed:
             return math.inf
         deadline = math.inf
-        p = self.params.get
-        prflt = p("COM_DISARM_PRFLT")
+        p = self._params_now()
+        prflt = p.disarm_prflt_s
         if not self._took_off and prflt > 0:
             deadline = _earlier(deadline, self._t_armed + prflt)
-        land_t = p("COM_DISARM_LAND")
+        land_t = p.disarm_land_s
         if self._touchdown_t is not None and land_t > 0:
             deadline = _earlier(deadline, self._touchdown_t + land_t)
         mode = self.mode
@@ -618,7 +624,7 @@ class Commander:
             deadline = _earlier(deadline, t + RTL_POLL_S)
         if mode is _ORBIT:
             deadline = _earlier(deadline, t + ORBIT_POLL_S)
-        if mode is _LAND and self._height_m > p("MPC_LAND_ALT2"):
+        if mode is _LAND and self._height_m > p.land_alt2:
             deadline = _earlier(deadline, t + RTL_POLL_S)  # the descent slows with height
         if self._pending is not None:
             deadline = _earlier(deadline, self._pending[1])
@@ -626,9 +632,9 @@ class Commander:
         if link_lost_s is not None:
             deadline = _earlier(deadline, link_lost_s + 1e-3)
         if mode is _OFFBOARD and self._last_sp_t is not None:
-            deadline = _earlier(deadline, self._last_sp_t + p("COM_OF_LOSS_T"))
+            deadline = _earlier(deadline, self._last_sp_t + p.offboard_loss_s)
         if self._sticks_t is not None and not self._sticks_lost:
-            deadline = _earlier(deadline, self._sticks_t + p("COM_RC_LOSS_T"))
+            deadline = _earlier(deadline, self._sticks_t + p.rc_loss_s)
             if mode in MANUAL_MODES:
                 deadline = _earlier(deadline, t + MANUAL_POLL_S)
         return deadline
@@ -645,7 +651,7 @@ class Commander:
     def fill_setpoint(self, sp: np.ndarray, contact: bool, active: ActiveSetpoint | None) -> None:
         """Write the flight-control setpoint vector for the current mode into ``sp`` (all of its
         N_SP entries in one assignment; called before every stretch of physics)."""
-        p = self._setpoint_params()
+        p = self._params_now()
         pos = self._hold_pos
         pos_n, pos_e, pos_d = pos[0], pos[1], pos[2]
         vel_n = vel_e = vel_d = math.nan
@@ -706,12 +712,9 @@ class Commander:
             1.0 if idle else 0.0, 1.0 if self.armed else 0.0, acc_max, acc_n, acc_e, 0.0,
         )  # fmt: skip
 
-    def _setpoint_params(self) -> _SetpointParams:
-        """The parameters :meth:`fill_setpoint` reads, read again only after a parameter set."""
-        if self._sp_params_version != self.params.version:
-            self._sp_params = _SetpointParams.of(self.params)
-            self._sp_params_version = self.params.version
-        return self._sp_params
+    def _params_now(self) -> _StretchParams:
+        """The parameters read at every stretch, read again only after a parameter set."""
+        return self.params.derived(_StretchParams.of)
 
     # --- helpers ------------------------------------------------------------------------------
     def _climbed(self, pos_ned_m: np.ndarray, contact: bool) -> bool:
@@ -721,8 +724,8 @@ class Commander:
         return not contact and -pos_ned_m[2] >= target_alt_m - accept_m
 
     def _setpoint_fresh(self, t: float) -> bool:
-        return self._last_sp_t is not None and t - self._last_sp_t < self.params.get(
-            "COM_OF_LOSS_T"
+        return (
+            self._last_sp_t is not None and t - self._last_sp_t < self._params_now().offboard_loss_s
         )
 
     def _hold(self, pos_ned_m: np.ndarray, yaw_rad: float) -> None:

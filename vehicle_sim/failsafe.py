@@ -39,6 +39,32 @@ MANUAL_CONTROL_LOSS_ACTIONS: dict[int, FailsafeAction] = {
 
 
 @dataclass(frozen=True)
+class _Limits:
+    """The parameters :meth:`FailsafeMonitor.check` reads at every stretch of physics, read
+    once per parameter version: NAV_DLL_ACT, COM_DL_LOSS_T [s], the battery thresholds
+    (fractions) and COM_LOW_BAT_ACT."""
+
+    datalink_action: int
+    datalink_loss_s: float
+    battery_low: float
+    battery_critical: float
+    battery_emergency: float
+    battery_action: int
+
+    @classmethod
+    def of(cls, params: Px4Params) -> _Limits:
+        p = params.get
+        return cls(
+            int(p("NAV_DLL_ACT")),
+            p("COM_DL_LOSS_T"),
+            p("BAT_LOW_THR"),
+            p("BAT_CRIT_THR"),
+            p("BAT_EMERGEN_THR"),
+            int(p("COM_LOW_BAT_ACT")),
+        )
+
+
+@dataclass(frozen=True)
 class Trigger:
     """A failsafe that fired: what to do and why (for the STATUSTEXT)."""
 
@@ -74,27 +100,27 @@ class FailsafeMonitor:
         """Warnings to announce and the failsafe that fires now (None if none)."""
         warnings: list[str] = []
         trigger = None
-        p = self._params.get
-        action = int(p("NAV_DLL_ACT"))
+        limits = self._params.derived(_Limits.of)
+        action = limits.datalink_action
         silent_s = None if self._last_gcs_s is None else t_s - self._last_gcs_s
         if (
             flying
             and action in DATALINK_LOSS_ACTIONS
             and not self._link_lost
-            and (silent_s is not None and silent_s > p("COM_DL_LOSS_T"))
+            and (silent_s is not None and silent_s > limits.datalink_loss_s)
         ):
             self._link_lost = True
             trigger = Trigger(DATALINK_LOSS_ACTIONS[action], "data link lost")
         level = (
-            int(battery_remaining < p("BAT_LOW_THR"))
-            + int(battery_remaining < p("BAT_CRIT_THR"))
-            + int(battery_remaining < p("BAT_EMERGEN_THR"))
+            int(battery_remaining < limits.battery_low)
+            + int(battery_remaining < limits.battery_critical)
+            + int(battery_remaining < limits.battery_emergency)
         )
         if level > self._battery_level:
             self._battery_level = level
             name = ("", "low", "critical", "emergency")[level]
             warnings.append(f"Battery {name}: {battery_remaining:.0%} remaining")
-            bat_action = int(p("COM_LOW_BAT_ACT"))
+            bat_action = limits.battery_action
             if flying and trigger is None and level >= 2 and bat_action in (2, 3):
                 act: FailsafeAction = "rtl" if bat_action == 3 and level == 2 else "land"
                 trigger = Trigger(act, f"battery {name}")
@@ -102,6 +128,9 @@ class FailsafeMonitor:
 
     def next_check_s(self, t_s: float) -> float | None:
         """When the data link would count as lost, if it is being watched."""
-        if self._last_gcs_s is None or self._link_lost or int(self._params.get("NAV_DLL_ACT")) == 0:
+        if self._last_gcs_s is None or self._link_lost:
             return None
-        return max(t_s, self._last_gcs_s + self._params.get("COM_DL_LOSS_T"))
+        limits = self._params.derived(_Limits.of)
+        if limits.datalink_action == 0:
+            return None
+        return max(t_s, self._last_gcs_s + limits.datalink_loss_s)

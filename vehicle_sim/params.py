@@ -10,13 +10,15 @@ PARAM_VALUE index.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Literal
+from typing import Literal, TypeVar
 
 import numpy as np
 
 from vehicle_sim import flight_control as fc
+
+T = TypeVar("T")
 
 ParamType = Literal["FLOAT", "INT32"]
 
@@ -158,6 +160,7 @@ class Px4Params:
     def __init__(self, overrides: Mapping[str, float] | None = None) -> None:
         self._values = {name: spec.default for name, spec in PX4_PARAMS.items()}
         self.version = 0  # increments on every set, so users of derived vectors can refresh
+        self._derived: dict[Callable[[Px4Params], object], tuple[int, object]] = {}
         for name, value in (overrides or {}).items():
             self.set(name, value)
 
@@ -166,6 +169,7 @@ class Px4Params:
         clone = object.__new__(type(self))
         clone._values = dict(self._values)
         clone.version = self.version
+        clone._derived = {}
         memo[id(self)] = clone
         return clone
 
@@ -185,6 +189,14 @@ class Px4Params:
         """The parameter's PX4 type, default and bounds."""
         self.get(name)
         return PX4_PARAMS[name]
+
+    def derived(self, build: Callable[[Px4Params], T]) -> T:
+        """``build(self)``, built again only after a parameter set: for values read from the
+        parameters at every step of a loop (kept per ``build``)."""
+        kept = self._derived.get(build)
+        if kept is None or kept[0] != self.version:
+            kept = self._derived[build] = (self.version, build(self))
+        return kept[1]
 
     def set(self, name: str, value: float) -> None:
         """Set one parameter; unknown names, non-numbers, non-finite values, fractions for an

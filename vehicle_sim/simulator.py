@@ -33,6 +33,7 @@ from vehicle_sim.params import Px4Params
 from vehicle_sim.truth_log import truth_row
 from vehicle_sim.vehicle_types import (
     MAX_SETPOINT_POS_M,
+    CheckedSetpoint,
     FlightMode,
     LandedState,
     VehicleState,
@@ -327,7 +328,8 @@ class Simulator:
         Raises:
             ValueError: non-finite or absurd values, or an unknown frame; nothing changes then.
         """
-        check_setpoint(sp)
+        if type(sp) is not CheckedSetpoint:  # (one is valid and immutable: checked when built)
+            check_setpoint(sp)
         self._commander.on_setpoint(self.t_s)
         if self._delay_steps == 0:
             self._active = self._to_ned(sp)
@@ -573,6 +575,8 @@ class Simulator:
             self._active = self._to_ned(self._pending.popleft()[1])
 
     def _to_ned(self, sp: VelocitySetpoint) -> ActiveSetpoint:
+        if type(sp) is CheckedSetpoint and sp.frame == "ned":  # (its numbers are floats)
+            return ActiveSetpoint(sp.vel_mps, sp.yaw_rate_radps, sp.yaw_rad, sp.pos_ned_m)
         vx, vy, vz = map(float, sp.vel_mps)
         if sp.frame == "body":
             yaw = fc.yaw_of(self._plant.x)

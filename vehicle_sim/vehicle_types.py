@@ -126,6 +126,25 @@ def check_setpoint(sp: VelocitySetpoint) -> None:
 
 
 @dataclass(frozen=True)
+class CheckedSetpoint(VelocitySetpoint):
+    """A :class:`VelocitySetpoint` validated once, when built (:func:`check_setpoint`; invalid
+    values raise ValueError then), its numbers stored as Python floats in tuples: it cannot
+    change, so the simulator takes it without validating it again. For setpoints set many
+    times, e.g. a replay's logged setpoints, set at every row of every replay of a log."""
+
+    def __post_init__(self) -> None:
+        check_setpoint(self)
+        floats = tuple(float(v) for v in self.vel_mps)
+        object.__setattr__(self, "vel_mps", floats)
+        object.__setattr__(self, "yaw_rate_radps", float(self.yaw_rate_radps))
+        if self.yaw_rad is not None:
+            object.__setattr__(self, "yaw_rad", float(self.yaw_rad))
+        object.__setattr__(self, "frame", "ned" if self.frame == "ned" else "body")
+        if self.pos_ned_m is not None:
+            object.__setattr__(self, "pos_ned_m", tuple(float(v) for v in self.pos_ned_m))
+
+
+@dataclass(frozen=True)
 class VehicleState:
     """True state of the simulated vehicle at time ``t_s``.
 

@@ -88,3 +88,15 @@ def test_nav_dll_act_values(nav_dll_act, action):
 def test_com_obl_rc_act_values(com_obl_rc_act, action):
     trigger = FailsafeMonitor(Px4Params({"COM_OBL_RC_ACT": com_obl_rc_act})).offboard_lost()
     assert trigger.action == action and trigger.reason == "offboard setpoints lost"
+
+
+def test_parameters_set_between_checks_take_effect_at_the_next_check():
+    params = Px4Params({"NAV_DLL_ACT": 0, "COM_DL_LOSS_T": 5})
+    monitor = FailsafeMonitor(params)
+    monitor.gcs_heartbeat(0.0)
+    assert monitor.check(10.0, True, 0.5) == ([], None)
+    params.set("NAV_DLL_ACT", 3)
+    params.set("BAT_LOW_THR", 0.5)
+    assert monitor.next_check_s(10.0) == 10.0
+    warnings, trigger = monitor.check(10.0, True, 0.4)
+    assert warnings == ["Battery low: 40% remaining"] and trigger.action == "land"

@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 import pytest
 
 from flightlog.schema import FlightLogRecorder, read_flight_log, write_flight_log
 from tests.vehicle_sim.sim_flying import fly
 from vehicle_sim import (
+    CheckedSetpoint,
     CommandResult,
     FlightMode,
     LandedState,
@@ -119,3 +122,21 @@ def test_random_command_sequences_never_break_the_vehicle():
             assert np.all(np.isfinite(values)) and s.pos_ned_m[2] <= 0.0
             assert abs(np.linalg.norm(s.q_wxyz) - 1.0) < 1e-9
             assert all(np.isfinite(v) for v in sim.log_row(None).values() if not isinstance(v, str))
+
+
+def test_a_checked_setpoint_is_validated_when_built_and_flies_as_the_plain_one(iris_hover):
+    for bad in ((float("nan"), 0.0, 0.0), (1e6, 0.0, 0.0), (0.0, 0.0)):
+        with pytest.raises(ValueError, match="setpoint"):
+            CheckedSetpoint(bad)
+    checked = CheckedSetpoint(np.array([1.0, -0.5, 0.2]), np.float32(0.25), frame="body")
+    assert checked.vel_mps == (1.0, -0.5, 0.2) and type(checked.vel_mps[0]) is float
+    assert type(checked.yaw_rate_radps) is float
+    plain = VelocitySetpoint((1.0, -0.5, 0.2), 0.25, frame="body")
+    states = []
+    for sp in (checked, plain):
+        sim = copy.deepcopy(iris_hover)
+        for _ in range(5):
+            sim.set_velocity_setpoint(sp)
+            sim.step(0.05)
+        states.append(np.concatenate([sim.state.pos_ned_m, sim.state.vel_ned_mps]))
+    assert np.array_equal(states[0], states[1])
