@@ -27,6 +27,7 @@ Models:
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import casadi as ca
@@ -166,6 +167,10 @@ def _batch_call(fn: ca.Function, x: np.ndarray, u: np.ndarray, nx: int, nu: int)
 
 def kinematic_4dof(residual_dt_s: float = 0.05) -> NominalModel:
     """Paper 000's 4-DOF kinematic model; ``residual_dt_s`` is δ_v, the residual's time base."""
+    if not (math.isfinite(residual_dt_s) and residual_dt_s > 0):
+        raise ValueError(
+            f"kinematic_4dof: residual_dt_s must be > 0 s and finite, got {residual_dt_s}"
+        )
     x = ca.SX.sym("x", 4)
     u = ca.SX.sym("u", 4)
     f = ca.Function("kinematic_4dof", [x, u], [u], ["x", "u"], ["x_dot"])
@@ -188,8 +193,8 @@ def first_order_lag(tau_s: float = 0.3, tau_d_s: float | None = None) -> Nominal
     ``tau_d_s`` [s] in down (default: ``tau_s``)."""
     tau_d_s = tau_s if tau_d_s is None else tau_d_s
     for name, value in (("tau_s", tau_s), ("tau_d_s", tau_d_s)):
-        if not value > 0:
-            raise ValueError(f"first_order_lag: {name} must be > 0 s, got {value}")
+        if not (math.isfinite(value) and value > 0):
+            raise ValueError(f"first_order_lag: {name} must be > 0 s and finite, got {value}")
     x = ca.SX.sym("x", 7)
     u = ca.SX.sym("u", 4)
     vel_dot = (u[:3] - x[3:6]) / ca.DM([tau_s, tau_s, tau_d_s])
@@ -233,9 +238,10 @@ def px4_velocity_pi(
     gains.update({"vel_d_z": vel_d_z, "drag_xy_per_s": drag_xy_per_s})
     gains["drag_z_per_s"] = drag_z_per_s
     for name, value in gains.items():
-        if not (value > 0 if name.startswith("vel_p") else value >= 0):
+        if not (math.isfinite(value) and (value > 0 if name.startswith("vel_p") else value >= 0)):
             raise ValueError(
-                f"px4_velocity_pi: {name} must be > 0 (P) or >= 0 (I, D, drag), got {value}"
+                f"px4_velocity_pi: {name} must be > 0 (P) or >= 0 (I, D, drag) and finite, "
+                f"got {value}"
             )
     kp = ca.DM([vel_p_xy, vel_p_xy, vel_p_z])
     ki = ca.DM([vel_i_xy, vel_i_xy, vel_i_z])

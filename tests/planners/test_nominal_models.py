@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import casadi as ca
 import numpy as np
 import pytest
@@ -66,5 +68,16 @@ def test_bad_inputs_give_clear_errors():
         first_order_lag().xdot_np(np.zeros(4), np.zeros(4))
     with pytest.raises(ValueError, match="tau_s must be > 0"):
         first_order_lag(0.0)
+    # an infinite time constant or gain is no model (it passed, and fit-gp fitted on it)
+    for model, param in (
+        ("first_order_lag", "tau_s"),
+        ("first_order_lag", "tau_d_s"),
+        ("kinematic_4dof", "residual_dt_s"),
+        ("px4_velocity_pi", "vel_p_xy"),
+        ("px4_velocity_pi", "vel_i_z"),
+    ):
+        for bad in (math.inf, math.nan):
+            with pytest.raises(ValueError, match=f"{model}: {param} must be .* finite, got"):
+                make_model(model, **{param: bad})
     with pytest.raises(ValueError, match="unknown nominal model 'bicycle'; choose one of"):
         make_model("bicycle")
