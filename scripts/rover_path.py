@@ -114,9 +114,7 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     parser = OneLineParser(
         prog=PROG,
         description=__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-        epilog="Exit codes: 0 done, 1 failed (rover stopped and sent Hold), 2 bad input, "
-        "3 handed over to a pilot (nothing sent), 130 Ctrl-C, 143 SIGTERM.",
+        formatter_class=argparse.RawDescriptionHelpFormatter,  # (its exit codes end it)
     )
     sub = parser.add_subparsers(dest="command", required=True)
     # No abbreviations: repeat's --drive would be taken as --drive-back (teach's --drive given

@@ -47,6 +47,14 @@ def files(tmp_path: Path) -> dict[str, Path]:
     return out
 
 
+def test_help_says_each_exit_code_once(capsys):
+    with pytest.raises(SystemExit) as done:
+        parse_args(["--help"])
+    assert done.value.code == 0
+    out = capsys.readouterr().out
+    assert out.count("Exit codes") == 1 and "143 SIGTERM" in out
+
+
 @pytest.mark.parametrize(
     ("argv", "message"),
     [
