@@ -114,7 +114,7 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     parser = OneLineParser(
         prog=PROG,
         description=__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,  # (its exit codes end it)
+        formatter_class=argparse.RawDescriptionHelpFormatter,  # (the doc ends with the exit codes)
     )
     sub = parser.add_subparsers(dest="command", required=True)
     # No abbreviations: repeat's --drive would be taken as --drive-back (teach's --drive given
