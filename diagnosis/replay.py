@@ -26,7 +26,7 @@ from diagnosis import sim_anchor
 from diagnosis.warm_up import LEAD_IN_S, start_integral
 from diagnosis.window_nuisance import RunNuisance
 from flightlog.schema import FlightLog
-from vehicle_sim import AnchorState, CheckedSetpoint, SimConfig, VelocitySetpoint
+from vehicle_sim import AnchorState, CheckedSetpoint, SimConfig, Simulator, VelocitySetpoint
 
 STATE_COLUMNS = (
     "pos_n_m", "pos_e_m", "pos_d_m", "vel_n_mps", "vel_e_mps", "vel_d_mps",
@@ -196,22 +196,43 @@ def _flown_windows(
             )  # fmt: skip
             last = max(w.stop for w in wins if w.log_index == i and w.anchor < run_stop)
             run += 1
-            for j in range(run_start, last):
-                follower.set_velocity_setpoint(a.setpoint[j])
-                follower.anchor(a.anchor(j, lead=j < lead_stop), integral="keep")
-                if j in mine:
-                    k, w = mine[j]
-                    free = sim_anchor.fresh_copy(follower)
-                    sim = []
-                    for r in range(w.anchor, w.stop):
-                        if r > w.anchor:
-                            free.set_velocity_setpoint(a.setpoint[r])
-                        free.advance(a.t[r + 1] - a.t[r])
-                        sim.append(free.vel_ned_mps)
-                    rows = slice(w.anchor + 1, w.stop + 1)
-                    tau = a.t[rows] - a.t[w.anchor]
-                    yield _Flown(k, run, a.t[rows], tau, np.array(sim), a.state[rows, 3:6])
-                follower.advance(a.t[j + 1] - a.t[j])
+            forks = sorted(j for j in mine if run_start <= j < last)
+            # the lead-in's rows (anchored with thrust and acceleration) apart from the rest
+            start, resumed = min(lead_stop, forks[0]), False
+            _follow(follower, a, run_start, start, lead_stop, resumed)
+            for fork in forks:
+                _follow(follower, a, start, fork, lead_stop, resumed)
+                follower.set_velocity_setpoint(a.setpoint[fork])
+                follower.anchor(a.anchor(fork, lead=fork < lead_stop), integral="keep")
+                k, w = mine[fork]
+                sim = (
+                    sim_anchor.fresh_copy(follower)
+                    .stream_setpoints(
+                        [None, *a.setpoint[w.anchor + 1 : w.stop]],
+                        np.diff(a.t[w.anchor : w.stop + 1]),
+                    )
+                    .vel_ned_mps
+                )
+                rows = slice(w.anchor + 1, w.stop + 1)
+                tau = a.t[rows] - a.t[w.anchor]
+                yield _Flown(k, run, a.t[rows], tau, sim, a.state[rows, 3:6])
+                start, resumed = fork, True
+            _follow(follower, a, start, last, lead_stop, resumed)
+
+
+def _follow(
+    follower: Simulator, a: LogArrays, start: int, stop: int, lead_stop: int, resumed: bool
+) -> None:
+    """The anchored follower along rows [start, stop): each row's logged setpoint, then its
+    measured state (with thrust and acceleration before ``lead_stop``), then the row's
+    interval; ``resumed``: row ``start``'s setpoint and state are already given."""
+    rows = range(start, stop)
+    skip = start if resumed else -1
+    follower.stream_setpoints(
+        [None if r == skip else a.setpoint[r] for r in rows],
+        np.diff(a.t[start : stop + 1]),
+        [None if r == skip else a.anchor(r, lead=r < lead_stop) for r in rows],
+    )
 
 
 class LogArrays:

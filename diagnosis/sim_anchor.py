@@ -11,7 +11,7 @@ from __future__ import annotations
 import copy
 from functools import lru_cache
 
-from vehicle_sim import FlightMode, SimConfig, Simulator, VelocitySetpoint
+from vehicle_sim import CheckedSetpoint, FlightMode, SimConfig, Simulator
 
 TEMPLATE_ALT_M = 5.0
 TEMPLATES_KEPT = 16  # configs whose template is kept (a diagnosis replays a few again and again)
@@ -32,7 +32,8 @@ def hovering_template(config: SimConfig) -> Simulator:
         if sim.state.mode is FlightMode.HOLD:
             break
         sim.step(0.5)
-    sim.set_velocity_setpoint(VelocitySetpoint((0.0, 0.0, 0.0)))
+    # checked: copies stream it on from their delay queue (Simulator.stream_setpoints)
+    sim.set_velocity_setpoint(CheckedSetpoint((0.0, 0.0, 0.0)))
     sim.step(0.05)
     if not sim.set_mode(FlightMode.OFFBOARD).accepted:
         raise AnchorError(f"replay vehicle {config.preset_name!r} refused OFFBOARD")

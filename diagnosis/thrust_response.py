@@ -107,6 +107,7 @@ MAX_P_VALUE = 0.01
 FLOOR_MARGIN_SE = 2.0  # the floor is an estimate: its standard errors added, as for forces
 MIN_THRUST_FRACTION = SelectionConfig().min_force_fraction  # least RMS thrust removed [of weight]
 SIMEX_SEED = 0
+TRACKED_CHUNK_ROWS = 50  # rows flown in one call after the lead-in (a few seconds of log)
 FLOOR_REPLICATES = 4  # draws of the extra velocity noise the held-out SIMEX errors average
 
 
@@ -271,16 +272,26 @@ def _tracked_rows(
                 continue
             follower = sim_anchor.fresh_copy(template)
             follower.anchor(a.anchor(run_start, lead=False), integral="reset")
-            lead_end = a.t[run_start] + LEAD_IN_S
-            last = run_start + int(np.flatnonzero(row_window[run_start:run_stop] >= 0)[-1])
-            for j in range(run_start, last + 1):
-                lead = a.t[j] < lead_end
+            stop = run_start + int(np.flatnonzero(row_window[run_start:run_stop] >= 0)[-1]) + 1
+            lead_stop = min(int(np.searchsorted(a.t, a.t[run_start] + LEAD_IN_S)), stop)
+            for j in range(run_start, lead_stop):
                 follower.set_velocity_setpoint(a.setpoint[j])
-                match = lead and a.thrust[j] > 0.0
-                follower.anchor(a.anchor(j, lead), integral="match_thrust" if match else "keep")
+                match = a.thrust[j] > 0.0
+                follower.anchor(a.anchor(j, True), integral="match_thrust" if match else "keep")
                 follower.advance(a.t[j + 1] - a.t[j])
                 if row_window[j] >= 0:
                     yield follower.thrust_n, a.thrust[j + 1], row_window[j], 1000 * i + k
+            # after the lead-in in chunks: a search that stops reading stops flying soon after
+            for chunk in range(lead_stop, stop, TRACKED_CHUNK_ROWS):
+                rows = range(chunk, min(chunk + TRACKED_CHUNK_ROWS, stop))
+                legs = follower.stream_setpoints(
+                    [a.setpoint[j] for j in rows],
+                    np.diff(a.t[rows.start : rows.stop + 1]),
+                    [a.anchor(j, False) for j in rows],
+                )
+                for j, thrust_n in zip(rows, legs.thrust_n.tolist(), strict=True):
+                    if row_window[j] >= 0:
+                        yield thrust_n, a.thrust[j + 1], row_window[j], 1000 * i + k
 
 
 def thrust_noise_var(logs: Sequence[FlightLog]) -> float:

@@ -62,13 +62,8 @@ def start_integral(
         free.set_velocity_integral(integral)
         if dv0.any():
             free.anchor(replace(first, vel_ned_mps=np.add(first.vel_ned_mps, dv0)))
-        out = []
-        for r, setpoint in enumerate(setpoints):
-            if r > 0:
-                free.set_velocity_setpoint(setpoint)
-            free.advance(t_s[r + 1] - t_s[r])
-            out.append(free.vel_ned_mps)
-        return np.array(out)
+        legs = free.stream_setpoints([None, *setpoints[1:]], np.diff(t_s[: len(setpoints) + 1]))
+        return legs.vel_ned_mps
 
     nominal, responses = finite_differences(fly)
     jac = responses.reshape(-1, 6)

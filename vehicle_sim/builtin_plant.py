@@ -93,7 +93,63 @@ def fused_loop(callees_sha256: str) -> Callable[..., int]:
     return run_closed_loop
 
 
+def scheduled_loop(callees_sha256: str) -> Callable[..., int]:
+    """The fused loop over a schedule of setpoint vectors, recording the velocity: what a row
+    of stretches of :func:`fused_loop`'s loop gives when nothing else happens between them
+    (``vehicle_sim.setpoint_schedule``). Cached on disk as :func:`fused_loop`'s, on the same
+    key."""
+
+    @njit(cache=True, error_model="numpy")
+    def run_scheduled(
+        dt, x, cs, sp, sp_rows, change_at, anchor_rows, anchor_at, record_at, out,
+        cp, mix, pp, rp, spin, ep, aux,
+    ):  # fmt: skip
+        """Flight control + physics for ``record_at[-1]`` steps (gusts off): ``sp`` becomes
+        ``sp_rows[j]`` (m, N_SP) from step ``change_at[j]`` (m,) on (the last of equal steps
+        wins), x's position to rates become ``anchor_rows[a]`` (p, 13) before step
+        ``anchor_at[a]`` (p,), and ``out[i]`` (n, 4) is the velocity NED and the nominal
+        thrust (aux) after step ``record_at[i]`` (n,), all in steps from the start, ascending.
+        Stops right after a step in which ground contact changed. Returns the steps done."""
+        _ = callees_sha256  # a closure variable: part of the cache key (see fused_loop)
+        scratch = np.zeros((6, ph.N_DYN))
+        u = np.zeros(4)
+        n_cmd = np.zeros(4)
+        work = np.empty(N_CONTROL_WORK)
+        no_noise = np.zeros((1, 3))  # read only with gusts on
+        contact0 = aux[ph.AUX_CONTACT]
+        n_steps = record_at[-1] if len(record_at) > 0 else 0
+        j = 0
+        a = 0
+        r = 0
+        while r < len(record_at) and record_at[r] == 0:
+            out[r, 0:3] = x[ph.VEL : ph.VEL + 3]
+            out[r, 3] = aux[ph.AUX_THRUST_NOM]
+            r += 1
+        for k in range(n_steps):
+            while a < len(anchor_at) and anchor_at[a] == k:
+                x[ph.POS : ph.RATES + 3] = anchor_rows[a]
+                a += 1
+            while j < len(change_at) and change_at[j] == k:
+                sp[:] = sp_rows[j]
+                j += 1
+            control_step_in(x, aux[ph.AUX_ACC : ph.AUX_ACC + 3], sp, cs, cp, mix, dt, u, work)
+            for i in range(4):
+                n_cmd[i] = math.sqrt(u[i])
+                aux[ph.AUX_CMD + i] = u[i]
+            ph.plant_step(x, n_cmd, pp, rp, spin, ep, no_noise, 0, dt, scratch, aux)
+            while r < len(record_at) and record_at[r] == k + 1:
+                out[r, 0:3] = x[ph.VEL : ph.VEL + 3]
+                out[r, 3] = aux[ph.AUX_THRUST_NOM]
+                r += 1
+            if aux[ph.AUX_CONTACT] != contact0:
+                return k + 1
+        return n_steps
+
+    return run_scheduled
+
+
 run_closed_loop = fused_loop(sources_sha256(ph, flight_control))
+run_scheduled = scheduled_loop(sources_sha256(ph, flight_control))
 
 
 class BuiltinPlant:
@@ -139,5 +195,40 @@ class BuiltinPlant:
             self.spin,
             self.ep,
             noise,
+            self.aux,
+        )
+
+    def advance_scheduled(
+        self,
+        dt_s: float,
+        sp: np.ndarray,
+        sp_rows: np.ndarray,
+        change_at: np.ndarray,
+        anchor_rows: np.ndarray,
+        anchor_at: np.ndarray,
+        record_at: np.ndarray,
+        out: np.ndarray,
+        cs: np.ndarray,
+        cp: np.ndarray,
+        mix: np.ndarray,
+    ) -> int:
+        """:func:`run_scheduled` on this plant (gusts off); returns the steps done."""
+        return run_scheduled(
+            dt_s,
+            self.x,
+            cs,
+            sp,
+            sp_rows,
+            change_at,
+            anchor_rows,
+            anchor_at,
+            record_at,
+            out,
+            cp,
+            mix,
+            self.pp,
+            self.rp,
+            self.spin,
+            self.ep,
             self.aux,
         )

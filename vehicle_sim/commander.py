@@ -639,6 +639,32 @@ class Commander:
                 deadline = _earlier(deadline, t + MANUAL_POLL_S)
         return deadline
 
+    def idle_in_offboard(self, t: float) -> bool:
+        """Whether, from time ``t`` on, :meth:`update` only records the vehicle's height and
+        yaw and :meth:`fill_setpoint` depends only on the setpoint in force, as long as the
+        vehicle stays in the air, its setpoints stay younger than :meth:`offboard_loss_s` and
+        its battery level does not change: an OFFBOARD flight with no pilot, no ground station
+        being watched and no failsafe pending (then no deadline but the setpoints' falls)."""
+        return (
+            self.armed
+            and self.mode is _OFFBOARD
+            and self._took_off
+            and self._touchdown_t is None
+            and self._pending is None
+            and self._sticks_t is None
+            and self._last_sp_t is not None
+            and self.failsafes.next_check_s(t) is None
+        )
+
+    def offboard_loss_s(self) -> float:
+        """COM_OF_LOSS_T [s]: a setpoint this old ends OFFBOARD."""
+        return self._params_now().offboard_loss_s
+
+    @property
+    def last_setpoint_s(self) -> float | None:
+        """When the last setpoint arrived [s] (None: none yet)."""
+        return self._last_sp_t
+
     def landed_state(self, contact: bool, climbing: bool) -> LandedState:
         if self.armed and self.mode is FlightMode.TAKEOFF and (contact or climbing):
             return LandedState.TAKEOFF

@@ -9,7 +9,8 @@ from __future__ import annotations
 import copy
 import math
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -30,6 +31,7 @@ from vehicle_sim.manual_control import Sticks, check_sticks
 from vehicle_sim.mission_plan import MissionItem
 from vehicle_sim.orbit import Orbit
 from vehicle_sim.params import Px4Params
+from vehicle_sim.setpoint_schedule import plan_stream
 from vehicle_sim.truth_log import truth_row
 from vehicle_sim.vehicle_types import (
     MAX_SETPOINT_POS_M,
@@ -51,7 +53,25 @@ from vehicle_sim.world_contact import (
 )
 
 NOISE_BLOCK_ROWS = 4096
+# A stream flies in one compiled call only if its setpoints stay this much younger than
+# COM_OF_LOSS_T [s] (the loss would be a deadline between its legs).
+STREAM_FRESH_MARGIN_S = 1e-6
 ATOMIC_TYPES = frozenset({bool, int, float, str, type(None)})  # deepcopy returns them as they are
+
+
+@dataclass(frozen=True)
+class StreamedLegs:
+    """What :meth:`Simulator.stream_setpoints` flew: at the end of each of its n legs, the
+    true velocity NED ``vel_ned_mps`` (n, 3) [m/s] and total rotor thrust ``thrust_n`` (n,)
+    [N] (as :attr:`Simulator.vel_ned_mps` and :attr:`Simulator.thrust_n`)."""
+
+    vel_ned_mps: np.ndarray
+    thrust_n: np.ndarray
+
+    @classmethod
+    def of(cls, record: np.ndarray) -> StreamedLegs:
+        """From a stream's record (n, 4): velocity, thrust."""
+        return cls(record[:, 0:3], record[:, 3])
 
 
 class Simulator:
@@ -185,8 +205,147 @@ class Simulator:
         loops that do not read it, e.g. a replay's anchored follower."""
         if not (math.isfinite(duration_s) and duration_s >= 0.0):
             raise ValueError(f"step duration {duration_s!r} s must be finite and >= 0")
+        # (a NumPy scalar's round takes microseconds)
+        self._advance_steps(round(float(duration_s) / self.physics_dt_s))
+
+    def stream_setpoints(
+        self,
+        setpoints: Sequence[VelocitySetpoint | None],
+        durations_s: Sequence[float],
+        anchors: Sequence[AnchorState | None] | None = None,
+    ) -> StreamedLegs:
+        """Fly a row of legs; returns the true velocity and thrust at the end of each.
+        Leg i takes ``setpoints[i]`` (None: keeps the one in force), is anchored at
+        ``anchors[i]`` if given (:meth:`anchor`, the integral kept) and advances
+        ``durations_s[i]`` [s]: the numbers of :meth:`set_velocity_setpoint`, :meth:`anchor`,
+        :meth:`advance`, :attr:`vel_ned_mps` and :attr:`thrust_n` leg by leg, to the last
+        bit. In an OFFBOARD flight whose commander only watches the setpoints' age
+        (``Commander.idle_in_offboard``), streamed NED setpoints already checked
+        (``CheckedSetpoint``), the built-in plant without obstacles, gusts or battery sag, and
+        anchors without thrust or acceleration on legs of at least one step, the whole row is
+        one compiled call instead of Python steps around each leg (a replay's follower and its
+        windows); from a touchdown on, and otherwise, leg by leg.
+
+        Raises:
+            ValueError: ``setpoints`` and ``durations_s`` differ in length; or a leg's setpoint
+                or duration :meth:`set_velocity_setpoint` or :meth:`advance` refuses (the legs
+                before it flown).
+        """
+        if len(setpoints) != len(durations_s):
+            raise ValueError(
+                f"{len(setpoints)} setpoints for {len(durations_s)} leg durations: give one "
+                "per leg (None keeps the one in force)"
+            )
+        if anchors is not None and len(anchors) != len(setpoints):
+            raise ValueError(f"{len(anchors)} anchors for {len(setpoints)} legs: give one per leg")
+        out = np.empty((len(setpoints), 4))
+        steps = [
+            round(float(d) / self.physics_dt_s) if math.isfinite(d) and d >= 0.0 else -1
+            for d in durations_s
+        ]
+        if min(steps, default=0) < 0 or not self._streams_compiled(setpoints, steps, anchors):
+            return StreamedLegs.of(self._stream_legs(setpoints, durations_s, anchors, 0, out))
+        plan = plan_stream(
+            self._k, steps, setpoints, self._delay_steps, self._active, tuple(self._pending)
+        )
+        rows = np.empty((len(plan.changes), fc.N_SP))
+        filled: dict[int, np.ndarray] = {}
+        for j, change in enumerate(plan.changes):
+            if id(change) not in filled:
+                active = change if j == 0 else self._to_ned(change)
+                self._commander.fill_setpoint(rows[j], False, active)
+                filled[id(change)] = rows[j]
+            rows[j] = filled[id(change)]
+        anchored = [i for i, a in enumerate(anchors or ()) if a is not None]
+        anchor_rows = np.array([anchors[i].physics_state for i in anchored]).reshape(-1, 13)
+        self._refresh_control_params()
+        done = self._plant.advance_scheduled(
+            self.physics_dt_s, self._sp, rows, plan.change_at, anchor_rows,
+            plan.leg_start[anchored], plan.leg_end, out, self._cs, self._cp, self._mix,
+        )  # fmt: skip
+        total = int(plan.leg_end[-1]) if steps else 0
+        now = plan.state_after(done, at_end=done == total)
+        if now.last_set_at is not None:
+            self._commander.on_setpoint((self._k + now.last_set_at) * self.physics_dt_s)
+        if now.in_force is not plan.changes[0]:
+            self._active = self._to_ned(now.in_force)
+        self._pending = deque(now.queued)
+        self._k += done
+        if done > 0:
+            self._update_commander()
+        if done < total:  # touched down: the leg under way and the rest, leg by leg
+            leg = now.legs_begun - 1
+            self._advance_steps(int(plan.leg_end[leg]) - done)
+            self._record_leg(out, leg)
+            self._stream_legs(setpoints, durations_s, anchors, now.legs_begun, out)
+        return StreamedLegs.of(out)
+
+    def _streams_compiled(
+        self,
+        setpoints: Sequence[VelocitySetpoint | None],
+        steps: list[int],
+        anchors: Sequence[AnchorState | None] | None,
+    ) -> bool:
+        """Whether :meth:`stream_setpoints` may fly these legs in one compiled call (see there):
+        nothing but the setpoints and anchors changes what the commander and the flight
+        control do, and no setpoint grows older than COM_OF_LOSS_T before the next."""
+        if anchors is not None and (
+            min(steps, default=1) < 1
+            or any(a is not None and (a.thrust_n or a.acc_ned_mps2 is not None) for a in anchors)
+        ):
+            return False
+        plant = self._plant
+        if not (
+            type(plant) is BuiltinPlant
+            and self._world is None
+            and not self._gust_on
+            and plant.ep[ph.BATTERY_TIME] == 0.0
+            and plant.aux[ph.AUX_CONTACT] <= 0.5
+            and self._commander.idle_in_offboard(self.t_s)
+        ):
+            return False
+        queued = [sp for _, sp in self._pending]
+        if any(
+            sp is not None and (type(sp) is not CheckedSetpoint or sp.frame != "ned")
+            for sp in (*setpoints, *queued)
+        ):
+            return False
+        dt, loss_s = self.physics_dt_s, self._commander.offboard_loss_s()
+        last_set_s, k = self._commander.last_setpoint_s, self._k
+        for sp, n in zip(setpoints, steps, strict=True):
+            if sp is not None:
+                last_set_s = k * dt
+            k += n
+            if k * dt - last_set_s >= loss_s - STREAM_FRESH_MARGIN_S:
+                return False
+        return True
+
+    def _stream_legs(
+        self,
+        setpoints: Sequence[VelocitySetpoint | None],
+        durations_s: Sequence[float],
+        anchors: Sequence[AnchorState | None] | None,
+        first: int,
+        out: np.ndarray,
+    ) -> np.ndarray:
+        """Legs ``first``.. of :meth:`stream_setpoints` one by one, velocities into ``out``."""
+        for i in range(first, len(setpoints)):
+            if setpoints[i] is not None:
+                self.set_velocity_setpoint(setpoints[i])
+            if anchors is not None and anchors[i] is not None:
+                self.anchor(anchors[i])
+            self.advance(durations_s[i])
+            self._record_leg(out, i)
+        return out
+
+    def _record_leg(self, out: np.ndarray, i: int) -> None:
+        """Row ``i`` of a stream's record (n, 4): velocity NED [m/s], nominal thrust [N]."""
+        out[i, 0:3] = self._plant.x[ph.VEL : ph.VEL + 3]
+        out[i, 3] = self._plant.aux[ph.AUX_THRUST_NOM]
+
+    def _advance_steps(self, remaining: int) -> None:
+        """:meth:`advance` by ``remaining`` physics steps."""
         dt = self.physics_dt_s
-        remaining = round(float(duration_s) / dt)  # (a NumPy scalar's round takes microseconds)
         plant, commander, aux = self._plant, self._commander, self._plant.aux
         self._refresh_control_params()
         while remaining > 0:

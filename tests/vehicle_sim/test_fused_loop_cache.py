@@ -27,8 +27,9 @@ def test_the_loop_is_loaded_from_the_cache_until_its_callees_sources_change(tmp_
 
 
 def test_the_shipped_loop_is_keyed_on_every_file_with_jitted_code():
-    (cell,) = builtin_plant.run_closed_loop.py_func.__closure__
-    assert cell.cell_contents == sources_sha256(physics, flight_control)
+    for loop in (builtin_plant.run_closed_loop, builtin_plant.run_scheduled):
+        (cell,) = loop.py_func.__closure__
+        assert cell.cell_contents == sources_sha256(physics, flight_control)
     # A new file of jitted code must join the key above (builtin_plant's own is numba's key).
     jitted = {
         path.name
