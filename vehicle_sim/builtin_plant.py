@@ -94,10 +94,10 @@ def fused_loop(callees_sha256: str) -> Callable[..., int]:
 
 
 def scheduled_loop(callees_sha256: str) -> Callable[..., int]:
-    """The fused loop over a schedule of setpoint vectors, recording the velocity: what a row
-    of stretches of :func:`fused_loop`'s loop gives when nothing else happens between them
-    (``vehicle_sim.setpoint_schedule``). Cached on disk as :func:`fused_loop`'s, on the same
-    key."""
+    """The fused loop over a schedule of setpoint vectors and anchors, recording velocity and
+    thrust: what a row of stretches of :func:`fused_loop`'s loop gives when nothing else
+    happens between them (``Simulator.stream_setpoints``, ``vehicle_sim.setpoint_schedule``).
+    Cached on disk as :func:`fused_loop`'s, on the same key."""
 
     @njit(cache=True, error_model="numpy")
     def run_scheduled(
@@ -214,21 +214,6 @@ class BuiltinPlant:
     ) -> int:
         """:func:`run_scheduled` on this plant (gusts off); returns the steps done."""
         return run_scheduled(
-            dt_s,
-            self.x,
-            cs,
-            sp,
-            sp_rows,
-            change_at,
-            anchor_rows,
-            anchor_at,
-            record_at,
-            out,
-            cp,
-            mix,
-            self.pp,
-            self.rp,
-            self.spin,
-            self.ep,
-            self.aux,
-        )
+            dt_s, self.x, cs, sp, sp_rows, change_at, anchor_rows, anchor_at, record_at, out,
+            cp, mix, self.pp, self.rp, self.spin, self.ep, self.aux,
+        )  # fmt: skip
