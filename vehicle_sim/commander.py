@@ -738,6 +738,28 @@ class Commander:
             1.0 if idle else 0.0, 1.0 if self.armed else 0.0, acc_max, acc_n, acc_e, 0.0,
         )  # fmt: skip
 
+    def offboard_rows(
+        self,
+        vel_ned_mps: np.ndarray,
+        yaw_rate_radps: np.ndarray,
+        yaw_rad: np.ndarray,
+        pos_ned_m: np.ndarray,
+    ) -> np.ndarray:
+        """(m, N_SP) the vectors :meth:`fill_setpoint` writes for m OFFBOARD setpoints in the
+        air (while :meth:`idle_in_offboard`), all at once: velocity NED (m, 3) [m/s], yaw rate
+        (m,) [rad/s], yaw (m,) [rad] and position NED (m, 3) [m], NaN where a setpoint gives
+        none; the yaw rate counts only without a yaw, as there."""
+        yaw_rad = np.asarray(yaw_rad, dtype=float).reshape(-1)
+        shared = np.empty(fc.N_SP)
+        self.fill_setpoint(shared, False, ActiveSetpoint((0.0, 0.0, 0.0), 0.0, None))
+        rows = np.repeat(shared[None, :], len(yaw_rad), axis=0)
+        if len(yaw_rad):
+            rows[:, fc.SP_POS : fc.SP_POS + 3] = pos_ned_m
+            rows[:, fc.SP_VEL : fc.SP_VEL + 3] = vel_ned_mps
+            rows[:, fc.SP_YAW] = yaw_rad
+            rows[:, fc.SP_YAW_RATE] = np.where(np.isnan(yaw_rad), yaw_rate_radps, 0.0)
+        return rows
+
     def _params_now(self) -> _StretchParams:
         """The parameters read at every stretch, read again only after a parameter set."""
         return self.params.derived(_StretchParams.of)

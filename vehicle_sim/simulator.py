@@ -56,6 +56,7 @@ NOISE_BLOCK_ROWS = 4096
 # A stream flies in one compiled call only if its setpoints stay this much younger than
 # COM_OF_LOSS_T [s] (the loss would be a deadline between its legs).
 STREAM_FRESH_MARGIN_S = 1e-6
+_NO_POSITION = (math.nan, math.nan, math.nan)
 ATOMIC_TYPES = frozenset({bool, int, float, str, type(None)})  # deepcopy returns them as they are
 
 
@@ -248,14 +249,19 @@ class Simulator:
         plan = plan_stream(
             self._k, steps, setpoints, self._delay_steps, self._active, tuple(self._pending)
         )
-        rows = np.empty((len(plan.changes), fc.N_SP))
-        filled: dict[int, np.ndarray] = {}
-        for j, change in enumerate(plan.changes):
-            if id(change) not in filled:
-                active = change if j == 0 else self._to_ned(change)
-                self._commander.fill_setpoint(rows[j], False, active)
-                filled[id(change)] = rows[j]
-            rows[j] = filled[id(change)]
+        first, later = np.empty((1, fc.N_SP)), plan.changes[1:]
+        self._commander.fill_setpoint(first[0], False, plan.changes[0])
+        rows = np.vstack(
+            [
+                first,
+                self._commander.offboard_rows(
+                    [sp.vel_mps for sp in later],
+                    [sp.yaw_rate_radps for sp in later],
+                    [math.nan if sp.yaw_rad is None else sp.yaw_rad for sp in later],
+                    [_NO_POSITION if sp.pos_ned_m is None else sp.pos_ned_m for sp in later],
+                ),
+            ]
+        )
         anchored = [i for i, a in enumerate(anchors or ()) if a is not None]
         anchor_rows = np.array([anchors[i].physics_state for i in anchored]).reshape(-1, 13)
         self._refresh_control_params()

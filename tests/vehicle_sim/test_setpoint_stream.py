@@ -23,14 +23,17 @@ from vehicle_sim.builtin_plant import BuiltinPlant
 
 
 def legs(rng: np.random.Generator, n: int, down_mps: float = 0.0, every: int = 3):
-    """n legs of random NED setpoints (every ``every``-th leg keeps the one in force) and
-    durations 0-50 ms (some empty); ``down_mps`` is added to each setpoint's down speed."""
+    """n legs of random NED setpoints (every ``every``-th leg keeps the one in force; some
+    with a yaw, some with a position) and durations 0-50 ms (some empty); ``down_mps`` is
+    added to each setpoint's down speed."""
     setpoints = [
         None
         if i % every == every - 1
         else CheckedSetpoint(
             (*rng.uniform(-2.0, 2.0, 2), rng.uniform(-0.5, 0.5) + down_mps),
             float(rng.uniform(-0.3, 0.3)),
+            yaw_rad=float(rng.uniform(-3.0, 3.0)) if i % 5 == 1 else None,
+            pos_ned_m=(*rng.uniform(-1.0, 1.0, 2), -2.5) if i % 7 == 2 else None,
         )
         for i in range(n)
     ]
