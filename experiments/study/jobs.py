@@ -48,6 +48,9 @@ class FlightSummary:
         n_residuals: residual rows (weights for pooling).
         solve_times_s: (n,) planner wall-clock times [s].
         log: the flight log.
+        flown_as: the planner whose flight this is when another planner flew the same
+            (flown once for both, experiments.study.same_flights; its solve times are that
+            flight's), else None.
     """
 
     trajectory: int
@@ -59,13 +62,17 @@ class FlightSummary:
     n_residuals: int
     solve_times_s: np.ndarray
     log: FlightLog
+    flown_as: str | None = None
+
+
+def flight_name(job: FlightJob) -> str:
+    """The flight's name in its log ("traj03_low_speed_s4")."""
+    return f"traj{job.trajectory:02d}_{job.planner}_s{job.seed}"
 
 
 def run_flight_job(job: FlightJob) -> FlightSummary:
     """Fly one job in this process and summarise it."""
-    spec = FlightSpec(
-        f"traj{job.trajectory:02d}_{job.planner}_s{job.seed}", job.reference, job.vehicle, job.seed
-    )
+    spec = FlightSpec(flight_name(job), job.reference, job.vehicle, job.seed)
     settings = replace(job.settings, compile_functions=job.compile_functions)
     record = fly(spec, settings, job.model)
     return FlightSummary(

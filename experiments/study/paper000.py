@@ -22,7 +22,8 @@ from companion.nmpc_planner import NmpcSettings
 from experiments.study.closed_loop import confirm_lineage
 from experiments.study.config import StudyConfig
 from experiments.study.fitting import FOLLOWING_MODES, fit_for_study, regular_rows
-from experiments.study.jobs import FlightJob, FlightSummary, run_flight_job, warm_up_planner
+from experiments.study.jobs import FlightJob, FlightSummary, warm_up_planner
+from experiments.study.same_flights import FlownFlights, fly_once
 from flightlog.schema import FlightLog
 from gp.lag_identification import identify_velocity_lag
 from gp.prediction_check import Predictor, refusal, structure_only
@@ -79,14 +80,16 @@ def study_trajectories(config: StudyConfig) -> list[BSplineReference]:
 def run_paper000(
     config: StudyConfig, pool: Executor, progress: Callable[[str], None]
 ) -> Paper000Result:
-    """Fly, fit and fly again; flights run on ``pool``, fits one per selection on it too."""
+    """Fly, fit and fly again; flights run on ``pool``, fits one per selection on it too.
+    Each distinct flight flies once (experiments.study.same_flights)."""
     refs = study_trajectories(config)
+    distinct: FlownFlights = {}
     jobs = [
         FlightJob(i, ref, NOMINAL, seed, config.vehicle, config.nmpc)
         for i, ref in enumerate(refs)
         for seed in range(config.repeats)
     ]
-    flights = {NOMINAL: _fly_all(jobs, pool, "nominal", progress)}
+    flights = {NOMINAL: _fly_all(jobs, pool, distinct, "nominal", progress)}
     logs = [f.log for f in flights[NOMINAL]]
     progress(f"fitting {len(config.selections)} residual models on {len(logs)} nominal flights")
     fits = _fit_selections(logs, config, pool)
@@ -95,13 +98,13 @@ def run_paper000(
     structure_flights: list[FlightSummary] = []
     if config.learn_from_structure:
         fits, structure_flights = _refit_on_structure(
-            config, refs, logs, fits, pool, progress, structure
+            config, refs, logs, fits, pool, distinct, progress, structure
         )
     lineage = {sel: [Learned(f"{sel} first fit", fit)] for sel, fit in fits.items()}
     augmented_logs: dict[str, list[FlightLog]] = {sel: [] for sel in config.selections}
     for round_ in range(1, config.refit_rounds + 1):
         fits, flown = _refit_on_augmented(
-            config, refs, logs, augmented_logs, fits, pool, round_, progress, structure
+            config, refs, logs, augmented_logs, fits, pool, distinct, round_, progress, structure
         )
         for sel, summaries in flown.items():
             latest = lineage[sel][-1]
@@ -109,7 +112,9 @@ def run_paper000(
             if fits[sel] is not latest.fit:
                 lineage[sel].append(Learned(f"{sel} round {round_} refit", fits[sel]))
     if config.closed_loop_check:
-        fits = _confirm_in_closed_loop(config, refs, lineage, structure_flights, pool, progress)
+        fits = _confirm_in_closed_loop(
+            config, refs, lineage, structure_flights, pool, distinct, progress
+        )
     if identification is not None:  # the later rounds keep the structure: say where it came from
         fits = {sel: _with_identification(fit, identification) for sel, fit in fits.items()}
     for sel, fit in fits.items():
@@ -169,7 +174,7 @@ def run_paper000(
             for i, ref in enumerate(refs)
             for seed in range(config.repeats)
         ]
-    for summary in _fly_all(aug_jobs, pool, "augmented", progress):
+    for summary in _fly_all(aug_jobs, pool, distinct, "augmented", progress):
         flights.setdefault(summary.planner, []).append(summary)
     return Paper000Result(refs, flights, fits, None if lag is None else lag.nominal_model)
 
@@ -195,6 +200,7 @@ def _refit_on_augmented(
     augmented_logs: dict[str, list[FlightLog]],
     fits: dict[str, TrainingResult],
     pool: Executor,
+    distinct: FlownFlights,
     round_: int,
     progress: Callable[[str], None],
     structure: tuple[tuple[str, float], ...],
@@ -214,7 +220,7 @@ def _refit_on_augmented(
         for seed in range(config.repeats)
     ]
     flown: dict[str, list[FlightSummary]] = {}
-    for summary in _fly_all(jobs, pool, f"refit round {round_}", progress):
+    for summary in _fly_all(jobs, pool, distinct, f"refit round {round_}", progress):
         flown.setdefault(summary.planner, []).append(summary)
     futures = {
         sel: pool.submit(
@@ -245,6 +251,7 @@ def _refit_on_structure(
     nominal_logs: list[FlightLog],
     fits: dict[str, TrainingResult],
     pool: Executor,
+    distinct: FlownFlights,
     progress: Callable[[str], None],
     structure: tuple[tuple[str, float], ...],
 ) -> tuple[dict[str, TrainingResult], list[FlightSummary]]:
@@ -262,7 +269,8 @@ def _refit_on_structure(
     lag = identified_lag_settings(config, fits[config.selections[0]])
     if lag is None:
         return fits, []
-    flights = _fly_all(_structure_jobs(config, refs, lag), pool, "structure round", progress)
+    jobs = _structure_jobs(config, refs, lag)
+    flights = _fly_all(jobs, pool, distinct, "structure round", progress)
     logs = [s.log for s in flights]
     return _fit_selections([*nominal_logs, *logs], config, pool, structure), flights
 
@@ -273,6 +281,7 @@ def _confirm_in_closed_loop(
     lineage: dict[str, list[Learned]],
     structure_flights: list[FlightSummary],
     pool: Executor,
+    distinct: FlownFlights,
     progress: Callable[[str], None],
 ) -> dict[str, TrainingResult]:
     """experiments.study.closed_loop's check on the training seeds: fly what has not flown
@@ -306,7 +315,7 @@ def _confirm_in_closed_loop(
         for seed in range(config.repeats)
     ]
     flown: dict[str, list[FlightSummary]] = {}
-    for summary in _fly_all(jobs, pool, "closed-loop check", progress):
+    for summary in _fly_all(jobs, pool, distinct, "closed-loop check", progress):
         flown.setdefault(summary.planner, []).append(summary)
     structure_flights = structure_flights or flown[IDENTIFIED_LAG]
     out = {sel: models[-1].fit for sel, models in lineage.items()}
@@ -391,18 +400,34 @@ def _identified_lag_beside(
 
 
 def _fly_all(
-    jobs: list[FlightJob], pool: Executor, what: str, progress: Callable[[str], None]
+    jobs: list[FlightJob],
+    pool: Executor,
+    distinct: FlownFlights,
+    what: str,
+    progress: Callable[[str], None],
 ) -> list[FlightSummary]:
+    """Fly ``jobs`` (each distinct flight once over ``distinct``, same_flights.fly_once), one
+    progress line per job and one saying how many flights were reused and from whom."""
     out = []
-    summaries = pool.map(run_flight_job, jobs)
-    for n, (job, summary) in enumerate(zip(jobs, summaries, strict=True), start=1):
+    reused: dict[str, list[str]] = {}  # the planner that flew -> the planners reusing it
+    flights = zip(jobs, fly_once(jobs, pool, distinct), strict=True)
+    for n, (job, (summary, flyer)) in enumerate(flights, start=1):
         planner = planner_label(summary.planner, job.settings.nominal_model)
+        same = ""
+        if summary.flown_as is not None:
+            source = planner_label(flyer.planner, flyer.settings.nominal_model)
+            reused.setdefault(source, []).append(planner)
+            same = f" (reused: same planner as {source})"
         progress(
             f"{what} flight {n}/{len(jobs)}: trajectory {summary.trajectory} {planner} "
             f"seed {summary.seed}: {summary.status}, tracking {summary.tracking_rmse_m:.3f} m, "
-            f"residual {summary.residual_rmse_mps:.4f} m/s"
+            f"residual {summary.residual_rmse_mps:.4f} m/s{same}"
         )
         out.append(summary)
+    if reused:
+        sources = "; ".join(f"{s} for {', '.join(dict.fromkeys(p))}" for s, p in reused.items())
+        n_reused = sum(len(p) for p in reused.values())
+        progress(f"{what}: {n_reused} of {len(jobs)} flights reused: same planner as {sources}")
     return out
 
 

@@ -91,6 +91,7 @@ def render_report(
         "",
         figures_table(figs, result.structure_model),
         "",
+        *_same_planner_lines(result),
         *_flown_lines(result),
         "Held-out rows of each fit (fit-gp's evaluation, per axis n/e/d, m/s):",
         "",
@@ -119,6 +120,25 @@ def render_report(
     lines += ["", *[f"- before trial {k}: {c}" for k, c in enumerate(trials.checks, start=2)]]
     lines += ["", *[f"![{p}]({p})" for p in images["trials"]], ""]
     return "\n".join(lines)
+
+
+def _same_planner_lines(result: Paper000Result) -> list[str]:
+    """A line per row with flights another row's planner flew: the same planner on the same
+    trajectory and seed, flown once for both (experiments.study.same_flights), so both rows
+    show that flight's solve times."""
+    lines = []
+    for planner, flights in result.flights.items():
+        reused = [f.flown_as for f in flights if f.flown_as is not None]
+        if reused:
+            names = " and ".join(
+                f"`{planner_label(p, result.structure_model)}`" for p in dict.fromkeys(reused)
+            )
+            lines.append(
+                f"- `{planner_label(planner, result.structure_model)}` flies the same planner "
+                f"as {names} ({len(reused)} of its {len(flights)} flights, the same trajectories "
+                "and seeds): each such flight was flown once, its solve times are in both rows."
+            )
+    return [*lines, ""] if lines else []
 
 
 def _flown_lines(result: Paper000Result) -> list[str]:

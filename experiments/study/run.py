@@ -3,7 +3,8 @@
 Flights are spread over ``config.workers`` local processes, or over the workers of a Dask
 cluster when ``config.scheduler`` names one (see :mod:`experiments.executors`); every flight is
 lockstep and seeded, so the figures (all but the wall-clock solve times) are the same on every
-run, machine and cluster.
+run, machine and cluster, and planners that fly the same (e.g. two refused selections) share
+one flight (experiments.study.same_flights).
 """
 
 from __future__ import annotations

@@ -25,15 +25,16 @@ def fit():
     return train_residual_model(logs, config)
 
 
-def _report(fits: dict) -> str:
-    """report.md for ``fits`` beside made-up figures (the rows' numbers do not matter here)."""
+def _report(fits: dict, flights: dict | None = None) -> str:
+    """report.md for ``fits`` (and ``flights`` per planner) beside made-up figures (the rows'
+    numbers do not matter here)."""
     figs = {
         name: PlannerFigures(name, 2, 2, 0.1, 0.05, 0.04, 1.0, 2.0) for name in (NOMINAL, *fits)
     }
     ref = generate_trajectories(1, seed=0)[0]
     trials = TrialsResult(ref, "low_speed", [], [], [])
     images = {"paths": [], "residuals": [], "trials": []}
-    result = Paper000Result([ref], {}, fits)
+    result = Paper000Result([ref], flights or {}, fits)
     return render_report(StudyConfig(), result, figs, trials, images, 1.0)
 
 
@@ -57,6 +58,29 @@ def test_report_says_when_a_selection_flew_its_structure_alone_or_the_nominal_pl
     assert "the structure flies alone" in lines["low_speed"]
     assert "its flights fly the nominal planner" in lines["cluster"]
     assert "the learned model flies (first_order_lag + GP)" in lines["flown"]
+
+
+def test_report_says_which_rows_share_one_flight_and_so_its_solve_times(fit):
+    """Rows flying the same planner share its flights (experiments.study.same_flights): their
+    equal solve times are one measurement, and the report says so under the table."""
+    import numpy as np
+
+    from experiments.study.jobs import FlightSummary
+    from flightlog.schema import FlightLog
+
+    def flight(planner: str, flown_as: str | None = None) -> FlightSummary:
+        log = FlightLog({"t_s": np.zeros(1)})
+        return FlightSummary(0, planner, 1, "completed", 0.1, 0.05, 9, np.ones(3), log, flown_as)
+
+    flights = {
+        "low_speed": [flight("low_speed"), flight("low_speed")],
+        "cluster": [flight("cluster"), flight("cluster", "low_speed")],
+    }
+    report = _report({"low_speed": fit, "cluster": fit}, flights)
+    table_end = report.index("What each selection's held-out flights flew:")
+    note = "- `cluster` flies the same planner as `low_speed` (1 of its 2 flights, the same "
+    assert note in report[:table_end]
+    assert "- `low_speed` flies the same planner" not in report
 
 
 def test_path_legends_hide_no_path():
