@@ -99,13 +99,15 @@ def fly_pair(
     residual_model: ResidualModel | None = None,
     rrt_path_ne_m: np.ndarray | None = None,
     bounds_ne_m: tuple[float, float, float, float] | None = None,
+    rrt_iterations: int = 10000,
     settle_s: float = 90.0,
 ) -> ClutterFlight:
     """Fly ``kind`` from ``start_ne_m`` to ``goal_ne_m`` (2,) [m] in ``world``.
 
     ``rrt_path_ne_m`` (k, 2) [m]: the known-forest RRT* path ``rrtstar`` tracks;
     ``bounds_ne_m``: (north_min, north_max, east_min, east_max) [m] the online ``rrtstar_online``
-    samples in (default: the world's extent plus 2 m)."""
+    samples in (default: the world's extent plus 2 m); ``rrt_iterations``: its RRT*'s budget
+    per plan (paper: 10000)."""
     start = np.asarray(start_ne_m, dtype=float)
     goal = np.asarray(goal_ne_m, dtype=float) - start
     mission = Mission(
@@ -125,7 +127,7 @@ def fly_pair(
         bounds_ne_m[2] - start[1],
         bounds_ne_m[3] - start[1],
     )
-    planner = _planner(kind, residual_model, bounds)
+    planner = _planner(kind, residual_model, bounds, rrt_iterations)
     if kind == "rrtstar":
         planner.set_obstacles(shifted(world, start))
         if rrt_path_ne_m is None:
@@ -191,7 +193,9 @@ def _centre_ne(obstacle) -> tuple[float, float]:
     return tuple(centre if centre is not None else obstacle.center_ned_m[:2])
 
 
-def _planner(kind: PlannerKind, residual_model: ResidualModel | None, bounds_ne_m):
+def _planner(
+    kind: PlannerKind, residual_model: ResidualModel | None, bounds_ne_m, rrt_iterations: int
+):
     if kind == "pd":
         return PdRegulator(PdGains(max_speed_mps=SPEED_MPS))
     clutter = kind in (
@@ -216,6 +220,7 @@ def _planner(kind: PlannerKind, residual_model: ResidualModel | None, bounds_ne_
     if not clutter:
         return nmpc
     if kind == "rrtstar_online":
-        return online_rrtstar(nmpc, bounds_ne_m, ClutterSettings(max_speed_mps=SPEED_MPS))
+        settings = ClutterSettings(max_speed_mps=SPEED_MPS)
+        return online_rrtstar(nmpc, bounds_ne_m, settings, rrt_iterations)
     regenerate = kind in ("proposed", "nominal")
     return ClutterNmpc(nmpc, ClutterSettings(regenerate=regenerate, max_speed_mps=SPEED_MPS))

@@ -39,7 +39,9 @@ class Table3Config:
     """Attributes:
     forest: the forest (paper: 60 x 60 x 10 m); n_pairs: start/goal pairs (paper: 10);
     pair_seed: seed of the pairs; training_flights: obstacle-free flights to learn the
-    residual from (0: no GP); rrt_iterations: RRT*'s budget (paper: 10000); planners: which to fly.
+    residual from (0: no GP); rrt_iterations: RRT*'s budget per plan, in the known forest
+    (rrtstar) and at each re-plan in the sensed map (rrtstar_online) (paper: 10000); planners:
+    which to fly.
     """
 
     forest: ForestSpec = field(default_factory=lambda: ForestSpec(seed=3, density_per_100m2=3.0))
@@ -105,6 +107,7 @@ def run_table3(config: Table3Config, progress: Callable[[str], None]) -> Table3R
                 residual_model=model,
                 rrt_path_ne_m=rrt,
                 bounds_ne_m=bounds,
+                rrt_iterations=config.rrt_iterations,
             )
             flights[kind].append(f)
             progress(
