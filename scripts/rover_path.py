@@ -109,7 +109,7 @@ def _pattern(text: str) -> list[tuple[float, float]]:
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
-    from experiments.rover.scenarios import NMPC_TUNING
+    from experiments.rover.tuning import NMPC_TUNING
 
     parser = OneLineParser(
         prog=PROG,
@@ -402,7 +402,7 @@ def repeat(args: argparse.Namespace) -> int:
     from experiments.rover.link_drive import NotARover, require_a_rover
     from experiments.rover.repeat import RepeatOutcome, Trial, repeat_path
     from experiments.rover.repeat_report import figure, history_row, summary, trial_line
-    from experiments.rover.scenarios import NMPC_TUNING, tuning_for
+    from experiments.rover.tuning import NMPC_TUNING, tuning_for
 
     path, experience, scheduler, gp, memory, schedule = _repeat_inputs(args)
     link = open_link(args)

@@ -107,7 +107,7 @@ def drive_path(
     horizon takes the scheduled speeds ahead, as experiments.rover.trial does). ``connect``
     False: the Link is connected already (a later trial on the same Link). ``feedforward``:
     the NMPC's turn-rate penalty is measured from the path's v * curvature ahead, as
-    experiments.rover.trial does for a tuning chosen with it (scenarios.RoverTuning).
+    experiments.rover.trial does for a tuning chosen with it (tuning.RoverTuning).
 
     Once the vehicle has reported OFFBOARD, a report of another mode ends the drive at once,
     with nothing more sent (the companion never fights a pilot or a failsafe): the mode is in

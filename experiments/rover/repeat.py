@@ -105,7 +105,7 @@ def repeat_path(
 ) -> RepeatOutcome:
     """Drive ``trials`` trials from ``schedule_mps`` (N,) [m/s] on the connected ``link``,
     its NMPC tuned by ``nmpc`` and ``feedforward`` (link_drive.drive_path; the rover's are
-    experiments.rover.scenarios.tuning_for's).
+    experiments.rover.tuning.tuning_for's).
 
     ``on_trial(trial, next_schedule)`` is called as each trial ends (e.g. to save the
     experience); ``on_drive()`` just before each drive (a trial's, or back to the start) arms

@@ -52,39 +52,11 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from experiments.rover.localisation import LocalisationErrorConfig
+from experiments.rover.tuning import NMPC_TUNING
 from planners.rover.path import TaughtPath
 from planners.rover.speed_scheduler import TABLE_I, SpeedSchedulerConfig
 from planners.rover.unicycle_nmpc import UnicycleNmpcConfig
 from vehicle_sim.effects import Slope, SurfacePatch, WheelSlip, gravel_patch, mud_patch
-
-
-@dataclass(frozen=True)
-class RoverTuning:
-    """How the NMPC drives one robot.
-
-    Attributes:
-        nmpc: weights, horizon and limits.
-        feedforward: the turn-rate penalty is measured from the path's v * curvature instead
-            of from zero; the weights were chosen with it (a heavy r_omega measured from zero
-            pulls the robot inside every arc: see above).
-    """
-
-    nmpc: UnicycleNmpcConfig
-    feedforward: bool = False
-
-
-# Per robot, as the three experiments drive them (the measurements that chose them are above).
-NMPC_TUNING = {
-    "husky_50kg": RoverTuning(UnicycleNmpcConfig(horizon=25, q_lat=40.0, q_head=1.0,
-                                                 r_omega=0.5, r_delta=1.0,
-                                                 omega_max_radps=1.5), feedforward=True),
-    "roc6_150kg": RoverTuning(UnicycleNmpcConfig(horizon=35, q_lat=20.0, q_head=1.0,
-                                                 r_omega=2.0, r_delta=4.0,
-                                                 omega_max_radps=1.2)),
-    "dmrv_600kg": RoverTuning(UnicycleNmpcConfig(horizon=40, q_lat=10.0, q_head=1.0,
-                                                 r_omega=10.0, r_delta=10.0,
-                                                 omega_max_radps=0.9), feedforward=True),
-}  # fmt: skip
 
 _TAN15 = math.tan(math.radians(15.0))
 
@@ -214,12 +186,6 @@ def experiment_3(seed: int = 0) -> RoverScenario:
         nmpc=NMPC_TUNING["dmrv_600kg"].nmpc,
         feedforward=NMPC_TUNING["dmrv_600kg"].feedforward, seed=seed,
     )  # fmt: skip
-
-
-def tuning_for(preset: str) -> RoverTuning:
-    """The NMPC tuning of the experiment that drives rover ``preset`` (above), or the planner's
-    defaults (no feedforward) for a rover none of them drives."""
-    return NMPC_TUNING.get(preset, RoverTuning(UnicycleNmpcConfig()))
 
 
 SCENARIOS = {"rover_exp1": experiment_1, "rover_exp2": experiment_2, "rover_exp3": experiment_3}
