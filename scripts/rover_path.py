@@ -255,7 +255,7 @@ def open_link(args: argparse.Namespace) -> Link:
 
 
 def teach(args: argparse.Namespace) -> int:
-    from experiments.rover.link_drive import NotARover
+    from experiments.rover.link_commands import NotARover
     from experiments.rover.teach import HandedOver, TeachError, record_teach, turns_not_driven
     from planners.rover.path_file import path_csv_text
 
@@ -298,7 +298,7 @@ def teach(args: argparse.Namespace) -> int:
 
 def _wrote(out: Path, path: TaughtPath) -> str:
     """What a teach says it wrote: vertices, spacing, length, loop or open."""
-    from experiments.rover.repeat import end_gap_m, is_loop
+    from experiments.rover.path_start import end_gap_m, is_loop
 
     gap = end_gap_m(path)
     shape = "a loop" if is_loop(path) else f"open: its end is {gap:.1f} m from its start"
@@ -351,7 +351,7 @@ def teach_from_log(args: argparse.Namespace) -> int:
 def _repeat_inputs(args: argparse.Namespace):  # noqa: ANN202 (a tuple of what repeat needs)
     from experiments.rover import learner
     from experiments.rover.experience_file import ExperienceFileError, load_experience
-    from experiments.rover.repeat import end_gap_m, is_loop
+    from experiments.rover.path_start import end_gap_m, is_loop
     from planners.rover.path_file import PathFileError, read_path_file
     from planners.rover.speed_scheduler import TABLE_I, initial_schedule
 
@@ -399,7 +399,7 @@ def _repeat_inputs(args: argparse.Namespace):  # noqa: ANN202 (a tuple of what r
 def repeat(args: argparse.Namespace) -> int:
     from experiments.rover.drive_back import DriveBack
     from experiments.rover.experience_file import save_experience
-    from experiments.rover.link_drive import NotARover, require_a_rover
+    from experiments.rover.link_commands import NotARover, require_a_rover
     from experiments.rover.repeat import RepeatOutcome, Trial, repeat_path
     from experiments.rover.repeat_report import figure, history_row, summary, trial_line
     from experiments.rover.tuning import NMPC_TUNING, tuning_for

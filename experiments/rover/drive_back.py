@@ -12,7 +12,7 @@ Two ways, both ending in Hold:
   so its curvature is within the steering's reach backwards as well.
 
 Poses are in the path frame (x north, y west, heading counter-clockwise;
-experiments.rover.link_drive).
+experiments.rover.link_commands).
 
 [Coulter92] R. C. Coulter, "Implementation of the Pure Pursuit Path Tracking Algorithm",
 Carnegie Mellon University, CMU-RI-TR-92-01, 1992.
@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from companion.link import Link, LinkError, VelocityCommand
-from experiments.rover.link_drive import start_driving, state_pose, stop_rover
+from experiments.rover.link_commands import start_driving, state_pose, stop_rover
 from planners.rover.path import TaughtPath
 
 ARRIVED_M = 0.05

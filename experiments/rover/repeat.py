@@ -5,18 +5,17 @@ or the speed scheduler's per-vertex schedule, [Ostafew16] eq. 31, from the trial
 the experience bins of a LocalGP: trial j drives on the experience of the trials before it
 (those of earlier runs too, loaded by the caller) and adds its own after it. A trial starts
 where the path starts: the rover must be within ``START_TOLERANCE_M`` and
-``START_TOLERANCE_RAD`` of the first vertex's pose. A loop ends there; after an open path the
-rover is driven back (experiments.rover.drive_back) when ``drive_back`` says how, and
-otherwise, or when the drive back ends outside those tolerances, the run stops with a line
-saying where the rover is. Whatever ends a trial early
-ends the run: a pilot or a failsafe taking the rover out of OFFBOARD (nothing more is sent; a
-failsafe PX4 announced is named with its words), a lost link, a
-non-finite pose, a failed solve (zero velocity and Hold), or not reaching the end in time.
+``START_TOLERANCE_RAD`` of the first vertex's pose (experiments.rover.path_start). A loop ends
+there; after an open path the rover is driven back (experiments.rover.drive_back) when
+``drive_back`` says how, and otherwise, or when the drive back ends outside those tolerances,
+the run stops with a line saying where the rover is. Whatever ends a trial early ends the run:
+a pilot or a failsafe taking the rover out of OFFBOARD (nothing more is sent; a failsafe PX4
+announced is named with its words), a lost link, a non-finite pose, a failed solve (zero
+velocity and Hold), or not reaching the end in time.
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -25,34 +24,14 @@ import numpy as np
 from companion.handover import failsafe_said
 from companion.link import Link
 from experiments.rover.drive_back import DriveBack
-from experiments.rover.link_drive import LinkDrive, drive_path, pose_of
+from experiments.rover.link_drive import LinkDrive, drive_path
+from experiments.rover.path_start import START_TOLERANCE_M, START_TOLERANCE_RAD, start_offset
 from gp.local_gp import LocalGP
-from planners.rover.path import TaughtPath, wrap_angle
+from planners.rover.path import TaughtPath
 from planners.rover.speed_scheduler import SpeedSchedulerConfig, next_schedule
 from planners.rover.unicycle_nmpc import UnicycleNmpcConfig
 
-START_TOLERANCE_M = 1.0
-START_TOLERANCE_RAD = 0.5
 _PLENTY_OF_FEATURES = 1e9  # a companion has no matched-feature count: never the limit
-
-
-def end_gap_m(path: TaughtPath) -> float:
-    """Distance from the path's last vertex to its first [m]."""
-    return float(np.hypot(*(path.xy_m[-1] - path.xy_m[0])))
-
-
-def is_loop(path: TaughtPath) -> bool:
-    """The path ends where it starts (within the start tolerances): a trial's end is the next
-    trial's start."""
-    turn = abs(float(wrap_angle(path.heading_rad[-1] - path.heading_rad[0])))
-    return end_gap_m(path) <= START_TOLERANCE_M and turn <= START_TOLERANCE_RAD
-
-
-def start_offset(link: Link, path: TaughtPath) -> tuple[float, float]:
-    """How far the rover is from the path's start: distance [m], heading error [rad]."""
-    x, y, th = pose_of(link)
-    x0, y0, th0 = path.pose(0)
-    return float(math.hypot(x - x0, y - y0)), float(wrap_angle(th0 - th))
 
 
 @dataclass(frozen=True, eq=False)
@@ -109,7 +88,7 @@ def repeat_path(
 
     ``on_trial(trial, next_schedule)`` is called as each trial ends (e.g. to save the
     experience); ``on_drive()`` just before each drive (a trial's, or back to the start) arms
-    the rover: from then on Ctrl-C stops the rover with Hold (link_drive.start_driving), and
+    the rover: from then on Ctrl-C stops the rover with Hold (link_commands.start_driving), and
     each drive ends in Hold or hands the rover over. With ``scheduler`` each trial's records
     set the next trial's speeds.
 

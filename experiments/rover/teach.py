@@ -22,7 +22,7 @@ import numpy as np
 
 from companion.link import Link, LinkError, VelocityCommand
 from companion.runner import Terminated
-from experiments.rover.link_drive import require_a_rover, start_driving, stop_rover
+from experiments.rover.link_commands import require_a_rover, start_driving, stop_rover
 from planners.rover.path import TaughtPath
 
 MIN_TEACH_M = 1.0

@@ -7,7 +7,8 @@ import pytest
 from companion.inprocess_rover_link import InProcessRoverLink
 from companion.pymavlink_link import PymavlinkLink
 from experiments.rover import learner
-from experiments.rover.link_drive import drive_path, pose_of
+from experiments.rover.link_commands import pose_of
+from experiments.rover.link_drive import drive_path
 from experiments.rover.tuning import tuning_for
 from planners.rover.path import TaughtPath
 from planners.rover.unicycle_nmpc import UnicycleNmpcConfig

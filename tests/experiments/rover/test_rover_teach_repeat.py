@@ -22,8 +22,10 @@ from experiments.rover.experience_file import (
     load_experience,
     save_experience,
 )
-from experiments.rover.link_drive import drive_path, pose_of
-from experiments.rover.repeat import is_loop, repeat_path, start_offset
+from experiments.rover.link_commands import pose_of
+from experiments.rover.link_drive import drive_path
+from experiments.rover.path_start import is_loop, start_offset
+from experiments.rover.repeat import repeat_path
 from experiments.rover.teach import HandedOver, TeachError, record_teach
 from planners.rover.path import TaughtPath
 from planners.rover.path_file import PathFileError, path_csv_text, read_path_file

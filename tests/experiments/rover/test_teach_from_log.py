@@ -8,7 +8,7 @@ import re
 import numpy as np
 import pytest
 
-from experiments.rover.repeat import is_loop
+from experiments.rover.path_start import is_loop
 from experiments.rover.teach import TeachError
 from experiments.rover.teach_from_log import teach_from_track
 from flightlog.ulog_track import ULogTrack, read_ulog_track
