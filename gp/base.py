@@ -10,8 +10,9 @@ from sklearn.base import BaseEstimator
 from threadpoolctl import threadpool_limits
 
 from gp.hyperopt import Hyperparameters
+from gp.not_fitted import check_fitted
 from gp.posterior import Posterior
-from gp.validation import check_fitted, check_inputs, check_targets
+from gp.validation import check_inputs, check_targets
 
 
 @dataclass(frozen=True, eq=False)

@@ -1,13 +1,9 @@
-"""Errors raised by the gp package; every message is one line saying what was wrong and the fix."""
+"""Errors raised by the gp package; every message is one line saying what was wrong and the fix.
+
+NotFittedError, scikit-learn's kind, is in gp.not_fitted (it imports scikit-learn).
+"""
 
 from __future__ import annotations
-
-from sklearn.exceptions import NotFittedError as _SklearnNotFittedError
-
-
-class NotFittedError(_SklearnNotFittedError):
-    """A model was used before ``fit`` (a scikit-learn NotFittedError: ValueError and
-    AttributeError)."""
 
 
 class GPInputError(ValueError):

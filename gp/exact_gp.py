@@ -13,7 +13,7 @@ from gp.base import IndependentOutputGP, OutputFit
 from gp.hyperopt import DataScales, Objective, ObjectiveValue, maximize, start_from
 from gp.kernels import SquaredExponentialARD, se_ard_gradients
 from gp.linalg import jittered_cholesky, solve_lower
-from gp.validation import check_fitted
+from gp.not_fitted import check_fitted
 
 _LOG_2PI = float(np.log(2.0 * np.pi))
 

@@ -16,17 +16,20 @@ import zipfile
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import casadi as ca
 import numpy as np
 
 from flightlog.atomic_output import write_bytes_atomic
-from gp.base import IndependentOutputGP
 from gp.batched_mean import BatchedMean
 from gp.casadi_export import posterior_function
 from gp.errors import ModelFileError
 from gp.features import FeatureDefinition
 from gp.posterior import Posterior
+
+if TYPE_CHECKING:  # a model file flies without the estimators (and scikit-learn) loaded
+    from gp.base import IndependentOutputGP
 
 FORMAT = "residual-gp"
 FORMAT_VERSION = 1

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from gp.errors import GPInputError, NotFittedError
+from gp.errors import GPInputError
 
 
 def check_inputs(X: object, name: str = "X", n_features: int | None = None) -> np.ndarray:
@@ -49,11 +49,3 @@ def check_targets(Y: object, n_samples: int, name: str = "Y") -> np.ndarray:
             f"{name} has {arr.shape[0]} rows but X has {n_samples}; pass one target row per sample"
         )
     return arr
-
-
-def check_fitted(estimator: object, attribute: str = "posterior_") -> None:
-    """Raise NotFittedError unless ``estimator`` has the fitted ``attribute``."""
-    if not hasattr(estimator, attribute):
-        raise NotFittedError(
-            f"this {type(estimator).__name__} is not fitted yet; call fit(X, Y) before using it"
-        )

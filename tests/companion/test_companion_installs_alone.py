@@ -1,7 +1,9 @@
 """The companion runs on a companion computer without the simulator (docs/design.md section 2).
 
 Importing every companion module that flies a real vehicle must not load ``vehicle_sim``,
-``numba`` or ``jsbsim`` (the ``[sim]`` extra), nor the experiments or the diagnosis above it.
+``numba`` or ``jsbsim`` (the ``[sim]`` extra), nor the experiments or the diagnosis above it,
+nor scikit-learn: a model file flies as its posterior (gp.model_io), and scikit-learn with the
+scipy.stats it imports costs every companion process about 2 s of CPU at start.
 """
 
 import subprocess
@@ -17,7 +19,7 @@ FLIGHT_MODULES = (
     "companion.flight_recorder",
     "scripts.companion_cli",
 )
-FORBIDDEN = ("vehicle_sim", "numba", "jsbsim", "experiments", "diagnosis")
+FORBIDDEN = ("vehicle_sim", "numba", "jsbsim", "experiments", "diagnosis", "sklearn")
 
 
 def test_companion_imports_no_simulator_module() -> None:

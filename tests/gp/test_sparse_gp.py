@@ -4,10 +4,11 @@ import numpy as np
 import pytest
 from sklearn.base import clone
 
-from gp.errors import GPInputError, NotFittedError
+from gp.errors import GPInputError
 from gp.exact_gp import ExactGP
 from gp.inducing import InducingConfig
 from gp.kernels import SquaredExponentialARD
+from gp.not_fitted import NotFittedError
 from gp.sparse_gp import SparseGP
 
 NOISE_STD = 0.05
