@@ -55,7 +55,9 @@ def parse_args(argv: list[str] | None) -> StudyConfig:
     parser.add_argument("--out", type=output_path, default=Path("out/study"), help="output folder")
     parser.add_argument("--trajectories", type=int, help="random trajectories (default 20)")
     parser.add_argument("--repeats", type=int, help="flights per trajectory (default 3)")
-    parser.add_argument("--trials", type=int, help="trials on the repeated path (default 6)")
+    parser.add_argument(
+        "--trials", type=int, help="trials on the repeated path (default 6; 0: none)"
+    )
     parser.add_argument(
         "--m", type=int, help="inducing points per output (default 30, or the regime's)"
     )

@@ -41,11 +41,12 @@ def render_report(
     config: StudyConfig,
     result: Paper000Result,
     figs: dict[str, PlannerFigures],
-    trials: TrialsResult,
+    trials: TrialsResult | None,
     images: dict[str, list[str]],
     elapsed_s: float,
 ) -> str:
-    """report.md text; ``images`` maps a section ("paths", "residuals", "trials") to PNG names."""
+    """report.md text; ``images`` maps a section ("paths", "residuals", "trials") to PNG names;
+    ``trials`` None: the trial-to-trial view was not flown (n_trials 0)."""
     nmpc = config.nmpc
     model = nmpc.nominal_model + "".join(f", {k}={v:g}" for k, v in nmpc.nominal_params)
     lines = [
@@ -104,10 +105,15 @@ def render_report(
     lines += ["", *[f"![{p}]({p})" for p in images["paths"]], ""]
     lines += ["Residual vs velocity (held-out rows), GP mean and inducing points:", ""]
     lines += [f"![{p}]({p})" for p in images["residuals"]]
-    lines += [
-        "",
-        "## Paper 004: trial after trial on one path",
-        "",
+    lines += ["", "## Paper 004: trial after trial on one path", "", *_trials_lines(trials, images)]
+    return "\n".join(lines)
+
+
+def _trials_lines(trials: TrialsResult | None, images: dict[str, list[str]]) -> list[str]:
+    """The paper 004 section's body: the trials table, why each model flew, the plot."""
+    if trials is None:
+        return ["Not flown (`--trials 0`): this report has no trial-to-trial view.", ""]
+    lines = [
         f"Trial 1 nominal; after each trial the `{trials.selection}` model is refitted on all "
         "trials so far and flies the next trial (a new seed each time) if it passes the "
         "checks (before each trial: why its model flies).",
@@ -118,8 +124,7 @@ def render_report(
     for k, (t, model) in enumerate(zip(trials.trials, trials.models, strict=True), start=1):
         lines.append(f"| {k} | {model} | {t.tracking_rmse_m:.4f} | {t.residual_rmse_mps:.4f} |")
     lines += ["", *[f"- before trial {k}: {c}" for k, c in enumerate(trials.checks, start=2)]]
-    lines += ["", *[f"![{p}]({p})" for p in images["trials"]], ""]
-    return "\n".join(lines)
+    return [*lines, "", *[f"![{p}]({p})" for p in images["trials"]], ""]
 
 
 def _same_planner_lines(result: Paper000Result) -> list[str]:

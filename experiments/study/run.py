@@ -33,7 +33,7 @@ class StudyResult:
     paper000: Paper000Result
     figures: dict[str, PlannerFigures]
     headline: dict[str, float]
-    trials: TrialsResult
+    trials: TrialsResult | None  # None: not flown (n_trials 0)
     report_path: Path
 
 
@@ -47,10 +47,14 @@ def run_study(config: StudyConfig, progress: Callable[[str], None]) -> StudyResu
     start = time.perf_counter()
     out = check_writable_dir(config.out_dir)
     with job_executor(config.workers, config.scheduler) as pool:
-        trials_future = pool.submit(run_trials, config, worker_progress)
+        trials_future = (
+            pool.submit(run_trials, config, worker_progress) if config.n_trials else None
+        )
         result = run_paper000(config, pool, progress)
-        progress("waiting for the trial-to-trial flights")
-        trials = trials_future.result()
+        trials = None
+        if trials_future is not None:
+            progress("waiting for the trial-to-trial flights")
+            trials = trials_future.result()
     figs = all_planner_figures(result)
     with atomic_output_dir(out) as tmp:  # the whole report set appears at once, or not at all
         for sel, fit in result.fits.items():
@@ -58,7 +62,7 @@ def run_study(config: StudyConfig, progress: Callable[[str], None]) -> StudyResu
         images = {
             "paths": [plot_paths(result, tmp / "paths.png").name],
             "residuals": [p.name for p in plot_residual_fits(result, tmp)],
-            "trials": [plot_trials(trials, tmp / "trials.png").name],
+            "trials": [plot_trials(trials, tmp / "trials.png").name] if trials else [],
         }
         text = render_report(config, result, figs, trials, images, time.perf_counter() - start)
         (tmp / "report.md").write_text(text)

@@ -168,7 +168,7 @@ def test_quick_refuses_sizes_it_would_override(capsys):
     [
         (["--m", "0"], "m must be >= 1"),
         (["--seed", "-1"], "seed must be >= 0"),
-        (["--trials", "0"], "trials must be >= 2"),
+        (["--trials", "1"], "trials must be >= 2"),
         (["--repeats", "-1"], "repeats must be >= 1"),
         (["--trajectories", "0"], "trajectories must be >= 1"),
     ],

@@ -21,3 +21,7 @@ def test_quick_run_reports_a_realtime_factor(tmp_path, monkeypatch):
     # the study behind the gains is there to read, where its progress said it went
     (wrote,) = [m.split("wrote ", 1)[1] for m in messages if m.startswith("wrote ")]
     assert Path(wrote).is_file() and Path(wrote).parent == bench_jsbsim.STUDY_OUT
+    # no figure reads the trial-to-trial view: not flown, and the report says so
+    assert "Not flown (`--trials 0`)" in Path(wrote).read_text()
+    assert not any("trial-to-trial" in m for m in messages)
+    assert not (Path(wrote).parent / "trials.png").exists()
