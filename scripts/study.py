@@ -22,11 +22,13 @@ sparse GP on what is left; ``--learned-model kinematic_4dof --features velocity`
 
 Flies every flight in process (lockstep, deterministic, seeded) on ``--workers`` local processes,
 or on the workers of a Dask cluster with ``--scheduler`` (same figures either way), and writes
-OUT/report.md with PNG plots and the fitted model files. Progress goes to stderr; the
-headline figures are printed on stdout, then, when the learned model's structure flew alone,
-``structure_model = NAME``: the model its ``*identified_lag*`` figures flew (first_order_lag,
-px4_velocity_pi). Exit code 0 on success, 2 with a one-line reason on bad input, 130 on
-Ctrl-C and 143 on SIGTERM (its worker processes stopped, nothing written).
+OUT/report.md with PNG plots and the fitted model files (``--trials 0``: without
+[Ostafew16]'s trial-to-trial view, which flies in a process of its own beside the rest).
+Progress goes to stderr; the headline figures are printed on stdout, then, when the learned
+model's structure flew alone, ``structure_model = NAME``: the model its ``*identified_lag*``
+figures flew (first_order_lag, px4_velocity_pi). Exit code 0 on success, 2 with a one-line
+reason on bad input, 130 on Ctrl-C and 143 on SIGTERM (its worker processes stopped, nothing
+written).
 """
 
 from __future__ import annotations
@@ -56,7 +58,10 @@ def parse_args(argv: list[str] | None) -> StudyConfig:
     parser.add_argument("--trajectories", type=int, help="random trajectories (default 20)")
     parser.add_argument("--repeats", type=int, help="flights per trajectory (default 3)")
     parser.add_argument(
-        "--trials", type=int, help="trials on the repeated path (default 6; 0: none)"
+        "--trials",
+        type=int,
+        help="trials on the repeated path (default 6; 0: no trial-to-trial view, also with "
+        "--quick)",
     )
     parser.add_argument(
         "--m", type=int, help="inducing points per output (default 30, or the regime's)"
@@ -126,12 +131,16 @@ def parse_args(argv: list[str] | None) -> StudyConfig:
         sizes = {field: getattr(args, opt) for opt, field in _SIZE_OPTIONS.items()}
         given = {field: value for field, value in sizes.items() if value is not None}
         config = replace(config, **given)  # after the regime: an explicit --m wins over its m
-        if args.quick and given:
-            named = ", ".join(f"--{o}" for o, f in _SIZE_OPTIONS.items() if f in given)
+        no_trials = given.get("n_trials") == 0  # turns a view off: not a size, --quick takes it
+        sized = [f for f in given if not (no_trials and f == "n_trials")]
+        if args.quick and sized:
+            named = ", ".join(f"--{o}" for o, f in _SIZE_OPTIONS.items() if f in sized)
             parser.error(f"--quick sets the study's sizes itself; drop --quick or {named}")
     except ValueError as exc:
         parser.error(str(exc))
-    return config.quick() if args.quick else config
+    if args.quick:
+        return replace(config.quick(), n_trials=0) if no_trials else config.quick()
+    return config
 
 
 # the study's sizes on the command line: option -> StudyConfig field

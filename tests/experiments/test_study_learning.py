@@ -7,6 +7,7 @@ import signal
 import subprocess
 import sys
 import time
+from dataclasses import replace
 
 import numpy as np
 import psutil
@@ -161,6 +162,22 @@ def test_quick_refuses_sizes_it_would_override(capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--quick sets the study's sizes itself" in err[0], err
     assert "--trials, --m" in err[0]
+
+
+def test_quick_takes_trials_0_which_turns_the_trial_view_off():
+    """``--trials 0`` is no size: ``--quick`` keeps its own sizes and drops the view only."""
+    from experiments.study.config import StudyConfig
+    from scripts.study import parse_args
+
+    config = parse_args(["--quick", "--trials", "0"])
+    assert config.n_trials == 0
+    assert config == replace(StudyConfig().quick(), n_trials=0)
+
+
+def test_quick_with_trials_0_still_refuses_a_size(capsys):
+    assert study_main(["--quick", "--trials", "0", "--m", "50"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].endswith("drop --quick or --m; see --help"), err
 
 
 @pytest.mark.parametrize(
