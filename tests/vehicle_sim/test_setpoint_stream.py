@@ -164,6 +164,28 @@ def test_a_touchdown_mid_stream_is_flown_on_leg_by_leg_as_the_commander_sees_it(
     assert sim.state.landed_state.name == "ON_GROUND"
 
 
+def test_an_anchored_stream_that_touches_down_flies_on_leg_by_leg_from_there(compiled_calls):
+    """Anchors taken from a descending flight of the same vehicle (disturbed): the stream
+    flies compiled until a step touches down, leg by leg from that step on."""
+    sim = hovering(settle_s=1.0, alt_m=1.0)
+    rng = np.random.default_rng(11)
+    setpoints, durations = legs(rng, 150, down_mps=1.5, every=4)
+    durations = [max(d, 0.004) for d in durations]
+    measured = copy.deepcopy(sim)
+    anchors = []
+    for sp, d in zip(setpoints, durations, strict=True):
+        if sp is not None:
+            measured.set_velocity_setpoint(sp)
+        measured.advance(d)
+        s = measured.state
+        vel = s.vel_ned_mps + rng.normal(0.0, 0.05, 3)
+        anchors.append(AnchorState(s.pos_ned_m, vel, s.q_wxyz, s.rates_frd_radps))
+    assert measured.state.landed_state.name == "ON_GROUND"
+    check_same(sim, setpoints, durations, anchors)
+    assert compiled_calls and compiled_calls[0] < sum(round(d / 0.002) for d in durations)
+    assert sim.state.landed_state.name == "ON_GROUND"
+
+
 def test_setpoints_older_than_the_offboard_loss_time_fly_leg_by_leg_into_the_failsafe(
     compiled_calls,
 ):
