@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -23,6 +25,24 @@ CLOSED_LOOP_KEYS = {
     "segments_reanchored", "segments_reanchored_baseline", "segments_reanchored_extended",
     "scored_rows",
 }  # fmt: skip
+
+
+HEAVY = ("diagnosis", "vehicle_sim", "scipy", "matplotlib", "numba", "casadi")
+
+
+@pytest.mark.parametrize("argv", [["--help"], ["f.csv", "--out", "o"]])
+def test_help_and_a_bad_command_line_answer_before_the_diagnosis_loads(argv):
+    """The diagnosis' libraries (about 3 s of CPU) load only once the command line is read."""
+    code = (
+        "import sys\n"
+        "from scripts.diagnose import main\n"
+        f"try:\n    main({argv!r})\nexcept SystemExit:\n    pass\n"
+        f"print(sorted({{n.split('.')[0] for n in sys.modules}} & set({HEAVY!r})))\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120
+    )
+    assert out.stdout.strip().splitlines()[-1] == "[]", out.stdout
 
 
 @pytest.mark.slow
