@@ -56,6 +56,28 @@ def leg_by_leg(sim: Simulator, setpoints, durations, anchors=None) -> np.ndarray
     return np.array(out).reshape(-1, 4)
 
 
+def measured_anchors(
+    sim: Simulator, setpoints, durations, rng: np.random.Generator, unanchored: float = 0.0
+) -> tuple[list[AnchorState | None], Simulator]:
+    """One anchor per leg from a copy of ``sim`` flying the legs (its velocity disturbed by
+    0.05 m/s), a fraction ``unanchored`` of the legs left without one at random; and the
+    copy after the legs."""
+    measured = copy.deepcopy(sim)
+    anchors = []
+    for sp, d in zip(setpoints, durations, strict=True):
+        if sp is not None:
+            measured.set_velocity_setpoint(sp)
+        measured.advance(d)
+        s = measured.state
+        anchors.append(
+            None
+            if rng.uniform() < unanchored
+            else AnchorState(s.pos_ned_m, s.vel_ned_mps + rng.normal(0.0, 0.05, 3), s.q_wxyz,
+                             s.rates_frd_radps)
+        )  # fmt: skip
+    return anchors, measured
+
+
 def state_of(sim: Simulator) -> object:
     """Everything a later step of ``sim`` depends on, comparable with == (arrays by their
     bytes: bit for bit, NaN included)."""
@@ -133,19 +155,7 @@ def test_anchored_legs_are_one_compiled_call_with_the_same_numbers(delay_s, comp
     rng = np.random.default_rng(8)
     setpoints, durations = legs(rng, 60)
     durations = [max(d, 0.004) for d in durations]  # anchored legs of at least a step
-    measured = copy.deepcopy(sim)
-    anchors = []
-    for sp, d in zip(setpoints, durations, strict=True):
-        if sp is not None:
-            measured.set_velocity_setpoint(sp)
-        measured.advance(d)
-        s = measured.state
-        anchors.append(
-            None
-            if rng.uniform() < 0.2
-            else AnchorState(s.pos_ned_m, s.vel_ned_mps + rng.normal(0.0, 0.05, 3), s.q_wxyz,
-                             s.rates_frd_radps)
-        )  # fmt: skip
+    anchors, _ = measured_anchors(sim, setpoints, durations, rng, unanchored=0.2)
     check_same(sim, setpoints, durations, anchors)
     assert len(compiled_calls) == 1
     last = next(a for a in reversed(anchors) if a is not None)
@@ -171,15 +181,7 @@ def test_an_anchored_stream_that_touches_down_flies_on_leg_by_leg_from_there(com
     rng = np.random.default_rng(11)
     setpoints, durations = legs(rng, 150, down_mps=1.5, every=4)
     durations = [max(d, 0.004) for d in durations]
-    measured = copy.deepcopy(sim)
-    anchors = []
-    for sp, d in zip(setpoints, durations, strict=True):
-        if sp is not None:
-            measured.set_velocity_setpoint(sp)
-        measured.advance(d)
-        s = measured.state
-        vel = s.vel_ned_mps + rng.normal(0.0, 0.05, 3)
-        anchors.append(AnchorState(s.pos_ned_m, vel, s.q_wxyz, s.rates_frd_radps))
+    anchors, measured = measured_anchors(sim, setpoints, durations, rng)
     assert measured.state.landed_state.name == "ON_GROUND"
     check_same(sim, setpoints, durations, anchors)
     assert compiled_calls and compiled_calls[0] < sum(round(d / 0.002) for d in durations)
