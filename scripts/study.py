@@ -43,7 +43,6 @@ from pathlib import Path
 from companion.nmpc_planner import MULTIROTOR_MODELS
 from experiments.study.config import StudyConfig
 from experiments.study.regimes import REGIMES, with_regime
-from experiments.study.run import run_study
 from flightlog.atomic_output import OutputError, check_writable_dir
 from gp.features import FEATURE_SETS
 from scripts.one_line_parser import OneLineParser, output_path
@@ -185,6 +184,10 @@ def main(argv: list[str] | None = None) -> int:
     previous_term = signal.signal(signal.SIGTERM, _terminate)
     try:
         _check_inputs(config)
+        # the flights' and the fits' libraries (scikit-learn, Matplotlib, Dask: about 3 s of
+        # CPU) load once the command line is read: --help and a bad option answer sooner
+        from experiments.study.run import run_study
+
         result = run_study(config, progress)
     except (SimConfigError, ValueError) as exc:
         print(f"study: error: {exc}", file=sys.stderr)

@@ -180,6 +180,22 @@ def test_quick_with_trials_0_still_refuses_a_size(capsys):
     assert len(err) == 1 and err[0].endswith("drop --quick or --m; see --help"), err
 
 
+def test_help_answers_before_the_flights_and_fits_load():
+    """scikit-learn, Matplotlib and Dask (about 3 s of CPU) load once the command line is read."""
+    heavy = ("sklearn", "matplotlib", "dask", "distributed", "experiments.study.run")
+    code = (
+        "import sys\n"
+        "from scripts.study import main\n"
+        "main(['--help'])\n"
+        "loaded = {*sys.modules, *(name.split('.')[0] for name in sys.modules)}\n"
+        f"print(sorted(set({heavy!r}) & loaded))\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120
+    )
+    assert out.stdout.strip().splitlines()[-1] == "[]", out.stdout
+
+
 @pytest.mark.parametrize(
     ("option", "message"),
     [
