@@ -44,6 +44,17 @@ def test_the_threads_logger_is_restored():
     assert jsbsim.get_logger() is before
 
 
+def test_a_block_of_many_steps_keeps_the_messages_and_restores_the_logger():
+    before = jsbsim.get_logger()
+    plant = JsbsimF450Plant(PlantConfig(height_m=2.0))
+    with plant.messages_kept():
+        routed = jsbsim.get_logger()
+        assert routed is not before
+        fly(plant, np.full(4, 0.5), 0.1)
+        assert jsbsim.get_logger() is routed  # each step left it as it found it
+    assert jsbsim.get_logger() is before
+
+
 def _tree(root: Path) -> dict[str, tuple[int, int]]:
     """Files under ``root`` (Python's own bytecode caches aside) with size and mtime."""
     return {

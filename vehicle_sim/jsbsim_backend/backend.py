@@ -67,13 +67,14 @@ class JsbsimBackend:
         contact changed. ``noise`` is unused (no gusts here). Returns the steps done."""
         contact0 = self.aux[ph.AUX_CONTACT]
         acc_ned_mps2 = self.aux[ph.AUX_ACC : ph.AUX_ACC + 3]
-        for k in range(n_steps):
-            control_step(self.x, acc_ned_mps2, sp, cs, cp, mix, dt_s, self._u)
-            self.plant.set_motor_commands(np.sqrt(self._u))
-            self.plant.step(dt_s)
-            self._write_state(self.plant.state())
-            if self.aux[ph.AUX_CONTACT] != contact0:
-                return k + 1
+        with self.plant.messages_kept():
+            for k in range(n_steps):
+                control_step(self.x, acc_ned_mps2, sp, cs, cp, mix, dt_s, self._u)
+                self.plant.set_motor_commands(np.sqrt(self._u))
+                self.plant.step(dt_s)
+                self._write_state(self.plant.state())
+                if self.aux[ph.AUX_CONTACT] != contact0:
+                    return k + 1
         return n_steps
 
     def _write_state(self, s: PlantState) -> None:

@@ -11,6 +11,7 @@ resting on the ground gives pos_d ~ +0.002 m).
 
 from __future__ import annotations
 
+import contextlib
 import math
 from dataclasses import dataclass
 
@@ -136,6 +137,11 @@ class JsbsimF450Plant:
         area_m2 = self._fdm["metrics/Sw-sqft"] * M_PER_FT**2
         return 0.5 * rho_kgpm3 * area_m2 * self._fdm["aero/coefficient/CD"]
 
+    def messages_kept(self) -> contextlib.AbstractContextManager[None]:
+        """A block in which JSBSim's messages in this thread are kept off the terminal (unless
+        verbose): around many steps, it routes them once instead of at every step."""
+        return logger_installed(self._logger)
+
     @property
     def messages(self) -> tuple[str, ...]:
         """JSBSim's recent console messages that were kept off the terminal (empty if verbose)."""
@@ -165,7 +171,7 @@ class JsbsimF450Plant:
         if substep_s != self._substep_s:
             self._fdm.set_dt(substep_s)
             self._substep_s = substep_s
-        with logger_installed(self._logger):
+        with self.messages_kept():
             for _ in range(n_sub - 1):
                 self._run()
             vel_before = self._vel_ecef_mps()

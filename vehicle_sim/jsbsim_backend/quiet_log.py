@@ -44,8 +44,10 @@ class CollectingLogger(jsbsim.FGLogger):
 
 @contextlib.contextmanager
 def logger_installed(logger: jsbsim.FGLogger | None) -> Iterator[None]:
-    """Route JSBSim's messages in this thread to ``logger`` inside the block (None: unchanged)."""
-    if logger is None:
+    """Route JSBSim's messages in this thread to ``logger`` inside the block (None: unchanged).
+    Inside a block that routes them there already it changes nothing (and costs nothing: setting
+    a logger takes microseconds, a JSBSim step tens of them)."""
+    if logger is None or jsbsim.get_logger() is logger:
         yield
         return
     previous = jsbsim.get_logger()
