@@ -184,7 +184,8 @@ def _closed_loop_markdown(doc: dict[str, Any], plot: Path) -> str:
             f"and ground holds below {NEAR_GROUND_ALT_M} m apart), flies the logged setpoints "
             "under its own flight control; its velocity is compared with the measured one (the "
             "real vehicle) on the held-out rows. A simulated vehicle that touches down where "
-            "the real one flew is re-anchored, and its segment is left out of the figures.",
+            "the real one flew is re-anchored, and its segment is left out of the figures "
+            "(dotted in the plot).",
             "",
             f"- Velocity RMSE over whole flight segments: {figures} (gain {gain}; "
             f"{cl['scored_rows']} rows)",

@@ -89,27 +89,29 @@ def plot_replay(d: Diagnosis, path: Path) -> Path:
 
 
 def plot_closed_loop(d: Diagnosis, path: Path) -> Path:
-    """Measured vs closed-loop velocity (config and extended config) on the held-out rows."""
+    """Measured vs closed-loop velocity (config and extended config) on the held-out rows;
+    segments a config was re-anchored in, which no figure counts, dotted and labelled so."""
     cl = d.closed_loop
     dt_s = np.diff(cl.t_s)
     row_dt_s = float(np.median(dt_s)) if len(dt_s) else 0.0
     gaps = np.flatnonzero((dt_s > 1.5 * row_dt_s) | (np.diff(cl.run) != 0)) + 1
+    flown = [("config", cl.baseline_vel_ned_mps, "C3")]
+    if d.added_effects:
+        flown.append(("extended", cl.extended_vel_ned_mps, "C0"))
     fig, axes = plt.subplots(3, 1, figsize=(10, 7), sharex=True)
     for k, (ax, name) in enumerate(zip(axes, ("north", "east", "down"), strict=True)):
         ax.plot(*_broken(cl.t_s, cl.meas_vel_ned_mps[:, k], gaps), "k", lw=1.5, label="measured")
-        ax.plot(
-            *_broken(cl.t_s, cl.baseline_vel_ned_mps[:, k], gaps),
-            "C3",
-            lw=1.0,
-            label="closed loop, config",
-        )
-        if d.added_effects:
-            ax.plot(
-                *_broken(cl.t_s, cl.extended_vel_ned_mps[:, k], gaps),
-                "C0",
-                lw=1.0,
-                label="closed loop, extended",
-            )
+        for config, vel, color in flown:
+            scored = np.where(cl.whole, vel[:, k], np.nan)
+            ax.plot(*_broken(cl.t_s, scored, gaps), color, lw=1.0, label=f"closed loop, {config}")
+            if not cl.whole.all():
+                ax.plot(
+                    *_broken(cl.t_s, np.where(cl.whole, np.nan, vel[:, k]), gaps),
+                    color,
+                    lw=1.0,
+                    ls=":",
+                    label=f"closed loop, {config}, re-anchored (not scored)",
+                )
         ax.set_ylabel(f"{name} vel [m/s]")
     axes[0].legend(loc="upper right", fontsize=8)
     axes[0].set_title("Closed-loop tracking of the logged setpoints, held-out rows")

@@ -23,7 +23,7 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping, Sequence
 
 from flightlog.schema import FlightLog
-from flightlog.velocity_loop_gains import is_number, velocity_loop_gains
+from flightlog.velocity_loop_gains import VELOCITY_LOOP_PARAMS, is_number, velocity_loop_gains
 
 MASS_REL_TOL = 1e-3  # masses closer than this (relative) are the same configured mass
 GAIN_REL_TOL = 1e-6  # gains closer than this (relative) are the same (float32 keeps ~6e-8)
@@ -95,10 +95,28 @@ def _same(a: object, b: object) -> bool:
     return a == b
 
 
+def _text(value: object, gains_shown: Sequence[str]) -> str:
+    """An identity value in words: gains as ``[MPC_XY_VEL_P_ACC 1.6, ...]``, only those named
+    in ``gains_shown``; numbers to 4 significant digits (a float32 parameter's
+    1.600000023841858 is 1.6)."""
+    if isinstance(value, dict):
+        shown = (f"{VELOCITY_LOOP_PARAMS.get(k, k)} {value[k]:.4g}" for k in gains_shown)
+        return f"[{', '.join(shown)}]"
+    return f"{value:.4g}" if isinstance(value, float) else str(value)
+
+
+def _differing_gains(values: Sequence[object]) -> list[str]:
+    """The gain names on which the gains among ``values`` differ (beyond GAIN_REL_TOL)."""
+    gains = [v for v in values if isinstance(v, dict)]
+    names = list(gains[0]) if gains else []
+    return [k for k in names if not all(_close(g[k], gains[0][k], GAIN_REL_TOL) for g in gains)]
+
+
 def mixed_vehicle_fields(logs: Sequence[FlightLog]) -> list[str]:
     """One clause per identity field on which the logs that record it disagree, naming each
-    value with its logs, e.g. ``airframe (SYS_AUTOSTART) 4001 in a.ulg, 4003 in b.ulg``;
-    [] when every field recorded by two or more logs agrees."""
+    value with its logs, e.g. ``airframe (SYS_AUTOSTART) 4001 in a.ulg, 4003 in b.ulg``
+    (velocity-loop gains by their PX4 names, those that differ); [] when every field
+    recorded by two or more logs agrees."""
     clauses = []
     for name, read in IDENTITY_FIELDS:
         groups: list[tuple[object, list[str]]] = []
@@ -112,6 +130,9 @@ def mixed_vehicle_fields(logs: Sequence[FlightLog]) -> list[str]:
             else:
                 group[1].append(log.where)
         if len(groups) > 1:
-            values = ", ".join(f"{value} in {' and '.join(where)}" for value, where in groups)
+            shown = _differing_gains([value for value, _ in groups])
+            values = ", ".join(
+                f"{_text(value, shown)} in {' and '.join(where)}" for value, where in groups
+            )
             clauses.append(f"{name} {values}")
     return clauses

@@ -34,7 +34,11 @@ class FlightlogArgs:
 
 
 def parse_args(argv: list[str] | None) -> FlightlogArgs:
-    parser = OneLineParser(prog="flightlog", description="Inspect and convert flight logs.")
+    parser = OneLineParser(
+        prog="flightlog",
+        description="Inspect and convert flight logs.",
+        epilog="Exit codes: 0 done, 2 bad input.",
+    )
     sub = parser.add_subparsers(dest="command", required=True)
     info = sub.add_parser("info", help="what a log holds and what each command can do with it")
     info.add_argument("log", type=Path)

@@ -52,7 +52,12 @@ from vehicle_sim.effects.base import SimConfigError
 
 def parse_args(argv: list[str] | None) -> StudyConfig:
     """Command line -> StudyConfig (argparse exits with code 2 on bad options)."""
-    parser = OneLineParser(prog="study", description=__doc__.splitlines()[0])
+    parser = OneLineParser(
+        prog="study",
+        description=__doc__.splitlines()[0],
+        epilog="Exit codes: 0 done, 2 bad input, 130 stopped by Ctrl-C and 143 by SIGTERM "
+        "(nothing written).",
+    )
     parser.add_argument("--out", type=output_path, default=Path("out/study"), help="output folder")
     parser.add_argument("--trajectories", type=int, help="random trajectories (default 20)")
     parser.add_argument("--repeats", type=int, help="flights per trajectory (default 3)")

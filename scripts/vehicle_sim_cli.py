@@ -138,7 +138,9 @@ def parse_args(argv: Sequence[str] | None) -> VehicleSimCliConfig:
         prog=PROG,
         description=__doc__.splitlines()[0],
         epilog="Also: vehicle-sim config-from-log LOG --out my_vehicle.toml (a config with a "
-        "PX4 log's tuning and hover thrust; --help there).",
+        "PX4 log's tuning and hover thrust; --help there). Exit codes: 0 stopped (Ctrl-C, "
+        "SIGTERM or --duration-s), 1 the simulation loop died or the onboard log could not be "
+        "written, 2 bad input (options, config, world, signing key, a port taken, --log).",
     )
     parser.add_argument(
         "--vehicle",

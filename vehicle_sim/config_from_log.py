@@ -5,11 +5,13 @@ The log tells: the flight-control parameters ([PX4-params] MPC_*, MC_*) and the 
 (MPC_THR_HOVER, or the median produced thrust while hovering). It cannot tell inertia, rotor
 geometry, rotor speed or thrust coefficient: those come from the preset, and the mass follows
 from hover thrust x the preset's maximum thrust / g, so the simulated vehicle hovers at the
-log's hover thrust. A multirotor ULog whose flight no command can read (flown in STAB, no
-position estimate) still gives its parameters; the hover thrust is then MPC_THR_HOVER, and the
-config says so. Velocity-loop gains a log records under their names before v1.11 are carried
-over in today's units (flightlog.velocity_loop_gains: x g / MPC_THR_HOVER, else / the measured
-hover thrust).
+log's hover thrust. The rate loop's gains stay the preset's too: they act in normalised
+torque, so they suit only the torque and inertia they were tuned on (a real vehicle's on iris'
+airframe swung about its command while yawing). A multirotor ULog whose flight no command can
+read (flown in STAB, no position estimate) still gives its parameters; the hover thrust is then
+MPC_THR_HOVER, and the config says so. Velocity-loop gains a log records under their names
+before v1.11 are carried over in today's units (flightlog.velocity_loop_gains: x g /
+MPC_THR_HOVER, else / the measured hover thrust).
 """
 
 from __future__ import annotations
@@ -38,6 +40,15 @@ from flightlog.velocity_loop_gains import (
 )
 from vehicle_sim.config import GRAVITY_MPS2, config_from_mapping, load_sim_config
 from vehicle_sim.params import PX4_PARAMS
+
+# [PX4-params] mc_rate_control: gains and integrator limits in normalised torque, which mean
+# what they should only on the airframe they were tuned on.
+RATE_LOOP_PARAMS = (
+    *(f"MC_{axis}RATE_{term}" for axis in ("ROLL", "PITCH", "YAW") for term in ("P", "I", "D")),
+    "MC_RR_INT_LIM",
+    "MC_PR_INT_LIM",
+    "MC_YR_INT_LIM",
+)
 
 
 @dataclass(frozen=True)
@@ -122,10 +133,10 @@ def _build(
     gains_hover, gains_hover_how = hover_thrust_for_gains(params, hover)
     legacy = acceleration_gains(params, gains_hover)
     params = {**params, **legacy}
-    tuned = {n: float(f"{float(params[n]):.7g}") for n in sorted(PX4_PARAMS) if n in params}
-    tuned.pop("MPC_THR_HOVER", None)
+    kept = [n for n in sorted(PX4_PARAMS) if n not in RATE_LOOP_PARAMS and n != "MPC_THR_HOVER"]
+    tuned = {n: float(f"{float(params[n]):.7g}") for n in kept if n in params}
     clamped = _clamp_to_px4_ranges(tuned)
-    defaults = [n for n in sorted(PX4_PARAMS) if n not in params and n != "MPC_THR_HOVER"]
+    defaults = [n for n in kept if n not in params]
     from_log = [
         *notes,
         f"mass_kg = {mass_kg:.4f}: hover thrust {hover:.3f} ({hover_how}) x the preset's "
@@ -144,6 +155,12 @@ def _build(
         f"inertia_kgm2, rotor geometry, rotor speed, thrust and torque coefficients, motor "
         f"time constant{'' if battery else ', battery voltages'}: from preset {preset!r}",
     ]
+    rate_gains = [n for n in RATE_LOOP_PARAMS if n in params]
+    if rate_gains:
+        assumed.append(
+            f"rate-loop gains {', '.join(rate_gains)}: from preset {preset!r}, not the log's "
+            "(normalised torque: they fit only the airframe they were tuned on)"
+        )
     if vehicle is not None and vehicle != "quadrotor":
         assumed.append(
             f"rotors: the log's vehicle ({vehicle}) flies as the {len(v.rotor_spin)} rotors of "

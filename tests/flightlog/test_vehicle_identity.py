@@ -118,5 +118,20 @@ def test_gains_logged_under_their_pre_v1_11_names_are_compared_in_todays_units()
     assert mixed_vehicle_fields([rows, renamed]) == []
     retuned = with_metadata(rows, "retuned.ulg", px4_params={**params, "MPC_XY_VEL_P": 0.2})
     clauses = mixed_vehicle_fields([rows, renamed, retuned])
-    assert len(clauses) == 1 and clauses[0].startswith("velocity_loop_gains {"), clauses
-    assert f"in {V1_9} and v1_11.ulg," in clauses[0] and "'vel_p_xy': 3.92" in clauses[0]
+    assert len(clauses) == 1 and clauses[0].startswith("velocity_loop_gains ["), clauses
+    assert clauses[0].endswith(
+        f"[MPC_XY_VEL_P_ACC 2.354] in {V1_9} and v1_11.ulg, [MPC_XY_VEL_P_ACC 3.923] in retuned.ulg"
+    )
+
+
+def test_two_vehicles_gains_are_named_as_px4_names_them_to_a_readable_precision() -> None:
+    """The two real vehicles' gains, float32 parameters, were printed as a Python dict of
+    px4_velocity_pi's names ({'vel_p_xy': 1.600000023841858, ...}); a PX4 engineer reads
+    the parameters that differ, under PX4's names."""
+    clauses = mixed_vehicle_fields([read_ulog(POSCTL), read_ulog(OFFBOARD)])
+    (gains,) = [c for c in clauses if c.startswith("velocity_loop_gains")]
+    assert gains == (
+        "velocity_loop_gains [MPC_XY_VEL_P_ACC 1.6, MPC_Z_VEL_P_ACC 2.5, MPC_Z_VEL_I_ACC 1, "
+        f"MPC_Z_VEL_D_ACC 0.0075] in {POSCTL}, [MPC_XY_VEL_P_ACC 1.8, MPC_Z_VEL_P_ACC 4, "
+        f"MPC_Z_VEL_I_ACC 2, MPC_Z_VEL_D_ACC 0] in {OFFBOARD}"
+    )

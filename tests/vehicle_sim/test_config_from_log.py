@@ -11,6 +11,7 @@ import pytest
 
 from flightlog.reader import read_log
 from scripts import vehicle_sim_cli
+from tests.vehicle_sim.sim_flying import fly, hovering
 from vehicle_sim import SimConfigError, Simulator, load_sim_config
 from vehicle_sim.config import GRAVITY_MPS2, config_from_mapping
 
@@ -245,3 +246,22 @@ def test_a_log_whose_mpc_thr_hover_is_0_is_refused_as_without_one(tmp_path, caps
     (line,) = capsys.readouterr().err.strip().splitlines()
     assert "no MPC_THR_HOVER parameter in (0, 1] and no produced thrust" in line
     assert not out.exists()
+
+
+def test_rate_loop_gains_stay_the_presets_as_its_airframe_does(tmp_path, capsys):
+    """PX4's rate gains act in normalised torque, so they fit only the airframe they were tuned
+    on. This real v1.16 vehicle's (roll P 0.039, yaw P 0.14) on iris' torque and inertia made
+    the simulated vehicle swing about its velocity command while yawing (north velocity std
+    0.13 m/s once settled; its held-out replay 4.5x worse than plain iris'); with the preset's
+    gains, as its airframe is, it settles as iris does."""
+    log = FIXTURES / "quad_offboard_v1_16.ulg"
+    out = tmp_path / "v.toml"
+    assert vehicle_sim_cli.main(["config-from-log", str(log), "--out", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert read_log(log).metadata["px4_params"]["MC_ROLLRATE_P"] == pytest.approx(0.0387, 1e-3)
+    assert "MC_ROLLRATE_P" not in tomllib.loads(out.read_text())["px4_params"]
+    assert "rate-loop gains MC_ROLLRATE_P" in err and "from preset 'iris'" in err
+    sim = hovering(preset=str(out))
+    states = fly(sim, (0.7, 0.7, 0.4), 4.0, yaw_rate_radps=0.5)
+    vel_n_mps = np.array([s.vel_ned_mps[0] for s in states[-40:]])
+    assert vel_n_mps.std() < 0.02
