@@ -665,11 +665,18 @@ class Commander:
         """When the last setpoint arrived [s] (None: none yet)."""
         return self._last_sp_t
 
-    def landed_state(self, contact: bool, climbing: bool) -> LandedState:
-        if self.armed and self.mode is FlightMode.TAKEOFF and (contact or climbing):
-            return LandedState.TAKEOFF
+    def landed_state(self, contact: bool) -> LandedState:
+        """As PX4 reports it ([PX4-extended-sys-state]): ON_GROUND while the vehicle touches the
+        ground (``contact``), else TAKEOFF for the whole of an automatic take-off (TAKEOFF, a
+        mission's first climb), LANDING while it lands (LAND, RTL's last phase), IN_AIR
+        otherwise."""
         if contact:
             return LandedState.ON_GROUND
+        if self.armed and (
+            self.mode is FlightMode.TAKEOFF
+            or (self.mode is FlightMode.MISSION and self._mission_takeoff)
+        ):
+            return LandedState.TAKEOFF
         if self.armed and self.mode is FlightMode.LAND:
             return LandedState.LANDING
         return LandedState.IN_AIR

@@ -627,10 +627,7 @@ class Simulator:
     @property
     def landed_state(self) -> LandedState:
         """The flight controller's landed state now, as ``state.landed_state``."""
-        x = self._plant.x
-        return self._commander.landed_state(
-            self._plant.aux[ph.AUX_CONTACT] > 0.5, x[ph.VEL + 2] < -0.1
-        )
+        return self._commander.landed_state(self._plant.aux[ph.AUX_CONTACT] > 0.5)
 
     # --- state and logging ----------------------------------------------------------------------
     @property
