@@ -11,9 +11,9 @@ processes or on the workers of the Dask cluster at ``--scheduler tcp://HOST:8786
 holds one such report set per log, in DIR/<log name>/, plus DIR/batch.json (verdict and gain
 per log). A log the batch cannot diagnose (unreadable, too slow a rate, never airborne) is
 skipped with one line saying why, here and in batch.json, and the others are diagnosed.
-Progress goes to stderr. Exit codes: 0 done, 2 bad input (one line saying why; in a batch,
-when no log at all can be diagnosed), 130 stopped by Ctrl-C (one line; nothing written, since
-the report set appears whole or not at all).
+Progress and the report's warnings go to stderr. Exit codes: 0 done, 2 bad input (one line
+saying why; in a batch, when no log at all can be diagnosed), 130 stopped by Ctrl-C (one line;
+nothing written, since the report set appears whole or not at all).
 """
 
 from __future__ import annotations

@@ -53,6 +53,8 @@ def run_diagnose(args: DiagnoseArgs) -> int:
                     file=sys.stderr,
                 )
         result = diagnose(logs, sim_config, progress=progress)
+        for warning in result.warnings:  # also in the report's headline
+            print(f"diagnose: warning: {warning}", file=sys.stderr)
     except (SimConfigError, FlightLogError, ForceDataError, SchedulerError) as exc:
         print(f"diagnose: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT

@@ -120,8 +120,12 @@ def test_the_last_line_names_what_was_not_examined_also_beside_a_gain(tmp_path, 
     examined. The last line said 'unexplained; gain 1.0x' and nothing of them (it named them
     only when the replay itself was not examined), as did each --batch line."""
     assert diagnose_cli.main([str(POSCTL), "--sim-config", "iris", "--out", str(tmp_path)]) == 0
-    last = capsys.readouterr().err.strip().splitlines()[-1]
-    not_examined = json.loads((tmp_path / "report.json").read_text())["not_examined"]
+    err = capsys.readouterr().err.strip().splitlines()
+    last = err[-1]
+    doc = json.loads((tmp_path / "report.json").read_text())
+    not_examined = doc["not_examined"]
+    # the report's warnings are said where the command runs too, as fit-gp says its own
+    assert doc["warnings"] and all(f"diagnose: warning: {w}" in err for w in doc["warnings"])
     assert "rotor_drag" in not_examined and "command_delay" in not_examined
     assert "gain 1.0x" in last and f"not examined: {', '.join(not_examined)}" in last, last
     verdict = next(line for line in (tmp_path / "report.md").read_text().splitlines()
