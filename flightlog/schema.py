@@ -249,9 +249,14 @@ def read_flight_log(path: str | Path, max_gap_s: float | None = None) -> FlightL
         values: list[object] = []
         for i, row in enumerate(rows):
             if len(row) != len(header):
+                fix = (
+                    "the file is cut short (copied while it was written?): delete its last "
+                    "line to read the rows before it"
+                    if i == len(rows) - 1
+                    else "the file is corrupt"
+                )
                 raise FlightLogError(
-                    f"{path}: row {i + 1} has {len(row)} fields, header has {len(header)}; "
-                    "the file is truncated or corrupt"
+                    f"{path}: row {i + 1} has {len(row)} fields, header has {len(header)}; {fix}"
                 )
             cell = row[j].strip()
             if is_text:

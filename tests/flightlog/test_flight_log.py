@@ -80,8 +80,12 @@ def test_time_going_backwards_is_rejected(tmp_path):
 def test_truncated_row_and_non_number(tmp_path):
     path = _write(tmp_path, [_row(0.0), _row(0.1)])
     good = path.read_text()
-    path.write_text(good.rsplit(",", 3)[0] + "\n")
-    with pytest.raises(FlightLogError, match="row 2 has .* fields.*truncated or corrupt"):
+    path.write_text(good.rsplit(",", 3)[0] + "\n")  # cut short: its last line says how to fix
+    with pytest.raises(FlightLogError, match="row 2 has .* fields.*cut short.*delete its last"):
+        read_flight_log(path)
+    lines = good.splitlines()
+    path.write_text("\n".join([lines[0], lines[1].rsplit(",", 3)[0], lines[2]]) + "\n")
+    with pytest.raises(FlightLogError, match="row 1 has .* fields.*; the file is corrupt$"):
         read_flight_log(path)
     path.write_text(good.replace("0.1,", "abc,", 1))
     with pytest.raises(FlightLogError, match=r"row 2, column t_s: 'abc' is not a number"):
