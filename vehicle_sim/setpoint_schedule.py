@@ -29,6 +29,9 @@ class StreamPlan(Generic[T]):
         change_at: (m,) int64, ascending: the step from which ``changes[j]`` is in force (the
             last of equal steps wins); the first is 0, what is in force at the start.
         changes: (m,) the setpoint in force from ``change_at[j]`` on.
+        k0: the absolute step the stream starts at; delay_steps: the command delay [steps];
+        setpoints: (n,) each leg's setpoint as given (None: none); queued: the delay queue
+            at the start [(absolute release step, setpoint)].
     """
 
     leg_start: np.ndarray
