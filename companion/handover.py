@@ -9,6 +9,7 @@ automatic mode that nothing explained, no one in particular.
 from __future__ import annotations
 
 from companion.link import Link
+from companion.waiting import POLL_PERIOD_S
 
 _MANUAL_MODES = ("MANUAL", "STABILIZED", "ACRO", "ALTCTL", "POSCTL")
 """Modes a pilot's sticks fly. PX4's failsafes choose them only as the offboard-loss fallback
@@ -19,12 +20,45 @@ activated"), which failsafe_said hears first."""
 FAILSAFE_TEXT_RECENT_S = 3.0
 """A vehicle text naming a failsafe this recent [s] explains a mode change."""
 
+FAILSAFE_TEXT_WAIT_S = 1.0
+"""How long [s] a real-time link is given, after a change to an automatic mode was seen, to
+deliver a failsafe's text (for such a mode the text is the only way to tell who chose it).
+PX4 announces the failsafe in the cycle that switches the mode, but a link may hand the two
+over in either order: MAVSDK reports the flight mode and the texts on separate streams, and on
+a loaded computer the text came second (seen once in a suite run beside other work)."""
 
-def failsafe_said(link: Link) -> str:
+
+def handover_detail(link: Link, mode: str, t_s: float) -> str:
+    """handed_over_detail for a vehicle that left OFFBOARD for ``mode`` ``t_s`` seconds in, with
+    what ``link`` heard of a failsafe (failsafe_heard)."""
+    return handed_over_detail(mode, t_s, failsafe_heard(link, mode))
+
+
+def failsafe_heard(link: Link, mode: str) -> str:
+    """failsafe_said once the vehicle left OFFBOARD for ``mode``: for an automatic mode it waits
+    up to FAILSAFE_TEXT_WAIT_S for the text; a manual mode is a pilot's unless a text already
+    said otherwise, so the report is not held back."""
+    return failsafe_said(link, 0.0 if mode in _MANUAL_MODES else FAILSAFE_TEXT_WAIT_S)
+
+
+def failsafe_said(link: Link, wait_s: float = 0.0) -> str:
     """The vehicle's newest text naming a failsafe in the last FAILSAFE_TEXT_RECENT_S, or ""
-    when it said none. PX4 v1.14+ says "Failsafe activated" (or "..., entering Hold for 5
+    when it said none, waiting up to ``wait_s`` [s] for one on a real-time link (a lockstep
+    link hands texts over in the order they were sent, so it does not wait). Nothing is sent
+    while waiting. PX4 v1.14+ says "Failsafe activated" (or "..., entering Hold for 5
     seconds"), v1.13 "Failsafe enabled: no datalink", each ending in a tab (PX4's mark of a
     text its events protocol says too), which is left out here, as surrounding blanks are."""
+    clock = link.clock
+    deadline_s = clock.now_s() + (wait_s if clock.real_time else 0.0)
+    while True:
+        said = _recent_failsafe_text(link)
+        if said or clock.now_s() >= deadline_s:
+            return said
+        clock.sleep_until(min(clock.now_s() + POLL_PERIOD_S, deadline_s))
+
+
+def _recent_failsafe_text(link: Link) -> str:
+    """The newest text naming a failsafe in the last FAILSAFE_TEXT_RECENT_S, or ""."""
     now_s = link.clock.now_s()
     for said in reversed(link.status_texts()):
         if now_s - said.t_s > FAILSAFE_TEXT_RECENT_S:

@@ -29,7 +29,7 @@ import numpy as np
 from companion.autopilot_gains import velocity_loop_metadata
 from companion.control_loop import LoopCounters, Tick, run_fixed_rate
 from companion.decision import CommandLimits, HoverPolicy
-from companion.handover import failsafe_said, handed_over_detail
+from companion.handover import handover_detail
 from companion.link import ZERO_VELOCITY, CommandOutcome, LandedPhase, Link, LinkError, LinkState
 from companion.mission import Mission
 from companion.planner_policy import PlannerPolicy
@@ -283,7 +283,7 @@ def _fly(
     except _HandedOver as exc:
         airborne = False  # the pilot's vehicle now: no safe stop, no command
         status = "handed_over"
-        detail = handed_over_detail(exc.mode, exc.t_s, failsafe_said(link))
+        detail = handover_detail(link, exc.mode, exc.t_s)
         progress(f"{detail}; nothing more sent")
     except Terminated:
         status, detail = "terminated", "terminated by SIGTERM"
@@ -480,7 +480,7 @@ def _follow(
     if monitor.taken_over is not None:
         mode, t_s, seen = monitor.taken_over
         if seen:
-            detail = handed_over_detail(mode, t_s, failsafe_said(link))
+            detail = handover_detail(link, mode, t_s)
         else:
             detail = (
                 f"the vehicle never reported OFFBOARD (it reports {mode} after {t_s:.1f} s); "

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from companion.handover import failsafe_said
+from companion.handover import failsafe_heard
 from companion.link import Link
 from experiments.rover.drive_back import DriveBack
 from experiments.rover.link_drive import LinkDrive, drive_path
@@ -136,7 +136,7 @@ def repeat_path(
             link, path, schedule, nmpc, timeout_s=timeout_s, gp=gp, connect=False,
             feedforward=feedforward,
         )  # fmt: skip
-        said = failsafe_said(link) if drive.left_offboard_for else ""
+        said = failsafe_heard(link, drive.left_offboard_for) if drive.left_offboard_for else ""
         trial = Trial(number, drive, schedule.copy(), len(gp))
         out.trials.append(trial)
         if scheduler is not None:

@@ -18,7 +18,12 @@ import time
 import numpy as np
 import pytest
 
-from companion.handover import FAILSAFE_TEXT_RECENT_S, failsafe_said
+from companion.handover import (
+    FAILSAFE_TEXT_RECENT_S,
+    FAILSAFE_TEXT_WAIT_S,
+    failsafe_said,
+    handover_detail,
+)
 from companion.inprocess_link import InProcessLink
 from companion.link import CommandOutcome, StatusText, VelocityCommand
 from companion.mavsdk_link import MavsdkLink
@@ -596,3 +601,38 @@ def test_only_a_recent_text_naming_a_failsafe_explains_a_mode_change(
     texts: list[tuple[float, str]], said: str
 ) -> None:
     assert failsafe_said(_SaidLink(10.0, texts)) == said
+
+
+class _WallLikeClock(ManualClock):
+    """A ManualClock that says it runs on the wall clock (sleeping still only moves it)."""
+
+    real_time = True
+
+
+class _LateTextLink:
+    """A link whose failsafe text reaches the companion ``delay_s`` after the mode change was
+    seen (at t = 0), as MAVSDK's separate streams can deliver it on a loaded computer."""
+
+    def __init__(self, clock: ManualClock, delay_s: float) -> None:
+        self.clock = clock
+        self._text = StatusText(delay_s, "Failsafe activated\t")
+
+    def status_texts(self) -> list[StatusText]:
+        return [self._text] if self.clock.now_s() >= self._text.t_s else []
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_failsafe_text_arriving_after_the_mode_change_still_names_it(seed: int) -> None:
+    delay_s = float(np.random.default_rng(seed).uniform(0.05, 0.95) * FAILSAFE_TEXT_WAIT_S)
+    detail = handover_detail(_LateTextLink(_WallLikeClock(), delay_s), "RTL", 5.0)
+    assert detail.startswith("a PX4 failsafe took the vehicle out of OFFBOARD into RTL"), detail
+    late = _LateTextLink(_WallLikeClock(), FAILSAFE_TEXT_WAIT_S + delay_s)
+    detail = handover_detail(late, "RTL", 5.0)  # waits a bounded time, then names no one
+    assert detail.startswith("the vehicle left OFFBOARD for RTL"), detail
+    assert late.clock.now_s() == pytest.approx(FAILSAFE_TEXT_WAIT_S)
+    pilot = _LateTextLink(_WallLikeClock(), delay_s)  # a manual mode: reported at once
+    assert handover_detail(pilot, "POSCTL", 5.0).startswith("pilot took control in POSCTL")
+    assert pilot.clock.now_s() == 0.0
+    lockstep = _LateTextLink(ManualClock(), delay_s)  # in order by construction: no wait
+    assert handover_detail(lockstep, "RTL", 5.0).startswith("the vehicle left OFFBOARD")
+    assert lockstep.clock.now_s() == 0.0
