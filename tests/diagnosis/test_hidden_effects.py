@@ -150,7 +150,7 @@ def test_gusts_are_reported_as_unexplained_disturbance(tmp_path):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("seed", [51, 52])
+@pytest.mark.parametrize("seed", [51, 53])  # horizontal gains faster (51), slower (53)
 def test_another_controller_is_named_flight_control_with_its_gains(seed, tmp_path):
     """The truth flies other horizontal velocity gains than the config (and body drag): the
     diagnosis names ``flight_control`` with the gains within 20 % and still finds the drag."""
@@ -173,8 +173,9 @@ def test_another_controller_is_named_flight_control_with_its_gains(seed, tmp_pat
 
 @pytest.mark.slow
 # Four of the six draws measured (BENCHMARKS.md, issue 18, session 6), for the suite's time:
-# an I pinned within 20 % (55), unpinned with the truth in its interval (51, 52), on the bound (56).
-@pytest.mark.parametrize("seed", [51, 52, 55, 56])
+# an I pinned within 20 % (55), unpinned with the truth in its interval (51; 53, whose horizontal
+# gains are slower than the config's: the other three draw faster ones), on the bound (56).
+@pytest.mark.parametrize("seed", [51, 53, 55, 56])
 def test_other_horizontal_and_vertical_gains_on_a_noisy_log(seed, tmp_path):
     """The truth flies other horizontal and vertical velocity gains than the config (and body
     drag), logged with realistic sensor noise (levels drawn): ``flight_control`` is named with
