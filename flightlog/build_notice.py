@@ -18,9 +18,16 @@ def say_building(what: str, about_s: float) -> None:
     """Say on stderr that ``what`` (e.g. "the simulator's compiled flight loop") is being built
     for this machine, once, in about ``about_s`` [s] (rounded, at least 1), after the running
     command's name as its other messages begin ("diagnose: building ...")."""
-    command = Path(sys.argv[0]).stem if sys.argv and sys.argv[0] not in ("", "-c") else "python"
+    about = f"once, about {max(1, round(about_s))} s"
     print(
-        f"{command}: building {what} for this machine (once, about {max(1, round(about_s))} s)...",
-        file=sys.stderr,
-        flush=True,
+        f"{_command()}: building {what} for this machine ({about})...", file=sys.stderr, flush=True
     )
+
+
+def _command() -> str:
+    """The running command's name: its console script's, its module's for ``python -m`` (the
+    package's for a package's __main__), "python" for ``python -c``."""
+    script = Path(sys.argv[0]) if sys.argv and sys.argv[0] not in ("", "-c") else None
+    if script is None:
+        return "python"
+    return script.parent.name if script.stem == "__main__" else script.stem
