@@ -42,6 +42,7 @@ from gp.errors import ModelFileError
 from gp.features import feature_definition
 from gp.model_io import ResidualModel, load_model
 from gp.prediction_check import refusal, structure_only
+from planners.model_names import MULTIROTOR_MODELS
 from planners.model_vectors import state_vector
 from planners.nmpc import NmpcPlanner
 from planners.nmpc_formulation import NmpcConfig
@@ -50,7 +51,6 @@ from planners.plan_result import PlanResult
 from planners.reference import PlannerState, Reference, ReferenceSample
 from planners.residual import ResidualTerm
 
-MULTIROTOR_MODELS = ("kinematic_4dof", "first_order_lag", "px4_velocity_pi")
 _DT_TOLERANCE = 0.05
 LATE_FALLBACK_S = 0.2  # oldest plan [s] flown on when a new plan comes back late
 INTEGRATOR_GAP_S = 0.5  # plans further apart [s] restart the companion's integrator at 0

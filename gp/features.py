@@ -3,32 +3,7 @@
 A :class:`FeatureDefinition` is recorded in every model file; the NMPC builds its GP query in
 exactly this order, and loading a model against another definition is an error.
 
-Built-in sets (outputs are always the NED velocity-rate residuals in m/s^2):
-    velocity: [Kulathunga23]. z = measured velocity (vel_n, vel_e, vel_d) [m/s].
-    state_input: measured velocity and the command: (vel_ned [m/s], cmd_vel_ned [m/s],
-        cmd_yaw_rate [rad/s]), 7 features.
-    position_state: state_input plus the horizontal position (pos_n, pos_e [m]) in front, 9
-        features: for a disturbance that depends on where the vehicle is (a wind field on a
-        repeated path, [Ostafew16]'s path-dependent disturbance).
-    position_velocity: the horizontal position and the measured velocity (pos_n, pos_e [m],
-        vel_ned [m/s]), 5 features, no command: the residual of a spatial disturbance on top
-        of a model that already carries the command's effect (first_order_lag). Without the
-        command among its inputs the NMPC cannot exploit the GP through its decision variable
-        (a GP fitted on the nominal planner's commands is wrong off them).
-    history: [Ostafew16]'s a_k = (x_k, v_{k-1}, u_k, u_{k-1}) for a velocity-commanded
-        multirotor: the velocity state now and one step ago, the command now and one step ago
-        (vel_ned[k], vel_ned[k-1], cmd_vel_ned[k], cmd_vel_ned[k-1]), 12 features in m/s.
-    velocity_history: the part of it the NMPC can carry along its horizon without the command:
-        the measured velocity now and one residual interval ago (vel_ned[k], vel_ned[k-H],
-        H = residual_steps log steps: 0.1 s, the planner's interval), 6 features in m/s, on a
-        model with a velocity state. The planner adds the previous velocity as states
-        (planners.velocity_history: node j's is node j-1's predicted velocity, node 0's the
-        velocity measured one interval before now). The command stays out: the optimiser
-        exploits a GP that sees its decision variable (experiments.study.regimes, agile).
-    velocity_change: the same information as the velocity now and its change over that
-        interval (vel_ned[k], vel_ned[k] - vel_ned[k-H]), 6 features in m/s: a stationary
-        kernel with one length scale per input reaches a function of the change directly,
-        where on (v[k], v[k-H]), two nearly equal inputs, it needs short scales on both.
+The built-in sets are in :mod:`gp.feature_sets` (names and columns, apart from CasADi).
 In the NMPC, "vel" is the velocity the (augmented) model predicts for the vehicle.
 """
 
@@ -40,47 +15,24 @@ from dataclasses import dataclass
 
 import casadi as ca
 
+from gp.feature_sets import CHANGE, CMD_COLUMNS, FEATURE_SETS, INTERVAL, POS_COLUMNS, VEL_COLUMNS
 from planners.nominal_models import HISTORY_STATES, MODELS, NominalModel, make_model
 from planners.velocity_history import with_velocity_history
 
 RESIDUAL_OUTPUTS: tuple[str, ...] = ("res_acc_n_mps2", "res_acc_e_mps2", "res_acc_d_mps2")
-_VEL = ("vel_n_mps", "vel_e_mps", "vel_d_mps")
-_CMD = ("cmd_vel_n_mps", "cmd_vel_e_mps", "cmd_vel_d_mps")
-_POS = ("pos_n_m", "pos_e_m", "pos_d_m")
-
-# In FEATURE_SETS, lags of one residual interval (the definition's residual_steps log steps,
-# resolved by feature_definition): the value that far back, and the change since then.
-INTERVAL = "interval"
-CHANGE = "change"
-
-FEATURE_SETS: dict[str, tuple[tuple[str, int | str], ...]] = {
-    "velocity": tuple((c, 0) for c in _VEL),
-    "state_input": tuple((c, 0) for c in (*_VEL, *_CMD, "cmd_yaw_rate_radps")),
-    "position_state": tuple(
-        (c, 0) for c in ("pos_n_m", "pos_e_m", *_VEL, *_CMD, "cmd_yaw_rate_radps")
-    ),
-    "position_velocity": tuple((c, 0) for c in ("pos_n_m", "pos_e_m", *_VEL)),
-    "history": tuple(
-        [(c, 0) for c in _VEL] + [(c, 1) for c in _VEL]
-        + [(c, 0) for c in _CMD] + [(c, 1) for c in _CMD]
-    ),
-    "velocity_history": tuple([(c, 0) for c in _VEL] + [(c, INTERVAL) for c in _VEL]),
-    "velocity_change": tuple([(c, 0) for c in _VEL] + [(c, CHANGE) for c in _VEL]),
-}  # fmt: skip
-
 
 # Where the NMPC takes each feature column from: (model, state x, input u, model velocity) ->
 # scalar. A position is the model's position state of that name.
 _PLANNER_SOURCES: dict[str, Callable[..., ca.SX]] = {
-    **{c: (lambda m, x, u, vel, i=i: vel[i]) for i, c in enumerate(_VEL)},
-    **{c: (lambda m, x, u, vel, i=i: u[i]) for i, c in enumerate(_CMD)},
+    **{c: (lambda m, x, u, vel, i=i: vel[i]) for i, c in enumerate(VEL_COLUMNS)},
+    **{c: (lambda m, x, u, vel, i=i: u[i]) for i, c in enumerate(CMD_COLUMNS)},
     "cmd_yaw_rate_radps": lambda m, x, u, vel: u[3],
-    **{c: (lambda m, x, u, vel, c=c: x[m.state_names.index(c)]) for c in _POS},
+    **{c: (lambda m, x, u, vel, c=c: x[m.state_names.index(c)]) for c in POS_COLUMNS},
 }
 # A velocity one interval ago is the model's previous-velocity state (planners.velocity_history).
 _HISTORY_SOURCES: dict[str, Callable[..., ca.SX]] = {
     c: (lambda m, x, u, vel, h=h: x[m.state_names.index(h)])
-    for c, h in zip(_VEL, HISTORY_STATES, strict=True)
+    for c, h in zip(VEL_COLUMNS, HISTORY_STATES, strict=True)
 }
 
 
@@ -143,13 +95,13 @@ class FeatureDefinition:
     @property
     def speed_columns(self) -> tuple[int, ...]:
         """Indices of the current measured velocity components (used by low_speed inducing)."""
-        return tuple(i for i, (c, lag) in enumerate(self.inputs) if c in _VEL and lag == 0)
+        return tuple(i for i, (c, lag) in enumerate(self.inputs) if c in VEL_COLUMNS and lag == 0)
 
     @property
     def history_lag(self) -> int:
         """The lag [log steps] of the lagged measured velocities (or their changes), 0 without
         any."""
-        return max((abs(lag) for c, lag in self.inputs if c in _VEL), default=0)
+        return max((abs(lag) for c, lag in self.inputs if c in VEL_COLUMNS), default=0)
 
     def nominal(self) -> NominalModel:
         """The nominal model instance."""
@@ -176,7 +128,7 @@ class FeatureDefinition:
         lagged = [
             n
             for n, (c, lag) in zip(self.input_names, self.inputs, strict=True)
-            if lag and not (carried and c in _VEL and abs(lag) == self.residual_steps)
+            if lag and not (carried and c in VEL_COLUMNS and abs(lag) == self.residual_steps)
         ]
         if lagged:
             fix = (
@@ -190,7 +142,7 @@ class FeatureDefinition:
                 "one residual interval ago along the horizon, on a model with a velocity "
                 f"state); {fix}"
             )
-        uses = {c in _VEL for c, _ in self.inputs if c not in _POS}
+        uses = {c in VEL_COLUMNS for c, _ in self.inputs if c not in POS_COLUMNS}
         if uses == {True, False} and not model.carries_velocity:
             raise ValueError(
                 f"the NMPC cannot feed features {self.name!r} from {model.name}'s state: they "
@@ -200,7 +152,7 @@ class FeatureDefinition:
         unknown = [
             c
             for c, _ in self.inputs
-            if c not in _PLANNER_SOURCES or (c in _POS and c not in model.state_names)
+            if c not in _PLANNER_SOURCES or (c in POS_COLUMNS and c not in model.state_names)
         ]
         if unknown:
             raise ValueError(f"the NMPC has no source for features {unknown}")

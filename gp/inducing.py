@@ -21,7 +21,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from sklearn.cluster import KMeans
 
 from gp.errors import GPInputError
 
@@ -128,6 +127,9 @@ def histogram_medians(x: np.ndarray, m: int) -> np.ndarray:
 
 
 def _kmeans(X: np.ndarray, m: int, weights: np.ndarray | None, seed: int) -> np.ndarray:
+    # scikit-learn (2.5 s to load) only here: a command line lists STRATEGIES without it
+    from sklearn.cluster import KMeans
+
     km = KMeans(n_clusters=m, n_init=3, random_state=seed)
     km.fit(X, sample_weight=weights)
     return km.cluster_centers_

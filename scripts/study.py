@@ -40,11 +40,11 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
-from companion.nmpc_planner import MULTIROTOR_MODELS
 from experiments.study.config import StudyConfig
 from experiments.study.regimes import REGIMES, with_regime
 from flightlog.atomic_output import OutputError, check_writable_dir
-from gp.features import FEATURE_SETS
+from gp.feature_sets import FEATURE_SETS
+from planners.model_names import MULTIROTOR_MODELS
 from scripts.one_line_parser import OneLineParser, output_path
 from scripts.rover import REGIMES as ROVER_REGIMES
 from vehicle_sim.effects.base import SimConfigError

@@ -22,6 +22,7 @@ from numba import njit
 
 from vehicle_sim import flight_control
 from vehicle_sim import physics as ph
+from vehicle_sim.compile_notice import announce_compiles
 from vehicle_sim.config import GRAVITY_MPS2, SimConfig
 from vehicle_sim.effects import pack_effects
 from vehicle_sim.flight_control import N_CONTROL_WORK, control_step_in
@@ -68,7 +69,8 @@ def fused_loop(callees_sha256: str) -> Callable[..., int]:
     running stale control or physics code after an edit of those files. Its callees' sources
     enter the key here instead: numba hashes a closure's variables into the key
     (``numba.core.caching._CacheImpl._index_key``), so the loop carries ``callees_sha256``.
-    Cached, a new process skips its compile (about 3 s of CPU on a slow machine).
+    Cached, a new process skips its compile (9-14 s with its callees' on two shared cores,
+    measured; said on stderr when it happens: vehicle_sim.compile_notice).
     """
 
     @njit(cache=True, error_model="numpy")
@@ -90,7 +92,7 @@ def fused_loop(callees_sha256: str) -> Callable[..., int]:
                 return k + 1
         return n_steps
 
-    return run_closed_loop
+    return announce_compiles(run_closed_loop, "the simulator's compiled flight loop", 15.0)
 
 
 def scheduled_loop(callees_sha256: str) -> Callable[..., int]:
@@ -145,7 +147,8 @@ def scheduled_loop(callees_sha256: str) -> Callable[..., int]:
                 return k + 1
         return n_steps
 
-    return run_scheduled
+    what = "the simulator's compiled loop over setpoint schedules"
+    return announce_compiles(run_scheduled, what, 10.0)  # 8 s after fused_loop's callees
 
 
 run_closed_loop = fused_loop(sources_sha256(ph, flight_control))

@@ -388,7 +388,8 @@ class Commander:
         self._hold(pos_ned_m, yaw_rad)
         self._mission_takeoff = self._landed  # on the ground: take off first, as PX4 does
         if self._mission_takeoff:
-            self._hold_pos[2] = self._home[2] - self.params.get("MIS_TAKEOFF_ALT")
+            floor_down_m = self._home[2] - self.params.get("MIS_TAKEOFF_ALT")
+            self._hold_pos[2] = self._navigator.takeoff_down_m(floor_down_m)
         self._set_mode(FlightMode.MISSION)
         self.events.append((SEVERITY_INFO, "Mission started"))
         return _ok()
@@ -667,9 +668,11 @@ class Commander:
 
     def landed_state(self, contact: bool) -> LandedState:
         """As PX4 reports it ([PX4-extended-sys-state]): ON_GROUND while the vehicle touches the
-        ground (``contact``), else TAKEOFF for the whole of an automatic take-off (TAKEOFF, a
-        mission's first climb), LANDING while it lands (LAND, RTL's last phase), IN_AIR
-        otherwise."""
+        ground (``contact``), else TAKEOFF for the whole of an automatic take-off (TAKEOFF; a
+        mission's climb from the ground, to :meth:`MissionNavigator.takeoff_down_m`), LANDING while
+        it lands (LAND, RTL's last phase), IN_AIR otherwise: also while a NAV_TAKEOFF item that
+        became current in the air climbs, which PX4 flies as a position setpoint
+        ([PX4-mission-takeoff])."""
         if contact:
             return LandedState.ON_GROUND
         if self.armed and (

@@ -32,6 +32,7 @@ import math
 import numpy as np
 from numba import njit
 
+from vehicle_sim.compile_notice import announce_compiles
 from vehicle_sim.physics import POS, QUAT, RATES, VEL
 
 SP_POS, SP_VEL, SP_YAW, SP_YAW_RATE = 0, 3, 6, 7
@@ -319,6 +320,10 @@ def control_step(x, acc, sp, cs, cp, mix, dt, u):
     ``u`` (4,): normalised motor thrust commands in [0, 1] (rotor speed command = sqrt(u)).
     """
     control_step_in(x, acc, sp, cs, cp, mix, dt, u, np.empty(N_CONTROL_WORK))
+
+
+# A plant of its own (JSBSim's) calls it from Python: its compile, about 6 s, is said.
+announce_compiles(control_step, "the simulator's compiled flight control", 6.0)
 
 
 @njit(cache=True, error_model="numpy")

@@ -5,6 +5,8 @@ says what to do: fly to a target (held by the commander's position control), lan
 return to launch; it records each item reached (MISSION_ITEM_REACHED) and the current item
 (MISSION_CURRENT). Waypoints count as reached within their acceptance radius (else NAV_ACC_RAD)
 horizontally and NAV_MC_ALT_RAD vertically, then hold for their hold time ([PX4-params]).
+A mission started on the ground takes off first (the commander flies it), to
+:meth:`MissionNavigator.takeoff_down_m`.
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ from vehicle_sim.mission_plan import (
     NAV_LAND,
     NAV_RETURN_TO_LAUNCH,
     NAV_TAKEOFF,
+    POSITION_COMMANDS,
     MissionItem,
 )
 
@@ -60,6 +63,18 @@ class MissionNavigator:
     @property
     def complete(self) -> bool:
         return self.current >= len(self.items)
+
+    def takeoff_down_m(self, floor_down_m: float) -> float:
+        """Where this mission, started on the ground, climbs before its items [m, NED down]:
+        to ``floor_down_m`` (MIS_TAKEOFF_ALT above home), or higher, to its first position
+        item's altitude when that item is a NAV_TAKEOFF: PX4 flies the take-off as that item,
+        to at least MIS_TAKEOFF_ALT ([PX4-mission-takeoff]), and reports it as one."""
+        first = next(
+            (i for i in self.items[self.current :] if i.command in POSITION_COMMANDS), None
+        )
+        if first is None or first.command != NAV_TAKEOFF or not math.isfinite(first.pos_ned_m[2]):
+            return floor_down_m
+        return min(floor_down_m, first.pos_ned_m[2])
 
     def step(self, t_s: float, pos_ned_m: np.ndarray) -> NavigatorOutput:
         """Advance over every item already satisfied at ``pos_ned_m``; the action for the rest."""

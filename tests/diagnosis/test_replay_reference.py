@@ -13,8 +13,9 @@ it; the replay's figures were recorded again when its warm-up began to read the 
 the attitude lag, again when it began to fit the run's start integral by output error
 (diagnosis.warm_up), and again when windows began to be scored after their nuisance
 (diagnosis.window_nuisance), and the mission's flight when LAND took PX4's descent
-profile (MPC_Z_V_AUTO_DN above MPC_LAND_ALT1, MPC_LAND_SPEED below MPC_LAND_ALT2), the rest
-unchanged. The test allows a relative 1e-7
+profile (MPC_Z_V_AUTO_DN above MPC_LAND_ALT1, MPC_LAND_SPEED below MPC_LAND_ALT2) and when its
+NAV_TAKEOFF became the take-off (at MPC_TKO_SPEED up to the item's 4 m, where it had climbed
+to MIS_TAKEOFF_ALT's 2.5 m first), the rest unchanged. The test allows a relative 1e-7
 (RTOL): NumPy picks its vectorised maths by the CPU's features, so another machine differs in
 the last bits (measured on a second machine: the noisy log's velocities by 3e-14 relative),
 and the replay's output-error fit of the start integral carries that to its tolerance's scale

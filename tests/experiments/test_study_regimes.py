@@ -4,7 +4,7 @@ import pytest
 
 from experiments.study.config import StudyConfig
 from experiments.study.regimes import REGIMES, with_regime
-from gp.features import FEATURE_SETS
+from gp.feature_sets import FEATURE_SETS
 
 
 def test_agile_raises_speeds_and_the_command_limit_and_keeps_the_rest():

@@ -1,5 +1,8 @@
 """fit-gp end to end on synthetic logs written to tmp_path."""
 
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 from gp_synthetic_logs import lag_plant_log, record_log
@@ -9,6 +12,7 @@ from gp.features import feature_definition
 from gp.model_io import load_model, read_model_header
 from gp.prediction_check import structure_only
 from scripts import fit_gp as fit_gp_cli
+from scripts import fit_gp_run
 from scripts.fit_gp import main
 
 
@@ -33,6 +37,28 @@ def test_fit_gp_writes_model_plots_and_reports_rmse(tmp_path, capsys):
     expected = feature_definition("velocity", "kinematic_4dof", residual_dt_s=0.05)
     model = load_model(out, expected=expected)
     assert np.isfinite(model.predict(np.zeros((1, 3)))[0]).all()
+
+
+HEAVY = ("sklearn", "scipy", "matplotlib", "casadi", "pyulog", "scripts.fit_gp_run")
+
+
+@pytest.mark.parametrize(
+    "argv", [["--help"], ["f.csv"], ["f.csv", "--out", "m", "--inducing", "kmeans"]]
+)
+def test_help_and_a_bad_command_line_answer_before_the_fitting_loads(argv):
+    """The fitting's libraries (about 3 s of CPU) load only once the command line is read."""
+    code = (
+        "import sys\n"
+        "from scripts.fit_gp import main\n"
+        f"print(main({argv!r}))\n"
+        "loaded = {*sys.modules, *(name.split('.')[0] for name in sys.modules)}\n"
+        f"print(sorted(loaded & set({HEAVY!r})))\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120
+    )
+    *_, exit_code, heavy = out.stdout.strip().splitlines()
+    assert (exit_code, heavy) == ("0" if argv == ["--help"] else "2", "[]"), out.stdout
 
 
 @pytest.mark.parametrize(
@@ -182,7 +208,7 @@ def test_a_gp_that_does_not_beat_the_lag_is_written_and_said_to_be_left_out(tmp_
 
 def test_held_out_doubts_about_a_gp_left_out_are_not_asked_but_the_lags_bound_is():
     metrics = {"nominal_rmse_mps": [0.001, 0.001, 0.001], "augmented_rmse_mps": [0.002] * 3}
-    on_bound = {"tau_s": fit_gp_cli.TAU_BOUNDS_S[1], "tau_d_s": 0.5}
-    assert len(fit_gp_cli.model_doubts(metrics, on_bound)) == 4
-    (doubt,) = fit_gp_cli.model_doubts(metrics, on_bound, gp_flies=False)
+    on_bound = {"tau_s": fit_gp_run.TAU_BOUNDS_S[1], "tau_d_s": 0.5}
+    assert len(fit_gp_run.model_doubts(metrics, on_bound)) == 4
+    (doubt,) = fit_gp_run.model_doubts(metrics, on_bound, gp_flies=False)
     assert doubt.startswith("identified tau_s=")

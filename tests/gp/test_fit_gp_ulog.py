@@ -15,7 +15,7 @@ from gp.errors import DatasetError
 from gp.model_io import read_model_header
 from gp.velocity_integrator import logged_velocity_loop_gains
 from scripts import fit_gp as fit_gp_cli
-from scripts import flightlog_cli
+from scripts import fit_gp_run, flightlog_cli
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "ulog"
 AUTO = FIXTURES / "quad_sitl_v1_15_auto.ulg"
@@ -64,8 +64,8 @@ def test_a_refused_lag_says_nothing_of_a_file_it_did_not_write(tmp_path, capsys)
 
 def test_time_constant_on_its_bound_is_a_doubt():
     metrics = {"nominal_rmse_mps": [0.3, 0.3, 0.1], "augmented_rmse_mps": [0.1, 0.1, 0.05]}
-    assert fit_gp_cli.model_doubts(metrics, {"tau_s": 0.4, "tau_d_s": 0.6}) == []
-    (doubt,) = fit_gp_cli.model_doubts(metrics, {"tau_s": 0.4, "tau_d_s": 10.0})
+    assert fit_gp_run.model_doubts(metrics, {"tau_s": 0.4, "tau_d_s": 0.6}) == []
+    (doubt,) = fit_gp_run.model_doubts(metrics, {"tau_s": 0.4, "tau_d_s": 10.0})
     assert "tau_d_s=10.000 s sits on its bound" in doubt
 
 

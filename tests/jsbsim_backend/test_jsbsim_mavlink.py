@@ -12,6 +12,7 @@ MAV_MODE_FLAG_SAFETY_ARMED = 128
 
 
 @pytest.mark.slow
+@pytest.mark.usefixtures("flight_control_compiled")
 def test_arm_takeoff_land_over_mavlink(capfd):
     sim = Simulator(load_sim_config("f450"), backend="jsbsim")
     endpoint = MavlinkEndpoint(sim, EndpointConfig(links=(LinkConfig("api"),), speed=5.0))

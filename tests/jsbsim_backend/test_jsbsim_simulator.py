@@ -105,6 +105,7 @@ def test_yaw_rate_turns_clockwise_and_body_velocity_follows_the_nose():
     assert abs(s.vel_ned_mps[0]) < 0.15
 
 
+@pytest.mark.usefixtures("flight_control_compiled")
 def test_a_whole_flight_prints_nothing(capfd):
     sim = airborne_sim("jsbsim")
     stream(sim, (1.0, 1.0, -0.5), 1.0)

@@ -38,12 +38,27 @@ def test_compiled_matches_and_is_cached(tmp_path, monkeypatch):
     assert libs[0].stat().st_mtime_ns == stamp  # reused, not rebuilt
 
 
-def test_without_compiler_returns_the_function(tmp_path, monkeypatch):
+@pytest.mark.skipif(
+    shutil.which(shlex.split(os.environ.get("CC") or "cc")[0]) is None, reason="needs a C compiler"
+)
+def test_a_build_is_said_on_stderr_first_and_a_cached_library_is_not(tmp_path, monkeypatch, capsys):
+    # a first build waited without a word (the NMPC's routines 1-2 s, a learned GP's 14 s)
+    monkeypatch.setenv("RESIDUAL_COMPANION_CACHE", str(tmp_path))
+    compiled(small_function())
+    out, err = capsys.readouterr()
+    line = "building the compiled C routine small_fn for this machine (once, about 1 s)...\n"
+    assert err.endswith(f": {line}") and err.count("\n") == 1 and out == ""
+    compiled(small_function())
+    assert capsys.readouterr() == ("", "")
+
+
+def test_without_compiler_returns_the_function(tmp_path, monkeypatch, capsys):
     monkeypatch.setenv("RESIDUAL_COMPANION_CACHE", str(tmp_path))
     monkeypatch.setenv("CC", str(tmp_path / "no-such-compiler"))
     fn = small_function()
     assert compiled(fn) is fn
     assert not list(tmp_path.glob("*.so"))
+    assert capsys.readouterr() == ("", "")  # nothing is built, so nothing is said
 
 
 def test_a_cc_that_is_no_command_line_returns_the_function(tmp_path, monkeypatch):
