@@ -39,7 +39,7 @@ study: setup
 	$(VENV)/bin/study --out out/study
 
 test: setup lint
-	$(PY) -m pytest -n 3 --dist worksteal -q --durations=15
+	$(PY) -m pytest -n 4 --dist worksteal -q --durations=15
 
 test-fast: setup
 	$(PY) -m pytest -n 2 --dist worksteal -q -m "not slow"
