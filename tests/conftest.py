@@ -1,13 +1,14 @@
 """Suite-wide ordering: every xdist worker starts on its share of the slow end-to-end tests.
 
-``make test`` runs ``pytest -n 3 --dist worksteal``: xdist hands each worker one contiguous
-block of the collected order (a third each), and a worker that runs out of tests takes the back
-half of the longest queue left. Put first in one list, every slow test fell in the first block:
-one worker flew them one after the other while the others ran the short tests, then stole the
-back of its queue, and the run ended when its last minutes-long test did. So the slow tests are
-dealt over the blocks, longest first, each to the block with the least expected time so far, and
-each block is filled up with short tests behind them: every worker starts on long tests, and
-what is stolen from the back of a queue and what is left at the end are short ones.
+``make test`` runs ``pytest -n 4 --dist worksteal``: xdist hands each worker one contiguous
+block of the collected order (an equal share each), and a worker that runs out of tests takes
+the back half of the longest queue left. Put first in one list, every slow test fell in the
+first block: one worker flew them one after the other while the others ran the short tests,
+then stole the back of its queue, and the run ended when its last minutes-long test did. So
+the slow tests are dealt over the blocks, longest first, each to the block with the least
+expected time so far, and each block is filled up with short tests behind them: every worker
+starts on long tests, and what is stolen from the back of a queue and what is left at the end
+are short ones.
 A slow test that takes minutes says so (``@pytest.mark.slow(expected_s=180)``, its wall time
 [s] in ``make test``); one that does not counts ``SLOW_DEFAULT_S``. Without xdist the slow tests
 simply run first, longest first. Otherwise the order is the collection order, the same on every
