@@ -22,6 +22,7 @@ from vehicle_sim.mission_plan import (
     NAV_LAND,
     NAV_RETURN_TO_LAUNCH,
     NAV_TAKEOFF,
+    NAV_WAYPOINT,
     POSITION_COMMANDS,
     MissionItem,
 )
@@ -67,12 +68,15 @@ class MissionNavigator:
     def takeoff_down_m(self, floor_down_m: float) -> float:
         """Where this mission, started on the ground, climbs before its items [m, NED down]:
         to ``floor_down_m`` (MIS_TAKEOFF_ALT above home), or higher, to its first position
-        item's altitude when that item is a NAV_TAKEOFF: PX4 flies the take-off as that item,
-        to at least MIS_TAKEOFF_ALT ([PX4-mission-takeoff]), and reports it as one."""
+        item's altitude when that item is a NAV_TAKEOFF or a waypoint: PX4 flies the take-off
+        as a NAV_TAKEOFF, and before a first waypoint inserts one to that waypoint's altitude,
+        at least MIS_TAKEOFF_ALT (``calculate_takeoff_altitude``, [PX4-mission-takeoff]); it
+        reports either climb as a take-off."""
         first = next(
             (i for i in self.items[self.current :] if i.command in POSITION_COMMANDS), None
         )
-        if first is None or first.command != NAV_TAKEOFF or not math.isfinite(first.pos_ned_m[2]):
+        climbs_to = (NAV_TAKEOFF, NAV_WAYPOINT)
+        if first is None or first.command not in climbs_to or not math.isfinite(first.pos_ned_m[2]):
             return floor_down_m
         return min(floor_down_m, first.pos_ned_m[2])
 

@@ -1,9 +1,9 @@
 """The landed state as PX4 reports it in EXTENDED_SYS_STATE: ON_GROUND while on the ground,
-TAKEOFF for the whole of an automatic take-off (a mission's from the ground up to its
-NAV_TAKEOFF's altitude; a NAV_TAKEOFF begun in the air reads IN_AIR, as in PX4), LANDING while
-landing, IN_AIR otherwise; never
-back and forth within a phase (it read TAKEOFF on the ground, then IN_AIR and TAKEOFF again
-within 0.1 s whenever the climb slowed below 0.1 m/s)."""
+TAKEOFF for the whole of an automatic take-off (a mission's from the ground up to its first
+NAV_TAKEOFF's or waypoint's altitude; a NAV_TAKEOFF begun in the air reads IN_AIR, as in PX4),
+LANDING while landing, IN_AIR otherwise; never back and forth within a phase (it read TAKEOFF
+on the ground, then IN_AIR and TAKEOFF again within 0.1 s whenever the climb slowed below
+0.1 m/s)."""
 
 from __future__ import annotations
 
@@ -53,6 +53,23 @@ def test_a_mission_from_the_ground_reads_takeoff_for_its_first_climb():
     sim.set_mission((MissionItem(NAV_WAYPOINT, (5.0, 0.0, -3.0), (0.0, 1.0, 0.0, math.nan)),))
     assert sim.arm().accepted and sim.set_mode(FlightMode.MISSION).accepted
     assert phases(fly_for(sim, 10.0))[:3] == [GROUND, TAKEOFF, IN_AIR]
+
+
+@pytest.mark.parametrize("seed", [9, 10])
+def test_a_mission_whose_first_item_is_a_waypoint_climbs_straight_up_to_its_altitude(seed):
+    # PX4 inserts a take-off to the first waypoint's altitude (calculate_takeoff_altitude); the
+    # climb stopped at MIS_TAKEOFF_ALT (2.5 m) and went on diagonally, reading IN_AIR
+    rng = np.random.default_rng(seed)
+    alt_m, north_m = float(rng.uniform(3.5, 8.0)), float(rng.uniform(5.0, 10.0))
+    sim = Simulator(load_sim_config("iris"), seed=seed)
+    waypoint = MissionItem(NAV_WAYPOINT, (north_m, 0.0, -alt_m), (0.0, 1.0, 0.0, math.nan))
+    sim.set_mission((waypoint,))
+    assert sim.arm().accepted and sim.set_mode(FlightMode.MISSION).accepted
+    states = fly_for(sim, 4.0 + alt_m / 1.5)  # MPC_TKO_SPEED 1.5 m/s
+    assert phases(states)[:3] == [GROUND, TAKEOFF, IN_AIR]
+    climbing = [s for s in states if s.landed_state is TAKEOFF]
+    assert max(-s.pos_ned_m[2] for s in climbing) == pytest.approx(alt_m, abs=0.35)
+    assert max(abs(s.pos_ned_m[0]) for s in climbing) < 0.3  # straight up, then across
 
 
 def takeoff_mission(way: str, takeoff_alt_m: float) -> tuple[tuple[MissionItem, ...], int]:
