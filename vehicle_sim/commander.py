@@ -8,8 +8,11 @@ vehicle was armed. A reposition (MAV_CMD_DO_REPOSITION, MAVSDK's goto) flies to 
 
 Sticks (MANUAL_CONTROL, an RC or a joystick) fly POSCTL and ALTCTL as PX4's manual position /
 altitude modes: velocity from the sticks, and where a stick is centred the vehicle brakes, then
-holds position (POSCTL only; ALTCTL only stops), altitude and heading. Without sticks ever
-received, POSCTL and ALTCTL hold where they were entered. Moving a stick faster than
+holds position (POSCTL only; ALTCTL only stops), altitude and heading. Without sticks (none
+received yet, or lost in a mode COM_RCL_EXCEPT exempts) they fly as with centred sticks: a
+vehicle entering POSCTL at speed brakes and holds where it stopped, as PX4's does (PX4 itself
+refuses both modes without manual control input, [PX4-mode-requirements]; the simulator lets
+a ground station or a test switch without a joystick). Moving a stick faster than
 COM_RC_STICK_OV [% of travel per s] (:class:`StickMotion`; a stick held still does not) takes a
 flying vehicle out of an auto mode (COM_RC_OVERRIDE bit 0, PX4's default) or OFFBOARD (bit 1,
 off by default) into POSCTL ("Pilot took over using sticks").
@@ -60,6 +63,7 @@ MANUAL_POLL_S = 0.05  # how often the brake-then-hold of centred sticks is check
 ORBIT_POLL_S = 0.02  # how often the orbit's setpoint follows the vehicle round
 BRAKED_XY_MPS = 0.3  # a centred horizontal stick holds position below this speed
 BRAKED_Z_MPS = 0.2  # a centred throttle holds altitude below this vertical speed
+CENTRED_COMMAND = StickCommand(0.0, 0.0, 0.0, 0.0)  # what the manual modes fly without sticks
 MANUAL_MODES = frozenset({FlightMode.POSCTL, FlightMode.ALTCTL})
 AUTO_MODES = frozenset(
     {FlightMode.HOLD, FlightMode.TAKEOFF, FlightMode.LAND, FlightMode.RTL, FlightMode.MISSION}
@@ -569,7 +573,7 @@ class Commander:
             self.events.append((SEVERITY_INFO, "Takeoff complete, holding"))
         if self.mode is _OFFBOARD and not self._setpoint_fresh(t):
             self._trigger(self.failsafes.offboard_lost(), t, pos_ned_m, yaw_rad)
-        if self._stick_cmd is not None and self.mode in MANUAL_MODES:
+        if self.mode in MANUAL_MODES:
             self._lock_centred_sticks(pos_ned_m, vel_ned_mps)
         if self.mode is _ORBIT and self.orbit is not None:
             self._orbit_sp = orbit_setpoint(self.orbit, (pos_ned_m[0], pos_ned_m[1]), self.params)
@@ -593,7 +597,7 @@ class Commander:
     def _lock_centred_sticks(self, pos_ned_m: np.ndarray, vel_ned_mps: np.ndarray | None) -> None:
         """A centred stick lets the vehicle brake, then holds where it stopped (PX4's manual
         position/altitude tasks lock the position once slow)."""
-        cmd = self._stick_cmd
+        cmd = self._manual_command()
         vel = np.zeros(3) if vel_ned_mps is None else vel_ned_mps
         if cmd.horizontal or self.mode is FlightMode.ALTCTL:
             self._xy_locked = False
@@ -605,6 +609,10 @@ class Commander:
         elif not self._z_locked and abs(vel[2]) < BRAKED_Z_MPS:
             self._hold_pos[2] = pos_ned_m[2]
             self._z_locked = True
+
+    def _manual_command(self) -> StickCommand:
+        """What the sticks command now; centred without sticks (see the module docstring)."""
+        return CENTRED_COMMAND if self._stick_cmd is None else self._stick_cmd
 
     def next_deadline(self, t: float) -> float:
         """Latest simulated time to which physics may run before :meth:`update` is due."""
@@ -636,8 +644,10 @@ class Commander:
             deadline = _earlier(deadline, self._last_sp_t + p.offboard_loss_s)
         if self._sticks_t is not None and not self._sticks_lost:
             deadline = _earlier(deadline, self._sticks_t + p.rc_loss_s)
-            if mode in MANUAL_MODES:
-                deadline = _earlier(deadline, t + MANUAL_POLL_S)
+        if mode in MANUAL_MODES and (
+            self._stick_cmd is not None or not (self._xy_locked and self._z_locked)
+        ):
+            deadline = _earlier(deadline, t + MANUAL_POLL_S)
         return deadline
 
     def idle_in_offboard(self, t: float) -> bool:
@@ -729,8 +739,8 @@ class Commander:
                 stick = self._stick_cmd
                 yaw_rate = 0.0 if stick is None else stick.yaw_rate_radps
             vmax_xy, acc_max = p.xy_vel_max, 0.0
-        elif self._stick_cmd is not None and mode in MANUAL_MODES:
-            cmd = self._stick_cmd
+        elif mode in MANUAL_MODES:
+            cmd = self._manual_command()
             c, s = math.cos(self._yaw_rad), math.sin(self._yaw_rad)
             if not self._xy_locked:
                 pos_n = pos_e = math.nan

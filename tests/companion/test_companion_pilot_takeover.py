@@ -321,10 +321,13 @@ def test_pilot_takeover_over_mavlink_no_command_after_the_mode_change(kind: str,
         at_return.setpoints_accepted + at_return.setpoints_rejected
     )
     assert final.mode is FlightMode[mode]
+    moved_m = float(np.linalg.norm(final.pos_ned_m[:2] - pos_at_return[:2]))
     if mode == "LAND":
         assert final.pos_ned_m[2] > pos_at_return[2] - 0.05  # descending (NED: down is +)
+    elif mode == "POSCTL":  # centred sticks: brakes from the mission's speed, then holds
+        assert float(np.hypot(*final.vel_ned_mps[:2])) < 0.3 and moved_m < 3.0, moved_m
     else:
-        assert float(np.linalg.norm(final.pos_ned_m[:2] - pos_at_return[:2])) < 1.0
+        assert moved_m < 1.0
 
 
 def fly_quietly(  # noqa: ANN001

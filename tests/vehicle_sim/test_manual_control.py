@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from vehicle_sim import FlightMode, Simulator, Sticks, load_sim_config
+from vehicle_sim import FlightMode, Simulator, Sticks, VelocitySetpoint, load_sim_config
 from vehicle_sim.manual_control import (
     CENTRED,
     StickMotion,
@@ -213,6 +213,32 @@ def test_without_sticks_ever_posctl_holds_and_never_fails_over() -> None:
     sim.step(10.0)
     assert sim.state.mode is FlightMode.POSCTL
     assert np.linalg.norm(sim.state.pos_ned_m - start) < 0.1
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_posctl_entered_at_speed_without_sticks_brakes_and_holds_where_it_stopped(seed) -> None:
+    """As PX4's centred sticks: the vehicle stops ahead of where POSCTL was entered (its
+    braking distance) and holds there; it does not fly back to the entry point."""
+    rng = np.random.default_rng(seed)
+    speed_mps, heading = rng.uniform(3.0, 6.0), rng.uniform(-math.pi, math.pi)
+    direction = np.array([math.cos(heading), math.sin(heading)])
+    sim = _in_offboard(_hovering(), VelocitySetpoint((*(speed_mps * direction), 0.0)))
+    for _ in range(round(4.0 / 0.05)):
+        sim.set_velocity_setpoint(VelocitySetpoint((*(speed_mps * direction), 0.0)))
+        sim.step(0.05)
+    assert sim.set_mode(FlightMode.POSCTL).accepted
+    entered = sim.state.pos_ned_m.copy()
+    ahead = []
+    for _ in range(round(8.0 / 0.05)):
+        sim.step(0.05)
+        ahead.append(float((sim.state.pos_ned_m[:2] - entered[:2]) @ direction))
+    stopped = sim.state.pos_ned_m.copy()
+    assert ahead[-1] > 0.1 * speed_mps, ahead[-1]  # at least the stop from speed_mps
+    assert max(ahead) - ahead[-1] < 0.3, (max(ahead), ahead[-1])  # never flew back
+    assert abs(stopped[2] - entered[2]) < 0.3
+    sim.step(3.0)
+    assert np.linalg.norm(sim.state.pos_ned_m - stopped) < 0.1
+    assert sim.state.mode is FlightMode.POSCTL
 
 
 @pytest.mark.parametrize(("rcl_except", "exempt"), [(0, False), (1, False), (2, True), (7, True)])
