@@ -5,6 +5,8 @@ sticks (:mod:`vehicle_sim.manual_control`); Orbit (MAV_CMD_DO_ORBIT, :mod:`vehic
 RTL follows PX4's navigator ([PX4-params] RTL_RETURN_ALT): climb to RTL_RETURN_ALT above home
 (or stay higher), fly to above home at MPC_XY_CRUISE, then land there. Home is where the
 vehicle was armed. A reposition (MAV_CMD_DO_REPOSITION, MAVSDK's goto) flies to a point in HOLD.
+HOLD entered in the air (a pilot's or a ground station's switch, a failsafe) holds where the
+vehicle stops, PX4's braking distance ahead along its horizontal velocity ([PX4-braking-stop]).
 
 Sticks (MANUAL_CONTROL, an RC or a joystick) fly POSCTL and ALTCTL as PX4's manual position /
 altitude modes: velocity from the sticks, and where a stick is centred the vehicle brakes, then
@@ -63,6 +65,7 @@ MANUAL_POLL_S = 0.05  # how often the brake-then-hold of centred sticks is check
 ORBIT_POLL_S = 0.02  # how often the orbit's setpoint follows the vehicle round
 BRAKED_XY_MPS = 0.3  # a centred horizontal stick holds position below this speed
 BRAKED_Z_MPS = 0.2  # a centred throttle holds altitude below this vertical speed
+BRAKING_DELAY_S = 0.6  # PX4's braking distance: accel_delay_max / jerk = 0.6 MPC_JERK_AUTO / jerk
 CENTRED_COMMAND = StickCommand(0.0, 0.0, 0.0, 0.0)  # what the manual modes fly without sticks
 MANUAL_MODES = frozenset({FlightMode.POSCTL, FlightMode.ALTCTL})
 AUTO_MODES = frozenset(
@@ -159,6 +162,13 @@ class _StretchParams:
         )
 
 
+def braking_distance_m(speed_mps: float, acc_hor_mps2: float) -> float:
+    """PX4's multirotor braking distance [m] from horizontal speed ``speed_mps`` [m/s]:
+    ``computeBrakingDistanceFromVelocity(v, MPC_JERK_AUTO, MPC_ACC_HOR, 0.6 MPC_JERK_AUTO)``,
+    that is ``v (v / (2 MPC_ACC_HOR) + 0.6 s)`` ([PX4-braking-stop]; the jerk cancels)."""
+    return speed_mps * (speed_mps / (2.0 * acc_hor_mps2) + BRAKING_DELAY_S)
+
+
 def _earlier(deadline: float, candidate: float) -> float:
     """``candidate`` if it is earlier than ``deadline``, else ``deadline`` (as ``min`` over the
     deadlines in the order given)."""
@@ -228,6 +238,7 @@ class Commander:
         self._stick_motion = StickMotion()  # for the stick override
         self._xy_locked = self._z_locked = True  # centred sticks hold (after braking)
         self._yaw_rad = 0.0  # as of the last update [rad]
+        self._vel_ne_mps = (0.0, 0.0)  # horizontal velocity as of the last update [m/s]
         self.orbit: Orbit | None = None  # the orbit flown in ORBIT (kept for a new command)
         self._orbit_sp: OrbitSetpoint | None = None
 
@@ -294,7 +305,7 @@ class Commander:
         if mode is FlightMode.OFFBOARD and not self._setpoint_fresh(t):
             return self._reject("Offboard denied: no setpoint stream")
         if mode is not self.mode:
-            self._hold(pos_ned_m, yaw_rad)
+            self._hold(self._stop_ahead(pos_ned_m) if mode is _HOLD else pos_ned_m, yaw_rad)
             self._set_mode(mode)
         return _ok()
 
@@ -439,7 +450,7 @@ class Commander:
 
     def _trigger(self, trigger: Trigger, t: float, pos_ned_m: np.ndarray, yaw_rad: float) -> None:
         """Hold now; run the action after COM_FAIL_ACT_T (at once when that is 0)."""
-        self._hold(pos_ned_m, yaw_rad)
+        self._hold(self._stop_ahead(pos_ned_m), yaw_rad)
         self._set_mode(FlightMode.HOLD)
         delay_s = self.params.get("COM_FAIL_ACT_T")
         if trigger.action == "hold":
@@ -541,9 +552,11 @@ class Commander:
         wants its OFFBOARD flight to survive a joystick going away sets bit 2). There a loss is
         only noted. Never before the first sticks: PX4 without any RC or joystick does not fail
         over for it either (it has none to lose; it only refuses the manual modes, which the
-        simulator lets a ground station enter to hold)."""
+        simulator lets a ground station enter, flown as centred sticks)."""
         self._landed = contact
         self._height_m = float(self._home[2]) - float(pos_ned_m[2])  # (NumPy scalars: slower)
+        if vel_ned_mps is not None:
+            self._vel_ne_mps = (float(vel_ned_mps[0]), float(vel_ned_mps[1]))
         self._yaw_rad = float(yaw_rad)
         self._check_sticks_lost(t, pos_ned_m, yaw_rad)
         if not self.armed:
@@ -795,6 +808,19 @@ class Commander:
         return (
             self._last_sp_t is not None and t - self._last_sp_t < self._params_now().offboard_loss_s
         )
+
+    def _stop_ahead(self, pos_ned_m: np.ndarray) -> np.ndarray:
+        """Where a flying vehicle entering HOLD stops: ``pos_ned_m`` moved along the horizontal
+        velocity by PX4's braking distance (:func:`braking_distance_m`), as PX4's Loiter sets
+        a multirotor's hold point ([PX4-braking-stop]: else it overshoots and flies back)."""
+        if self._landed:
+            return pos_ned_m
+        vn, ve = self._vel_ne_mps
+        speed = math.hypot(vn, ve)
+        if speed == 0.0:
+            return pos_ned_m
+        ahead = braking_distance_m(speed, self._params_now().acc_hor) / speed
+        return np.array([pos_ned_m[0] + ahead * vn, pos_ned_m[1] + ahead * ve, pos_ned_m[2]])
 
     def _hold(self, pos_ned_m: np.ndarray, yaw_rad: float) -> None:
         self._hold_pos = np.array(pos_ned_m, dtype=float)

@@ -399,9 +399,10 @@ class Simulator:
         return self._command(lambda c, t, p, y: c.land(t, p, y))
 
     def set_mode(self, mode: FlightMode) -> CommandResult:
-        """Switch mode. OFFBOARD needs a setpoint younger than COM_OF_LOSS_T; HOLD and POSCTL
-        hold the current position; RTL climbs to RTL_RETURN_ALT, returns home and lands;
-        MISSION flies the uploaded mission (taking off first when on the ground)."""
+        """Switch mode. OFFBOARD needs a setpoint younger than COM_OF_LOSS_T; HOLD holds where
+        the vehicle stops (PX4's braking distance ahead), POSCTL brakes, then holds; RTL
+        climbs to RTL_RETURN_ALT, returns home and lands; MISSION flies the uploaded mission
+        (taking off first when on the ground)."""
         if not isinstance(mode, FlightMode):
             raise ValueError(f"mode must be a FlightMode, got {mode!r}; use FlightMode.parse(name)")
         return self._command(lambda c, t, p, y: c.set_mode(mode, t, p, y))

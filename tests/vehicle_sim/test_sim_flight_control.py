@@ -94,13 +94,28 @@ def test_body_frame_setpoint_and_yaw_rate():
     assert log_row["cmd_vel_e_mps"] == pytest.approx(math.sin(yaw))
 
 
-def test_hold_mode_returns_to_where_it_was_switched():
+@pytest.mark.parametrize("seed", [0, 1])
+def test_hold_mode_stops_px4s_braking_distance_ahead_and_holds(seed):
+    """PX4's multirotor Hold holds where the vehicle stops, not where the switch came: the
+    braking distance v (v / (2 MPC_ACC_HOR) + 0.6 s) ahead along the horizontal velocity
+    (docs/references.md [PX4-braking-stop]), by hand with MPC_ACC_HOR's default 3 m/s^2."""
+    rng = np.random.default_rng(seed)
+    speed_mps, heading = rng.uniform(1.5, 4.0), rng.uniform(-math.pi, math.pi)
     sim = hovering(settle_s=1.0)
-    fly(sim, (2.0, 0.0, 0.0), 3.0)
+    fly(sim, (speed_mps * math.cos(heading), speed_mps * math.sin(heading), 0.0), 4.0)
+    vel = sim.state.vel_ned_mps.copy()
     assert sim.set_mode(FlightMode.HOLD).accepted
     switched = sim.state.pos_ned_m.copy()
-    sim.step(10.0)
-    assert sim.state.pos_ned_m == pytest.approx(switched, abs=0.05)
+    v = math.hypot(vel[0], vel[1])
+    ahead_m = v * (v / (2.0 * 3.0) + 0.6)
+    along = np.array([vel[0] / v, vel[1] / v])
+    progress = []
+    for _ in range(100):
+        sim.step(0.1)
+        progress.append(float((sim.state.pos_ned_m[:2] - switched[:2]) @ along))
+    assert sim.state.pos_ned_m[:2] == pytest.approx(switched[:2] + ahead_m * along, abs=0.05)
+    assert sim.state.pos_ned_m[2] == pytest.approx(switched[2], abs=0.05)
+    assert max(progress) - progress[-1] < 0.1  # stopped there, did not fly back
     assert np.linalg.norm(sim.state.vel_ned_mps) < 0.02
 
 
