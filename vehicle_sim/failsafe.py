@@ -126,6 +126,12 @@ class FailsafeMonitor:
                 trigger = Trigger(act, f"battery {name}")
         return warnings, trigger
 
+    def battery_thresholds(self) -> tuple[float, float, float]:
+        """BAT_LOW_THR, BAT_CRIT_THR, BAT_EMERGEN_THR (fractions of charge remaining): the
+        charges below which :meth:`check` warns and may act."""
+        limits = self._params.derived(_Limits.of)
+        return limits.battery_low, limits.battery_critical, limits.battery_emergency
+
     def next_check_s(self, t_s: float) -> float | None:
         """When the data link would count as lost, if it is being watched."""
         if self._last_gcs_s is None or self._link_lost:

@@ -56,6 +56,7 @@ NOISE_BLOCK_ROWS = 4096
 # A stream flies in one compiled call only if its setpoints stay this much younger than
 # COM_OF_LOSS_T [s] (the loss would be a deadline between its legs).
 STREAM_FRESH_MARGIN_S = 1e-6
+BATTERY_MARGIN = 1e-9  # of charge: rounding of a stream's discharge bound (far above it)
 _NO_POSITION = (math.nan, math.nan, math.nan)
 ATOMIC_TYPES = frozenset({bool, int, float, str, type(None)})  # deepcopy returns them as they are
 
@@ -222,7 +223,8 @@ class Simulator:
         :meth:`advance`, :attr:`vel_ned_mps` and :attr:`thrust_n` leg by leg, to the last
         bit. In an OFFBOARD flight whose commander only watches the setpoints' age
         (``Commander.idle_in_offboard``), streamed NED setpoints already checked
-        (``CheckedSetpoint``), the built-in plant without obstacles, gusts or battery sag, and
+        (``CheckedSetpoint``), the built-in plant without obstacles or gusts and with a battery
+        that cannot reach a failsafe threshold within the legs, and
         anchors without thrust or acceleration on legs of at least one step, the whole row is
         one compiled call instead of Python steps around each leg (a replay's follower and its
         windows); from a touchdown on, and otherwise, leg by leg.
@@ -305,7 +307,7 @@ class Simulator:
             type(plant) is BuiltinPlant
             and self._world is None
             and not self._gust_on
-            and plant.ep[ph.BATTERY_TIME] == 0.0
+            and self._battery_level_holds(sum(steps))
             and plant.aux[ph.AUX_CONTACT] <= 0.5
             and self._commander.idle_in_offboard(self.t_s)
         ):
@@ -325,6 +327,24 @@ class Simulator:
             if k * dt - last_set_s >= loss_s - STREAM_FRESH_MARGIN_S:
                 return False
         return True
+
+    def _battery_level_holds(self, n_steps: int) -> bool:
+        """Whether the battery cannot fall below a failsafe threshold
+        (:meth:`FailsafeMonitor.battery_thresholds`) within ``n_steps`` physics steps: not
+        even at full thrust all along (the physics discharges ``dt`` nominal thrust / weight /
+        BATTERY_TIME per step, the nominal thrust at most four rotors' maximum). Then the
+        commander has nothing to do with the battery while they fly."""
+        plant = self._plant
+        battery_time_s = plant.ep[ph.BATTERY_TIME]
+        if battery_time_s == 0.0:
+            return True
+        pp = plant.pp
+        most = n_steps * self.physics_dt_s * 4.0 * pp[ph.P_TMAX]
+        most /= pp[ph.P_MASS] * pp[ph.P_G] * battery_time_s
+        remaining = 1.0 - float(plant.x[ph.DISCHARGE])
+        lowest = remaining - most - BATTERY_MARGIN
+        thresholds = self._commander.failsafes.battery_thresholds()
+        return not any(lowest < t <= remaining for t in thresholds)
 
     def _stream_legs(
         self,

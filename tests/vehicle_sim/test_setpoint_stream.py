@@ -19,6 +19,7 @@ from vehicle_sim import (
     StreamedLegs,
     VelocitySetpoint,
 )
+from vehicle_sim import physics as ph
 from vehicle_sim.builtin_plant import BuiltinPlant
 
 
@@ -203,7 +204,6 @@ def test_setpoints_older_than_the_offboard_loss_time_fly_leg_by_leg_into_the_fai
     "effects, setpoint",
     [
         ({"gusts": {"intensity_mps": 0.5}, "rotor_drag": {}}, CheckedSetpoint((1.0, 0.0, 0.0))),
-        ({"battery_sag": {}}, CheckedSetpoint((1.0, 0.0, 0.0))),
         (None, CheckedSetpoint((1.0, 0.0, 0.0), frame="body")),
         (None, VelocitySetpoint((1.0, 0.0, 0.0))),
     ],
@@ -212,6 +212,34 @@ def test_what_the_compiled_call_cannot_fly_is_flown_leg_by_leg(effects, setpoint
     sim = hovering(effects, settle_s=1.0, seed=2)
     check_same(sim, [setpoint, None] * 20, [0.02, 0.03] * 20)
     assert compiled_calls == []
+
+
+def test_a_sagging_battery_far_from_its_thresholds_streams_in_one_compiled_call(compiled_calls):
+    sim = hovering({"battery_sag": {"full_flight_time_s": 60.0}}, settle_s=1.0)
+    rng = np.random.default_rng(21)
+    setpoints, durations = legs(rng, 120)
+    durations = [max(d, 0.004) for d in durations]
+    anchors, _ = measured_anchors(sim, setpoints, durations, rng, unanchored=0.2)
+    check_same(sim, *legs(rng, 60))
+    check_same(sim, setpoints, durations, anchors)
+    assert len(compiled_calls) == 2
+    assert sim._plant.x[ph.DISCHARGE] > 0.03  # it did discharge meanwhile
+
+
+@pytest.mark.parametrize("threshold", ["BAT_LOW_THR", "BAT_CRIT_THR"])
+def test_a_battery_that_may_reach_a_threshold_in_the_stream_flies_leg_by_leg(
+    threshold, compiled_calls
+):
+    """Charge a few seconds of full thrust above a failsafe threshold: the commander must
+    see it cross, so the legs fly one by one, with its warning."""
+    sim = hovering({"battery_sag": {"full_flight_time_s": 60.0}}, settle_s=1.0)
+    sim._plant.x[ph.DISCHARGE] = 1.0 - (sim.get_param(threshold) + 0.02)
+    sim.stream_setpoints([None], [0.0])  # the commander sees the charge
+    sim.drain_events()
+    compiled_calls.clear()
+    check_same(sim, [CheckedSetpoint((1.0, 0.0, 0.0)), None] * 60, [0.05] * 120)
+    assert compiled_calls == []
+    assert any(text.startswith("Battery ") for _severity, text in sim.drain_events())
 
 
 def test_a_refused_leg_raises_after_the_legs_before_it_flew():
