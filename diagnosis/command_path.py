@@ -27,7 +27,7 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from scipy.optimize import minimize, minimize_scalar
+from scipy.optimize import least_squares, minimize_scalar
 
 from diagnosis.cause import Cause, explained_fraction
 from diagnosis.controller_fit import (
@@ -43,7 +43,12 @@ from vehicle_sim.effects import EFFECT_CLASSES, effects_with_role
 from vehicle_sim.params import PX4_PARAMS
 
 FLIGHT_CONTROL = "flight_control"
-REFINE_EVALUATIONS = 40
+# The gains' refinement by replay (:func:`_refine_gains`): Gauss-Newton iterations at most, the
+# forward-difference step and the tolerances (relative, on the log of the gains and the cost).
+REFINE_ITERATIONS = 6
+REFINE_STEP = 1e-3
+REFINE_XTOL = 1e-3
+REFINE_FTOL = 1e-4
 # Not refined by replay (the replay hardly sees it): refitted with the refined vertical P.
 Z_INTEGRAL = "MPC_Z_VEL_I_ACC"
 # A refitted vertical I whose 95 % interval's half-width exceeds this fraction of its value is
@@ -206,37 +211,46 @@ def _refine_gains(
     train: Sequence[Window],
     start: Mapping[str, float],
 ) -> dict[str, float]:
-    """The regression's gains refined by training-window replay error (Nelder-Mead on the log
-    of each gain, PX4's bounds kept, at most ``REFINE_EVALUATIONS`` replays): the replay is
-    far more sensitive to P than the regression's lag model is exact (10 % in P, 0.13 m/s).
+    """The regression's gains refined by training-window replay error: the replay is far more
+    sensitive to P than the regression's lag model is exact (10 % in P, 0.13 m/s).
 
-    The objective weighs the horizontal and the vertical replay error each against its value
-    at the start: the vertical error is a few percent of the horizontal one on an excitation
+    Least squares on the replay's per-row velocity errors (a trust-region Gauss-Newton,
+    ``scipy.optimize.least_squares``; forward-difference Jacobians) in the log of each gain,
+    PX4's bounds kept, at most ``REFINE_ITERATIONS`` iterations of ``1 + len(start)`` replays.
+    The errors are weighted so that the sum of their squares is the sum over the three axes of
+    each axis's mean squared error over its value at the start (north and east share the
+    horizontal one): the vertical error is a few percent of the horizontal one on an excitation
     flight, and in their plain sum the vertical gains would not be refined at all (seen: a
     vertical P driven to its bound). Returns the gains."""
     names = list(start)
     lo = np.array([max(PX4_PARAMS[n].lo, 1e-3) for n in names])
     hi = np.array([PX4_PARAMS[n].hi for n in names])
     x0 = np.log(np.clip([start[n] for n in names], lo, hi))
-    mse_of: dict[tuple[float, ...], np.ndarray] = {}  # the start is the simplex's first vertex
 
-    def axis_mse(x: np.ndarray) -> np.ndarray:
-        key = tuple(x)
-        if key not in mse_of:
-            gains = dict(zip(names, np.clip(np.exp(x), lo, hi).tolist(), strict=True))
-            result = replay(configured(config, {FLIGHT_CONTROL: gains}), logs, train)
-            err = result.sim_vel_ned_mps - result.meas_vel_ned_mps
-            mse_of[key] = np.array([np.mean(err[:, :2] ** 2), np.mean(err[:, 2] ** 2)])
-        return mse_of[key]
+    def errors(x: np.ndarray) -> np.ndarray:
+        gains = dict(zip(names, np.clip(np.exp(x), lo, hi).tolist(), strict=True))
+        result = replay(configured(config, {FLIGHT_CONTROL: gains}), logs, train)
+        return result.sim_vel_ned_mps - result.meas_vel_ned_mps
 
-    scale = np.maximum(axis_mse(x0), 1e-12)
+    err0 = errors(x0)  # (rows, 3) [m/s]; the solver's first call asks for it again
+    n_rows = max(len(err0), 1)
+    weight_xy = 1.0 / np.sqrt(max(float(np.mean(err0[:, :2] ** 2)), 1e-12) * n_rows)
+    weight_z = 1.0 / np.sqrt(max(float(np.mean(err0[:, 2] ** 2)), 1e-12) * n_rows)
 
-    def objective(x: np.ndarray) -> float:
-        return float(np.sum(axis_mse(x) / scale))
+    def weighted(x: np.ndarray) -> np.ndarray:
+        err = err0 if np.array_equal(x, x0) else errors(x)
+        return np.concatenate([weight_xy * err[:, :2].ravel(), weight_z * err[:, 2]])
 
-    simplex = np.vstack([x0, *(x0 + 0.1 * e for e in np.eye(len(names)))])
-    options = {"initial_simplex": simplex, "maxfev": REFINE_EVALUATIONS, "xatol": 0.01}
-    sol = minimize(objective, x0, method="Nelder-Mead", options=options)
+    sol = least_squares(
+        weighted,
+        x0,
+        bounds=(np.log(lo), np.log(hi)),
+        method="trf",
+        diff_step=REFINE_STEP,
+        xtol=REFINE_XTOL,
+        ftol=REFINE_FTOL,
+        max_nfev=REFINE_ITERATIONS,
+    )
     return dict(zip(names, np.clip(np.exp(sol.x), lo, hi).tolist(), strict=True))
 
 
