@@ -49,6 +49,7 @@ REFINE_ITERATIONS = 6
 REFINE_STEP = 1e-3
 REFINE_XTOL = 1e-3
 REFINE_FTOL = 1e-4
+DIVERGED_MPS = 1e3  # the velocity error [m/s] a diverged replay's row counts as in the refinement
 # Not refined by replay (the replay hardly sees it): refitted with the refined vertical P.
 Z_INTEGRAL = "MPC_Z_VEL_I_ACC"
 # A refitted vertical I whose 95 % interval's half-width exceeds this fraction of its value is
@@ -216,7 +217,8 @@ def _refine_gains(
 
     Least squares on the replay's per-row velocity errors (a trust-region Gauss-Newton,
     ``scipy.optimize.least_squares``; forward-difference Jacobians) in the log of each gain,
-    PX4's bounds kept, at most ``REFINE_ITERATIONS`` iterations of ``1 + len(start)`` replays.
+    PX4's bounds kept, at most ``REFINE_ITERATIONS`` iterations of ``1 + len(start)`` replays;
+    a replay that diverges counts as ``DIVERGED_MPS`` of error in each row that did.
     The errors are weighted so that the sum of their squares is the sum over the three axes of
     each axis's mean squared error over its value at the start (north and east share the
     horizontal one): the vertical error is a few percent of the horizontal one on an excitation
@@ -233,12 +235,15 @@ def _refine_gains(
         return result.sim_vel_ned_mps - result.meas_vel_ned_mps
 
     err0 = errors(x0)  # (rows, 3) [m/s]; the solver's first call asks for it again
-    n_rows = max(len(err0), 1)
+    if not err0.size or not np.all(np.isfinite(err0)):
+        return dict(start)  # no rows, or the replay diverges at the start: nothing to refine
+    n_rows = len(err0)
     weight_xy = 1.0 / np.sqrt(max(float(np.mean(err0[:, :2] ** 2)), 1e-12) * n_rows)
     weight_z = 1.0 / np.sqrt(max(float(np.mean(err0[:, 2] ** 2)), 1e-12) * n_rows)
 
     def weighted(x: np.ndarray) -> np.ndarray:
         err = err0 if np.array_equal(x, x0) else errors(x)
+        err = np.nan_to_num(err, nan=DIVERGED_MPS, posinf=DIVERGED_MPS, neginf=-DIVERGED_MPS)
         return np.concatenate([weight_xy * err[:, :2].ravel(), weight_z * err[:, 2]])
 
     sol = least_squares(
