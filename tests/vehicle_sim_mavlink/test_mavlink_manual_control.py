@@ -66,7 +66,7 @@ def test_sticks_fly_posctl_and_their_loss_returns(hovering, client) -> None:
         client.forget()
     finally:
         joystick.stop()
-    lost = client.recv("STATUSTEXT", 5.0, lambda m: "manual control lost" in m.text)
+    lost = client.recv("STATUSTEXT", 15.0, lambda m: "manual control lost" in m.text)
     assert lost is not None and lost.severity == 2, "no manual-control-loss failsafe"
     assert endpoint.state.mode is FlightMode.HOLD
     wait_until(lambda: endpoint.state.mode is FlightMode.RTL, 10.0, "NAV_RCL_ACT 2: RTL")
