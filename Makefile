@@ -4,7 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: setup acados demo showcase study test test-fast lint bench clean
+.PHONY: setup acados prebuild demo showcase study test test-fast lint bench clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -38,10 +38,15 @@ showcase: setup
 study: setup
 	$(VENV)/bin/study --out out/study
 
-test: setup lint
+# The simulator's compiled loops built once into numba's cache, before pytest's workers start
+# (on a fresh clone each worker compiled them at once otherwise: vehicle_sim/prebuild.py).
+prebuild: setup
+	$(PY) -m vehicle_sim.prebuild
+
+test: setup lint prebuild
 	$(PY) -m pytest -n 4 --dist worksteal -q --durations=15
 
-test-fast: setup
+test-fast: setup prebuild
 	$(PY) -m pytest -n 2 --dist worksteal -q -m "not slow"
 
 lint: setup
