@@ -29,17 +29,18 @@ $(ACADOS_STAMP): $(STAMP)
 
 acados: $(ACADOS_STAMP)
 
-demo: setup
+demo: setup prebuild
 	$(PY) -m scripts.demo
 
-showcase: setup
+showcase: setup prebuild
 	$(PY) -m experiments.showcase
 
 study: setup
 	$(VENV)/bin/study --out out/study
 
-# The simulator's compiled loops built once into numba's cache, before pytest's workers start
-# (on a fresh clone each worker compiled them at once otherwise: vehicle_sim/prebuild.py).
+# The simulator's compiled loops built once into numba's cache, before the processes that fly it
+# start (on a fresh clone pytest's workers, or the demo's endpoints, each compiled them at once
+# otherwise: vehicle_sim/prebuild.py).
 prebuild: setup
 	$(PY) -m vehicle_sim.prebuild
 
