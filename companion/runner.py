@@ -293,7 +293,8 @@ def _fly(
         progress(f"{detail}: holding and landing")
     except LinkError as exc:
         status, detail = "failed", str(exc)
-        progress(f"failed: {detail}")
+        if airborne:  # the safe stop's lines follow; on the ground the last line says it once
+            progress(f"failed: {detail}; stopping safely")
     finally:
         if airborne:
             _safe_stop(link, config, progress)

@@ -179,7 +179,8 @@ def diagnose(
     for i, source in enumerate(thrust_sources):
         progress(f"log {i + 1} thrust: {source}")
     base_names = {e.name for e in sim_config.effects}
-    not_ident = check_identifiability(logs, base_names)
+    battery_range_v = (vehicle.battery_empty_v, vehicle.battery_full_v)
+    not_ident = check_identifiability(logs, base_names, battery_range_v)
     excluded = {n.name for n in not_ident}
     for n in not_ident:
         progress(f"not identifiable: {n.name} ({n.reason})")

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
@@ -22,6 +23,12 @@ MIN_NEAR_GROUND_SPAN_M = 0.05
 MIN_SPEED_SPAN_MPS = 3.0
 MIN_HEADING_SPREAD = 0.3  # smallest eigenvalue share of horizontal velocity directions
 MIN_VOLTAGE_DROP_V = 0.02
+# A logged battery voltage below one lithium cell's empty voltage is no pack reading (seen: a
+# real PX4 log's battery_status at 0.0-0.13 V, a flight controller without a power module).
+MIN_PACK_V = 3.0
+# The config's battery range [empty_v, full_v] widened by this fraction of its span each side:
+# a pack read mostly outside it is another pack, whose discharge the range cannot tell.
+BATTERY_RANGE_MARGIN = 0.1
 MIN_SETPOINT_STEP_MPS = 0.5
 MIN_SETPOINT_STEPS = 4
 
@@ -55,14 +62,18 @@ Check = Callable[[Sequence[FlightLog]], tuple[str, str | None] | None]
 
 
 def check_identifiability(
-    logs: Sequence[FlightLog], known: Collection[str] = ()
+    logs: Sequence[FlightLog],
+    known: Collection[str] = (),
+    battery_range_v: tuple[float, float] | None = None,
 ) -> tuple[NotIdentifiable, ...]:
     """The causes that ``logs`` cannot identify (empty when all can be); ``known``: effects the
     config already has (an effect that acts through drag is identifiable only if a drag is
-    known or identifiable). Requirements are checked in the order of :data:`CHECKS`; a cause
-    is listed once, with the first requirement it misses."""
+    known or identifiable); ``battery_range_v``: the config's (empty_v, full_v) [V], against
+    which the logged voltage is read (None: not checked). Requirements are checked in the
+    order of :data:`CHECKS`; a cause is listed once, with the first requirement it misses."""
     out: dict[str, NotIdentifiable] = {}
-    for requirement, check in CHECKS.items():
+    checks = {**CHECKS, "voltage_drop": partial(_voltage_drop, battery_range_v=battery_range_v)}
+    for requirement, check in checks.items():
         needing = [n for n, needs in _NEEDS.items() if requirement in needs and n not in out]
         if not needing:
             continue
@@ -133,12 +144,37 @@ def _near_ground(logs: Sequence[FlightLog]) -> tuple[str, str | None] | None:
     return f"no altitude change below {NEAR_GROUND_M} m", None
 
 
-def _voltage_drop(logs: Sequence[FlightLog]) -> tuple[str, str | None] | None:
-    volts = [log["battery_v"] for log in logs if log.has("battery_v")]
-    drop = max((float(np.ptp(v)) for v in volts), default=0.0)
-    if drop >= MIN_VOLTAGE_DROP_V:
+def _voltage_drop(
+    logs: Sequence[FlightLog], battery_range_v: tuple[float, float] | None = None
+) -> tuple[str, str | None] | None:
+    """A logged pack voltage that changes, and (given ``battery_range_v``, the config's
+    (empty_v, full_v) [V]) mostly lies within the config's battery."""
+    volts = [v[np.isfinite(v)] for v in (log["battery_v"] for log in logs if log.has("battery_v"))]
+    volts = [v for v in volts if v.size]
+    if not volts:
+        return "no battery_v column", None
+    every = np.concatenate(volts)
+    median = float(np.median(every))
+    if median < MIN_PACK_V:
+        return (
+            f"battery_v is no pack voltage (median {median:.2f} V, below one cell's "
+            f"{MIN_PACK_V:.1f} V)",
+            "log the pack's voltage (a power module's battery_status.voltage_v)",
+        )
+    if battery_range_v is not None:
+        empty_v, full_v = battery_range_v
+        margin = BATTERY_RANGE_MARGIN * (full_v - empty_v)
+        inside = (every >= empty_v - margin) & (every <= full_v + margin)
+        if np.mean(inside) < 0.5:
+            return (
+                f"battery_v {every.min():.1f}-{every.max():.1f} V lies outside the config's "
+                f"battery ({empty_v:.1f}-{full_v:.1f} V)",
+                "give the vehicle's pack as the config's [battery] full_v and empty_v "
+                "(vehicle-sim config-from-log reads them from the log's parameters)",
+            )
+    if max(float(np.ptp(v)) for v in volts) >= MIN_VOLTAGE_DROP_V:
         return None
-    return ("no battery_v column" if not volts else "battery voltage does not change"), None
+    return "battery voltage does not change", None
 
 
 def _setpoint_steps(logs: Sequence[FlightLog]) -> tuple[str, str | None] | None:

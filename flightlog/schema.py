@@ -278,6 +278,11 @@ def read_flight_log(path: str | Path, max_gap_s: float | None = None) -> FlightL
             raise FlightLogError(
                 f"{side}: sidecar is not valid JSON ({exc.msg} at line {exc.lineno})"
             ) from None
+        if not isinstance(meta, dict):
+            raise FlightLogError(
+                f"{side}: sidecar holds a JSON {type(meta).__name__}, not an object of metadata "
+                f'({{"schema_version": {SCHEMA_VERSION}, ...}}); fix it or delete it'
+            )
         version = meta.get("schema_version", SCHEMA_VERSION)
         if version != SCHEMA_VERSION:
             raise FlightLogError(

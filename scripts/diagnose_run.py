@@ -107,6 +107,9 @@ def _run_batch(args: DiagnoseArgs, sim_config: SimConfig, progress: Progress) ->
         with job_executor(args.workers, args.scheduler) as pool:
             outcomes = diagnose_each(jobs, pool, progress)
     results = {o.name: o.diagnosis for o in outcomes if o.diagnosis is not None}
+    for name, result in results.items():  # as a single diagnosis says them (and batch.json)
+        for warning in result.warnings:
+            print(f"diagnose: warning: {path_of[name]}: {warning}", file=sys.stderr)
     for outcome in outcomes:
         if outcome.diagnosis is None:
             path = path_of[outcome.name]
@@ -139,6 +142,7 @@ def _run_batch(args: DiagnoseArgs, sim_config: SimConfig, progress: Progress) ->
                         "report": f"{name}/report.json",
                         "verdict": list(result.verdict),
                         "gain": result.gain if math.isfinite(result.gain) else None,
+                        "warnings": list(result.warnings),
                     }
                 )
             doc = {"schema": "diagnosis-batch/1", "sim_config": args.sim_config, "logs": summary}

@@ -166,6 +166,11 @@ def parse_args(argv: list[str] | None) -> FitGpConfig:
             sep = ""
         if not sep:
             parser.error(f"--nominal-param {item!r}: expected NAME=NUMBER")
+    if args.out.is_dir():  # diagnose --out takes a folder; this one names a file
+        parser.error(
+            f"--out {args.out} is a folder; give the model file's name, e.g. --out "
+            f"{args.out / 'model'} (writes model.npz and its plots there)"
+        )
     if args.m < 1:
         parser.error(f"--m must be >= 1, got {args.m}")
     if args.seed < 0:

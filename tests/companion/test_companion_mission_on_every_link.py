@@ -292,7 +292,31 @@ def test_losing_the_vehicle_mid_flight_fails_the_mission_within_deadlines() -> N
     assert outcome.detail.startswith("link lost: no autopilot heartbeat")
     assert not outcome.disarmed
     assert any(m.startswith("safe stop: hold refused") for m in messages), messages
+    assert any(m.endswith("; stopping safely") for m in messages), messages  # in the air: said
     assert time.monotonic() - started < 40.0
+
+
+def test_no_vehicle_fails_on_the_ground_and_leaves_the_saying_to_the_last_line() -> None:
+    """Nobody on the port: the outcome says so, and the runner's lines do not (the command's
+    last line is the outcome: said twice before, one line apart)."""
+    link = PymavlinkLink(f"udpin://127.0.0.1:{free_udp_port()}")
+    mission = load_mission(LINE)
+    messages: list[str] = []
+    try:
+        outcome = fly_mission(
+            link,
+            make_planner("pd", 3.0),
+            reference_of(mission),
+            mission,
+            RunnerConfig(connect_timeout_s=0.5),
+            lambda tick: None,
+            messages.append,
+        )
+    finally:
+        link.close()
+    assert (outcome.status, outcome.ticks) == ("failed", 0)
+    assert outcome.detail.startswith("no autopilot heartbeat on udpin://127.0.0.1:")
+    assert not any(outcome.detail in m for m in messages), messages
 
 
 @pytest.mark.slow

@@ -145,3 +145,21 @@ def test_a_log_path_that_does_not_exist_is_a_typo_refused_before_any_work(tmp_pa
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [f"diagnose: error: no such log: {logs[1]}; check the path"]
     assert not out.exists()
+
+
+def test_a_damaged_log_in_a_batch_is_said_on_stderr_and_in_the_summary(tmp_path, capsys):
+    """A truncated ULog is diagnosed as far as it was read; a batch says so as a single
+    diagnosis does (it said it only inside the log's report.md)."""
+    fixtures = Path(__file__).resolve().parents[1] / "fixtures" / "ulog"
+    whole = (fixtures / "quad_offboard_v1_16.ulg").read_bytes()
+    cut = tmp_path / "cut.ulg"
+    cut.write_bytes(whole[: int(0.8 * len(whole))])
+    logs = [str(fixtures / "quad_offboard_v1_16.ulg"), str(cut)]
+    out = tmp_path / "out"
+    args = [*logs, "--sim-config", "iris", "--batch", "--workers", "1", "--out", str(out)]
+    assert main(args) == 0
+    said = [line for line in capsys.readouterr().err.splitlines() if "is truncated" in line]
+    assert len(said) == 1 and said[0].startswith(f"diagnose: warning: {cut}: ")
+    whole_entry, cut_entry = json.loads((out / "batch.json").read_text())["logs"]
+    assert not any("truncated" in w for w in whole_entry["warnings"])
+    assert any("is truncated" in w for w in cut_entry["warnings"])

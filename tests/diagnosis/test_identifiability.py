@@ -160,6 +160,27 @@ def test_battery_sag_says_whether_the_voltage_is_missing_or_flat():
     assert "battery_sag" not in unidentifiable([sagging])
 
 
+def test_battery_sag_is_not_read_from_a_voltage_that_is_no_pack_or_another_pack():
+    """Two real PX4 logs' batteries: a flight controller without a power module (0.0-0.13 V)
+    and a 6S pack (20.5-22.7 V) read against a 4S config (14.0-16.8 V). Either would have
+    been taken as a discharge (clipped to empty, or to full on every row)."""
+    iris = (14.0, 16.8)
+    none = synthetic(battery_v=np.linspace(0.13, 0.0, 100))
+    reason = unidentifiable([none])["battery_sag"]
+    assert reason.reason == "battery_v is no pack voltage (median 0.07 V, below one cell's 3.0 V)"
+    assert "power module" in reason.flight
+    six_s = [synthetic(battery_v=np.linspace(22.7, 20.5, 100))]
+    assert "battery_sag" not in unidentifiable(six_s)  # no range given: not read against one
+    other = {n.name: n for n in check_identifiability(six_s, battery_range_v=iris)}
+    assert other["battery_sag"].reason == (
+        "battery_v 20.5-22.7 V lies outside the config's battery (14.0-16.8 V)"
+    )
+    assert "config-from-log" in other["battery_sag"].flight
+    # a full pack read a little above the config's full voltage is the same pack
+    charged = [synthetic(battery_v=np.linspace(17.0, 16.2, 100))]
+    assert "battery_sag" not in {n.name for n in check_identifiability(charged, (), iris)}
+
+
 def test_setpoint_steps_are_counted_over_every_log():
     """Two logs with two 1 m/s steps each: four steps, the least that identifies the command
     path."""

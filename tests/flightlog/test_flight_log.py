@@ -113,6 +113,10 @@ def test_missing_file_binary_file_and_bad_sidecar(tmp_path):
     sidecar_path(path).write_text("{not json")
     with pytest.raises(FlightLogError, match=r"flight\.csv\.json: sidecar is not valid JSON"):
         read_flight_log(path)
+    for not_an_object, kind in (("[]", "list"), ('"x"', "str"), ("3", "int")):
+        sidecar_path(path).write_text(not_an_object)
+        with pytest.raises(FlightLogError, match=f"sidecar holds a JSON {kind}, not an object"):
+            read_flight_log(path)
     sidecar_path(path).write_text(json.dumps({"schema_version": 7}))
     with pytest.raises(FlightLogError, match="schema_version 7"):
         read_flight_log(path)

@@ -212,3 +212,17 @@ def test_held_out_doubts_about_a_gp_left_out_are_not_asked_but_the_lags_bound_is
     assert len(fit_gp_run.model_doubts(metrics, on_bound)) == 4
     (doubt,) = fit_gp_run.model_doubts(metrics, on_bound, gp_flies=False)
     assert doubt.startswith("identified tau_s=")
+
+
+def test_an_out_folder_is_refused_with_the_file_name_to_give(tmp_path, capsys):
+    """diagnose --out takes a folder; fit-gp's names the model file (a folder wrote g.npz and
+    its plots beside the folder)."""
+    log = write_flight_log(tmp_path / "f.csv", record_log(60))
+    folder = tmp_path / "g"
+    folder.mkdir()
+    assert main([str(log), "--out", str(folder), "--no-plots"]) == 2
+    (line,) = capsys.readouterr().err.splitlines()
+    assert (
+        f"--out {folder} is a folder; give the model file's name, e.g. --out {folder}/model" in line
+    )
+    assert not list(tmp_path.glob("g*.*")) and not any(folder.iterdir())  # nothing written
