@@ -56,7 +56,7 @@ from diagnosis.thrust_response import (
 from diagnosis.warm_up import LEAD_IN_S
 from flightlog.schema import FlightLog
 from flightlog.ulog import damage_note, rows_left_out_note
-from flightlog.vehicle_identity import mixed_vehicle_fields
+from flightlog.vehicle_identity import airframe_mismatch, mixed_vehicle_fields
 from vehicle_sim import SimConfig
 from vehicle_sim.effects import EFFECT_CLASSES, BatterySag
 from vehicle_sim.effects.base import effect_as_mapping
@@ -277,7 +277,8 @@ def diagnose(
         if extra is not None:
             causes.append(extra)
             verdict.append(extra.name)
-    warnings: list[str] = []
+    mismatch = airframe_mismatch(dict(sim_config.px4_params), logs)
+    warnings: list[str] = [mismatch] if mismatch else []
     floor_rmse = float(np.sqrt(replay_floor_mse))
     left_rmse = extended.rmse_mps()
     limit = max(config.unexplained_replay_ratio * floor_rmse, 0.05)
@@ -544,14 +545,16 @@ def _unexplained(
     gust = gust_intensity_mps(effects, data, battery)
     if gust is not None:
         params["gust_intensity_mps"] = gust
-    share = selection.final_sse_n2 / max(selection.baseline_sse_n2, 1e-12)
+    share = min(selection.final_sse_n2 / max(selection.baseline_sse_n2, 1e-12), 1.0)
+    named = [s.name for s in selection.scores if s.accepted]
+    after = f"after the causes named ({', '.join(named)})" if named else "with no force cause named"
     return Cause(
         "unexplained",
         params,
-        float(min(share, 1.0)),
-        float(min(share, 1.0)),
+        float(share),
+        float(share),
         f"held-out force residual RMS {rms:.3f} N ({100 * rms / weight:.1f} % of the weight, "
-        f"averaged over {config.persistence_s} s) stays after every deterministic candidate: "
-        "a disturbance such as gusts, or a vehicle the config does not describe (another "
-        "airframe or controller, an effect outside the vocabulary)",
+        f"averaged over {config.persistence_s} s) stays {after}, {100 * share:.0f} % of its "
+        "squared error: a disturbance such as gusts, or a vehicle the config does not describe "
+        "(another airframe or controller, its mass or thrust, an effect outside the vocabulary)",
     )

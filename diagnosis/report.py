@@ -17,11 +17,19 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from diagnosis.cause import Cause
 from diagnosis.closed_loop import NEAR_GROUND_ALT_M
 from diagnosis.diagnosis import Diagnosis
 from diagnosis.report_plots import plot_closed_loop, plot_replay, plot_residuals
 
 SCHEMA = "diagnosis/2"
+EXPLAINED_LEGEND = (
+    "*explained*: the share of the held-out error above the noise floor (the force residual's "
+    "for a force cause, the replay's for a command-path cause) that the cause removes, fitted "
+    "on top of the causes named before it (0 % when it removes none); *confidence*: the share "
+    "of the error then left that it removes. A cause is named only when that removal is large, "
+    "significant (p) and its fit is not on its search bound."
+)
 
 
 def report_document(diagnosis: Diagnosis) -> dict[str, Any]:
@@ -142,12 +150,8 @@ def _markdown(
         "| cause | parameters | explained | confidence | evidence |",
         "|---|---|---|---|---|",
     ]
-    for c in d.causes:
-        params = ", ".join(f"{k} = {v:.4g}" for k, v in c.params.items()) or "-"
-        lines.append(
-            f"| `{c.name}` | {params} | {_percent(c.explained_fraction)} | "
-            f"{c.confidence:.2f} | {c.evidence} |"
-        )
+    lines += [_cause_row(c) for c in d.causes]
+    lines += ["", EXPLAINED_LEGEND]
     if d.not_identifiable:
         lines += ["", "## Not identifiable from these logs", ""]
         lines += [
@@ -201,6 +205,18 @@ def _closed_loop_markdown(doc: dict[str, Any], plot: Path) -> str:
 
 def _num(value: float) -> float | None:
     return float(value) if math.isfinite(value) else None
+
+
+def _cause_row(cause: Cause) -> str:
+    """The cause table's row of ``cause``. A cause that made the error larger explains nothing
+    (its evidence says how much larger: a share of a small explainable part read -100 % for
+    0.8 % more on a real log); what is left unexplained is no share explained ("-": its
+    evidence gives the share left)."""
+    params = ", ".join(f"{k} = {v:.4g}" for k, v in cause.params.items()) or "-"
+    explained = "-" if cause.name == "unexplained" else _percent(max(cause.explained_fraction, 0.0))
+    return (
+        f"| `{cause.name}` | {params} | {explained} | {cause.confidence:.2f} | {cause.evidence} |"
+    )
 
 
 def _percent(fraction: float) -> str:

@@ -136,3 +136,22 @@ def mixed_vehicle_fields(logs: Sequence[FlightLog]) -> list[str]:
             )
             clauses.append(f"{name} {values}")
     return clauses
+
+
+def airframe_mismatch(config_px4_params: Mapping[str, float], logs: Sequence[FlightLog]) -> str:
+    """A sentence naming the logs flown on another airframe (SYS_AUTOSTART) than the one a
+    config was built for (its PX4 parameters, e.g. from ``vehicle-sim config-from-log`` of
+    another log); "" when they agree or either does not say."""
+    configured = config_px4_params.get("SYS_AUTOSTART")
+    if not is_number(configured):
+        return ""
+    others = [(log.where, _airframe(log)) for log in logs]
+    others = [(where, a) for where, a in others if a is not None and a != int(configured)]
+    if not others:
+        return ""
+    flown = ", ".join(f"{a} in {where}" for where, a in others)
+    return (
+        f"the config was built for airframe (SYS_AUTOSTART) {int(configured)}, the log(s) flew "
+        f"{flown}: its mass, thrust and gains may be another vehicle's; build the config from "
+        "this vehicle's log (vehicle-sim config-from-log)"
+    )

@@ -11,7 +11,7 @@ from companion.autopilot_gains import velocity_loop_metadata
 from companion.inprocess_link import InProcessLink
 from flightlog.schema import FlightLog
 from flightlog.ulog import read_ulog
-from flightlog.vehicle_identity import mixed_vehicle_fields
+from flightlog.vehicle_identity import airframe_mismatch, mixed_vehicle_fields
 from flightlog.velocity_loop_gains import (
     GAINS_METADATA_KEY,
     GRAVITY_MPS2,
@@ -135,3 +135,18 @@ def test_two_vehicles_gains_are_named_as_px4_names_them_to_a_readable_precision(
         f"MPC_Z_VEL_D_ACC 0.0075] in {POSCTL}, [MPC_XY_VEL_P_ACC 1.8, MPC_Z_VEL_P_ACC 4, "
         f"MPC_Z_VEL_I_ACC 2, MPC_Z_VEL_D_ACC 0] in {OFFBOARD}"
     )
+
+
+def test_a_config_built_for_another_airframe_is_named_with_the_logs_that_flew_another() -> None:
+    """A config from ``config-from-log`` of the offboard log (airframe 4003) diagnosing the
+    position-control log (4001) gave a confident battery_sag without a word on the vehicle."""
+    built_for = {"SYS_AUTOSTART": 4003.0, "MPC_XY_VEL_P_ACC": 1.8}
+    posctl, offboard = read_ulog(POSCTL), read_ulog(OFFBOARD)
+    said = airframe_mismatch(built_for, [offboard, posctl])
+    assert said.startswith(
+        f"the config was built for airframe (SYS_AUTOSTART) 4003, the log(s) flew 4001 in {POSCTL}:"
+    )
+    assert str(OFFBOARD) not in said and "vehicle-sim config-from-log" in said
+    assert airframe_mismatch(built_for, [offboard]) == ""
+    assert airframe_mismatch({"MPC_XY_VEL_P_ACC": 1.8}, [posctl]) == ""  # a preset: no airframe
+    assert airframe_mismatch(built_for, [with_metadata(posctl, "a.csv")]) == ""  # log silent
