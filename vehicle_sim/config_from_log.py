@@ -33,6 +33,7 @@ from flightlog.ulog import (
 from flightlog.velocity_loop_gains import (
     HOVER_ESTIMATED,
     HOVER_PARAMETER,
+    HOVER_SPEED_MPS,
     acceleration_gains,
     estimated_hover_thrust,
     hover_thrust_for_gains,
@@ -76,8 +77,24 @@ def config_from_log(log: FlightLog, preset: str = "iris") -> ConfigFromLog:
         )
     vehicle = log.metadata.get("vehicle")
     kind = vehicle.get("type") if isinstance(vehicle, Mapping) else None
-    damaged = damage_note(log)
-    return _build(log.where, params, hover, hover_how, preset, (damaged,) if damaged else (), kind)
+    notes = tuple(n for n in (damage_note(log), _thrust_not_read(log, hover_how)) if n)
+    return _build(log.where, params, hover, hover_how, preset, notes, kind)
+
+
+def _thrust_not_read(log: FlightLog, hover_how: str) -> str:
+    """Why a log that has a thrust column gave its hover thrust by parameter: a thrust that is
+    not the rotors' produced one (e.g. PX4's commanded actuator_controls_0) is not read as it
+    ("" when the hover thrust was read from the flight, or the log has no thrust)."""
+    source = log.metadata.get("thrust_source")
+    if hover_how != HOVER_PARAMETER or not log.has("thrust_norm"):
+        return ""
+    if isinstance(source, Mapping) and source.get("kind") != "produced":
+        what = f"{source.get('kind')} ({source.get('topic')})"
+        return f"the log's thrust is {what}, not produced: not read as the hover thrust"
+    return (
+        f"no hovering stretch in the air (10 rows slower than {HOVER_SPEED_MPS} m/s at a "
+        "thrust a vehicle hovers at) to read the hover thrust from"
+    )
 
 
 def config_from_log_file(path: str | Path, preset: str = "iris") -> ConfigFromLog:
@@ -139,8 +156,9 @@ def _build(
     defaults = [n for n in kept if n not in params]
     from_log = [
         *notes,
-        f"mass_kg = {mass_kg:.4f}: hover thrust {hover:.3f} ({hover_how}) x the preset's "
-        f"maximum thrust {4 * v.max_rotor_thrust_n:.2f} N / g",
+        f"mass_kg = {mass_kg:.4f}: what the preset's rotors (maximum thrust "
+        f"{4 * v.max_rotor_thrust_n:.2f} N) hover at the log's hover thrust {hover:.3f} "
+        f"({hover_how}); the vehicle's weight only if its rotors are the preset's",
         f"{len(tuned)} PX4 parameters: {', '.join(tuned) or 'none'}",
         *_legacy_note(legacy, gains_hover, gains_hover_how),
         *clamped,
@@ -175,7 +193,7 @@ def _build(
     lines += [
         "",
         "[vehicle]",
-        f"mass_kg = {mass_kg:.6g}  # from the log's hover thrust",
+        f"mass_kg = {mass_kg:.6g}  # the preset's rotors at the log's hover thrust",
         f"inertia_kgm2 = {list(v.inertia_kgm2)}  # assumed ({preset})",
         f"rotor_max_speed_radps = {v.rotor_max_speed_radps!r}  # assumed ({preset})",
         f"thrust_coeff_n_per_radps2 = {v.thrust_coeff_n_per_radps2!r}  # assumed ({preset})",

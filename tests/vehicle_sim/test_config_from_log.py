@@ -229,6 +229,10 @@ def test_velocity_gains_logged_under_their_pre_v1_11_names_are_carried_over(tmp_
     assert "VEL_P_ACC" not in assumed and "VEL_I_ACC" not in assumed
     assert "logged as MPC_*_VEL_P/I/D (PX4 before v1.11" in err
     assert dict(load_sim_config(out).px4_params)["MPC_XY_VEL_P_ACC"] == params["MPC_XY_VEL_P_ACC"]
+    # why a log with thrust gave its hover thrust by parameter, and what the mass stands for
+    said = "the log's thrust is commanded (actuator_controls_0), not produced: not read as"
+    assert said in err and said in out.read_text()
+    assert "what the preset's rotors (maximum thrust 28.27 N) hover at the log's hover" in err
 
 
 def test_a_log_whose_mpc_thr_hover_is_0_is_refused_as_without_one(tmp_path, capsys):
