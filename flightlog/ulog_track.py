@@ -25,6 +25,18 @@ from flightlog.schema import FlightLogError
 from flightlog.ulog import TOPICS, damage_metadata, damage_note_of, open_ulog
 from flightlog.ulog_time import data_span_us
 
+EARTH_RADIUS_M = 6.371e6
+# Bounds of a vehicle_local_position sample's numbers ([PX4-msgs]): a local position or reset
+# shift within the Earth's radius [m], an origin a latitude and longitude [deg].
+PLAUSIBLE_LIMITS = {
+    "x": EARTH_RADIUS_M,
+    "y": EARTH_RADIUS_M,
+    "delta_xy[0]": EARTH_RADIUS_M,
+    "delta_xy[1]": EARTH_RADIUS_M,
+    "ref_lat": 90.0,
+    "ref_lon": 180.0,
+}
+
 
 @dataclass(frozen=True)
 class ULogTrack:
@@ -94,19 +106,34 @@ def read_ulog_track(path: str | Path) -> ULogTrack:
         xy_valid=valid,
         duration_s=duration_s,
         armed_spans_s=_armed_spans_s(topics.get("vehicle_status"), t0_us, duration_s),
-        origin_deg=_origin_deg(pos),
+        origin_deg=_origin_deg(pos, _plausible(pos, len(t_s))),
         vehicle="no airframe set" if px4.no_airframe_set(params) else px4.vehicle_name(mav_type),
         damage=damage_note_of(meta),
         eph_m=np.asarray(pos["eph"], float) if "eph" in pos else np.full(len(t_s), np.nan),
-        xy_resets=_xy_resets(pos, t_s),
+        xy_resets=_xy_resets(pos, t_s, _plausible(pos, len(t_s))),
     )
 
 
-def _xy_resets(pos, t_s: np.ndarray) -> tuple[tuple[float, float], ...]:
-    """(t_s, |delta_xy| [m]) wherever xy_reset_counter changes (none when not logged)."""
+def _plausible(pos, n: int) -> np.ndarray:
+    """(n,) the samples resets and the origin are read from: those whose numbers a vehicle can
+    have. A damaged log's bytes read as a sample gave a reset by 3.7e37 m (and another as its
+    counter came back) and an origin at latitude -4.8e240 deg. (Not only valid estimates: a
+    reset comes as the estimate becomes valid.)"""
+    keep = np.ones(n, bool)
+    for field, limit in PLAUSIBLE_LIMITS.items():
+        if field in pos:
+            with np.errstate(invalid="ignore"):  # NaN: not known (an origin not yet set)
+                keep &= ~(np.abs(np.asarray(pos[field], float)) > limit)
+    return keep
+
+
+def _xy_resets(pos, t_s: np.ndarray, keep: np.ndarray) -> tuple[tuple[float, float], ...]:
+    """(t_s, |delta_xy| [m]) wherever xy_reset_counter changes between the samples ``keep``
+    (n,) holds (none when not logged)."""
     if not all(f in pos for f in ("xy_reset_counter", "delta_xy[0]", "delta_xy[1]")):
         return ()
-    at = np.flatnonzero(np.diff(np.asarray(pos["xy_reset_counter"], int))) + 1
+    rows = np.flatnonzero(keep)
+    at = rows[np.flatnonzero(np.diff(np.asarray(pos["xy_reset_counter"], int)[rows])) + 1]
     shift = np.hypot(np.asarray(pos["delta_xy[0]"], float), np.asarray(pos["delta_xy[1]"], float))
     return tuple((float(t_s[i]), float(shift[i])) for i in at)
 
@@ -123,12 +150,12 @@ def _armed_spans_s(status, t0_us: float, duration_s: float) -> list[tuple[float,
     return [(float(t[a]), float(ends[b])) for a, b in zip(edges[::2], edges[1::2], strict=True)]
 
 
-def _origin_deg(pos) -> tuple[float, float] | None:
-    """(lat, lon) [deg] of the local origin from the last sample whose xy_global says it is
-    set, else None (no global reference, or fields not logged)."""
+def _origin_deg(pos, keep: np.ndarray) -> tuple[float, float] | None:
+    """(lat, lon) [deg] of the local origin from the last sample of ``keep`` (n,) whose
+    xy_global says it is set, else None (no global reference, or fields not logged)."""
     if not all(f in pos for f in ("xy_global", "ref_lat", "ref_lon")):
         return None
-    known = np.flatnonzero(np.asarray(pos["xy_global"]) > 0)
+    known = np.flatnonzero((np.asarray(pos["xy_global"]) > 0) & keep)
     if not len(known):
         return None
     i = known[-1]

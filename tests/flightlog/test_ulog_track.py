@@ -133,3 +133,21 @@ def test_a_board_with_no_airframe_set_is_not_called_a_generic_vehicle(tmp_path: 
     ulog.initial_parameters["SYS_AUTOSTART"] = 4001
     ulog.write_ulog(str(tmp_path / "generic.ulg"))
     assert read_ulog_track(tmp_path / "generic.ulg").vehicle == "generic vehicle"
+
+
+def test_a_sample_of_garbage_gives_no_reset_and_no_origin(tmp_path: Path) -> None:
+    """A damaged log's bytes read as one vehicle_local_position sample: rover-path printed a
+    reset by 3.7e37 m (and one more as the counter came back) and an origin at -4.8e240 deg."""
+    ulog = ULog(str(FIXTURES / "quad_sitl_v1_15_auto.ulg"))
+    (pos,) = [d for d in ulog.data_list if d.name == "vehicle_local_position"]
+    data = pos.data
+    i = len(data["timestamp"]) // 2
+    data["delta_xy[0]"][i], data["ref_lat"][i], data["ref_lon"][i] = 3.7e37, -4.8e240, 1e-299
+    data["xy_reset_counter"][i] += 7
+    data["xy_global"][-1] = 0  # the origin is known up to the sample before the last
+    data["ref_lat"][-2] = np.inf
+    ulog.write_ulog(str(tmp_path / "garbage.ulg"))
+    track = read_ulog_track(tmp_path / "garbage.ulg")
+    clean = read_ulog_track(FIXTURES / "quad_sitl_v1_15_auto.ulg")
+    assert track.xy_resets == clean.xy_resets and len(clean.xy_resets) == 1
+    assert track.origin_deg == (data["ref_lat"][-3], data["ref_lon"][-3])
