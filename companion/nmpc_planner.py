@@ -388,9 +388,10 @@ def check_residual_model(model: ResidualModel, period_s: float, planner_dt_s: fl
     dt_s = dict(features.nominal_params).get("residual_dt_s")
     off_rate = dt_s is None or abs(dt_s - period_s) > _DT_TOLERANCE * period_s
     if not nominal.carries_velocity and off_rate:
+        its_rate = f"fly at its rate (companion --rate-hz {1.0 / dt_s:.4g}) or " if dt_s else ""
         raise ModelFileError(
             f"residual model was measured over steps of {dt_s} s but the control loop runs "
-            f"every {period_s:g} s; refit from logs flown at the same rate"
+            f"every {period_s:g} s; {its_rate}refit from logs flown at this rate"
         )
 
 

@@ -73,7 +73,9 @@ def parse_args(argv: list[str] | None) -> CompanionConfig:
         help="residual model from fit-gp: fly the NMPC augmented with it (--planner nmpc or "
         "nmpc_clutter)",
     )
-    parser.add_argument("--rate-hz", type=float, default=50.0, help="control loop rate [Hz]")
+    parser.add_argument(
+        "--rate-hz", type=float, default=50.0, help="control loop rate [Hz] (default %(default)g)"
+    )
     parser.add_argument(
         "--log",
         type=output_path,

@@ -28,6 +28,7 @@ from scripts.one_line_parser import OneLineParser, output_path
 EXIT_OK = 0
 EXIT_BAD_INPUT = 2
 EXIT_INTERRUPTED = 130
+DEFAULT_WORKERS = 2  # --batch's local processes
 
 
 @dataclass(frozen=True)
@@ -38,7 +39,7 @@ class DiagnoseArgs:
     sim_config: str
     out_dir: Path
     batch: bool = False
-    workers: int = 2
+    workers: int = DEFAULT_WORKERS
     scheduler: str | None = None
 
 
@@ -59,7 +60,12 @@ def parse_args(argv: list[str] | None) -> DiagnoseArgs:
     parser.add_argument(
         "--batch", action="store_true", help="diagnose every log on its own (one report each)"
     )
-    parser.add_argument("--workers", type=int, default=2, help="--batch: local processes")
+    parser.add_argument(
+        "--workers",
+        type=int,
+        default=None,
+        help=f"--batch: local processes (default {DEFAULT_WORKERS})",
+    )
     parser.add_argument(
         "--scheduler",
         metavar="ADDRESS",
@@ -67,10 +73,14 @@ def parse_args(argv: list[str] | None) -> DiagnoseArgs:
         "processes; needs pip install 'residual-companion[cluster]'",
     )
     args = parser.parse_args(argv)
-    if args.workers < 1:
+    if args.workers is not None and args.workers < 1:
         parser.error(f"--workers must be >= 1, got {args.workers}")
-    if args.scheduler is not None and not args.batch:
-        parser.error("--scheduler runs a --batch diagnosis; add --batch")
+    for option in ("scheduler", "workers"):
+        if getattr(args, option) is not None and not args.batch:
+            parser.error(f"--{option} runs a --batch diagnosis; add --batch")
+    if args.workers is not None and args.scheduler is not None:
+        parser.error("--workers are local processes, --scheduler a cluster's; give one")
+    args.workers = DEFAULT_WORKERS if args.workers is None else args.workers
     if args.scheduler is not None:
         try:
             check_scheduler_address(args.scheduler)

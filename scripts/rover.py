@@ -47,9 +47,11 @@ def _seed(text: str) -> int:
     return value
 
 
-def main(argv: list[str] | None = None) -> int:
+def main(argv: list[str] | None = None, prog: str = "rover") -> int:
+    """Run a rover regime; returns the exit code. ``prog``: the command's name in its lines
+    (``study`` when ``study --regime rover_exp1`` runs it)."""
     ap = OneLineParser(
-        prog="rover", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+        prog=prog, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     ap.add_argument("--regime", required=True, help=f"one of {', '.join(REGIMES)}")
     ap.add_argument(
@@ -65,37 +67,38 @@ def main(argv: list[str] | None = None) -> int:
     except SystemExit as exc:  # --help (0) or a one-line usage error (2): the exit code
         return int(exc.code or 0)
     if args.regime == "example" and (args.trials is not None or args.quick or args.seed != 0):
-        print("rover: error: --regime example has no trials or draws; drop --trials, --quick "
+        print(f"{prog}: error: --regime example has no trials or draws; drop --trials, --quick "
               "and --seed", file=sys.stderr)  # fmt: skip
         return 2
     if args.quick and args.trials is None:
         args.trials = QUICK_TRIALS
     if args.regime not in REGIMES:
-        print(f"rover: error: --regime {args.regime!r} is unknown; use one of {', '.join(REGIMES)}",
+        known = ", ".join(REGIMES)
+        print(f"{prog}: error: --regime {args.regime!r} is unknown; use one of {known}",
               file=sys.stderr)  # fmt: skip
         return 2
     if args.trials is not None and args.trials < 1:
-        print(f"rover: error: --trials must be >= 1, got {args.trials}", file=sys.stderr)
+        print(f"{prog}: error: --trials must be >= 1, got {args.trials}", file=sys.stderr)
         return 2
     try:  # before any trial: a folder that cannot be made is found now (made when written)
         check_writable_dir(args.out)
     except OutputError as exc:
-        print(f"rover: error: --out {exc}", file=sys.stderr)
+        print(f"{prog}: error: --out {exc}", file=sys.stderr)
         return 2
     start = time.process_time()
 
     def progress(message: str) -> None:
-        print(f"rover [{time.process_time() - start:6.1f} s CPU] {message}", file=sys.stderr)
+        print(f"{prog} [{time.process_time() - start:6.1f} s CPU] {message}", file=sys.stderr)
 
     try:
         written, result = _run(args.regime, args.out, args.trials, args.seed, progress)
     except KeyboardInterrupt:  # the files are written at the end, each whole
-        print(f"rover: interrupted; nothing written to {args.out}", file=sys.stderr)
+        print(f"{prog}: interrupted; nothing written to {args.out}", file=sys.stderr)
         return 130
     except OutputError as exc:  # the folder checked above failed later (full, removed)
-        print(f"rover: error: --out {exc}", file=sys.stderr)
+        print(f"{prog}: error: --out {exc}", file=sys.stderr)
         return 2
-    print(f"rover: wrote {' and '.join(written)}", file=sys.stderr)
+    print(f"{prog}: wrote {' and '.join(written)}", file=sys.stderr)
     print(json.dumps(result, indent=1))
     return 0
 

@@ -28,7 +28,7 @@ repeat.json and repeat.png (errors and travel time per trial, speeds along the p
 at the end. Each trial starts at the path's start: a loop ends there; after an open path
 --drive-back drives back to it: `turn` (the default: turn in place, the straight line, turn; a
 skid-steer rover, a clear line) or `reverse` (backwards along the path itself, on ground
-already driven; any rover, Ackermann too). Without it an open path is repeated once. A rover
+already driven; any rover, Ackermann too). Without it an open path takes --trials 1. A rover
 not at the start is refused in one line.
 
 Exit codes: 0 done; 1 failed (no vehicle or position, link lost, refused, a teach pass too
@@ -160,7 +160,11 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         help="experience file (npz) to continue from and to update (default: beside --path, "
         "PATH.experience.npz)",
     )  # fmt: skip
-    repeat.add_argument("--trials", type=int, default=3, help="trials in this run")
+    repeat.add_argument(
+        "--trials", type=int, default=3,
+        help="trials in this run (default %(default)s; an open path needs --drive-back for more "
+        "than 1)",
+    )  # fmt: skip
     speeds = repeat.add_mutually_exclusive_group()
     speeds.add_argument(
         "--speed", type=_positive, default=None,
@@ -180,8 +184,10 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         help="the NMPC weights of the paper's experiment on this rover (default: --vehicle's "
         "in process; over MAVLink the planner's defaults, which do not suit an Ackermann rover)",
     )  # fmt: skip
-    repeat.add_argument("--out", type=output_path, default=Path("out/rover_path"),
-                        help="folder for repeat.json and repeat.png")  # fmt: skip
+    repeat.add_argument(
+        "--out", type=output_path, default=Path("out/rover_path"),
+        help="folder for repeat.json and repeat.png (default %(default)s)",
+    )  # fmt: skip
     args = parser.parse_args(argv)
     if args.command == "teach":
         _check_from_log_options(parser, args)

@@ -174,7 +174,7 @@ def main(argv: list[str] | None = None) -> int:
     if _rover_regime(args_list):
         from scripts import rover  # [Ostafew16] on its own robots: study --regime rover_exp1
 
-        return rover.main(args_list)
+        return rover.main(args_list, prog="study")
     try:
         config = parse_args(argv)
     except SystemExit as exc:

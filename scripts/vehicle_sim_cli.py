@@ -146,7 +146,7 @@ def parse_args(argv: Sequence[str] | None) -> VehicleSimCliConfig:
         "--vehicle",
         default="iris",
         help="multirotor preset or config TOML path, or a rover preset "
-        f"({', '.join(ROVER_PRESETS)})",
+        f"({', '.join(ROVER_PRESETS)}) (default %(default)s)",
     )
     parser.add_argument(
         "--effect",
@@ -160,9 +160,18 @@ def parse_args(argv: Sequence[str] | None) -> VehicleSimCliConfig:
         choices=BACKEND_NAMES,
         help="physics backend (default: the config's [sim] backend, else builtin)",
     )
-    parser.add_argument("--seed", type=int, default=0)
     parser.add_argument(
-        "--speed", type=float, default=1.0, help="simulated seconds per wall-clock second"
+        "--seed",
+        type=int,
+        default=0,
+        help="seed of the vehicle's random draws: gusts, a rover's rate noise "
+        "(default %(default)s)",
+    )
+    parser.add_argument(
+        "--speed",
+        type=float,
+        default=1.0,
+        help="simulated seconds per wall-clock second (default %(default)g)",
     )
     parser.add_argument("--host", default="127.0.0.1", help="address to bind and send to")
     parser.add_argument(

@@ -53,6 +53,14 @@ def test_scheduler_without_batch_or_malformed_exits_2(tmp_path, capsys):
     with pytest.raises(SystemExit) as exc:
         main([*base, "--batch", "--scheduler", "h:8786"])
     assert exc.value.code == 2 and "tcp://HOST:PORT" in capsys.readouterr().err
+    # --workers alone was taken and ignored; beside --scheduler one of them was
+    for extra, said in (
+        (["--workers", "3"], "--workers runs a --batch diagnosis; add --batch"),
+        (["--batch", "--workers", "3", "--scheduler", "tcp://h:8786"], "give one"),
+    ):
+        with pytest.raises(SystemExit) as exc:
+            main([*base, *extra])
+        assert exc.value.code == 2 and said in capsys.readouterr().err
 
 
 def test_batch_summary_names_each_log_by_the_path_given(tmp_path):

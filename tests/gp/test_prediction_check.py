@@ -179,3 +179,18 @@ def test_a_gp_that_does_not_beat_its_structure_flies_without_it(hidden_plant_log
         record = {"flies": "x", "structure_flies": chosen, "comparisons": []}
         trained = {**model.training, "closed_loop_check": record}
         assert structure_only(replace(model, training=trained)) is chosen
+
+
+def test_a_model_measured_at_another_rate_is_refused_with_the_rate_to_fly(hidden_plant_logs):
+    """fit-gp tells a user to fly at the model's rate with companion --rate-hz; the companion's
+    refusal only said to refit."""
+    from companion.nmpc_planner import check_residual_model
+    from gp.errors import ModelFileError
+
+    config = TrainingConfig(features="velocity", nominal="kinematic_4dof", m=10, restarts=1)
+    model = train_residual_model(hidden_plant_logs[:2], config).model
+    dt_s = dict(model.features.nominal_params)["residual_dt_s"]
+    check_residual_model(model, period_s=dt_s)
+    with pytest.raises(ModelFileError) as info:
+        check_residual_model(model, period_s=2.0 * dt_s)
+    assert f"fly at its rate (companion --rate-hz {1.0 / dt_s:.4g}) or refit" in str(info.value)

@@ -44,6 +44,10 @@ def test_an_out_folder_that_cannot_be_made_is_one_line_exit_2(tmp_path: Path, ca
         assert rover.main(["--regime", regime, "--out", str(blocker / "out")]) == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and err[0].startswith(f"rover: error: --out {blocker}"), err
+    # through study, its lines name the command the user ran (they said "rover: error:")
+    assert study.main(["--regime", "rover_exp1", "--out", str(blocker / "out")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"study: error: --out {blocker}"), err
 
 
 def test_without_out_the_files_go_under_out_as_every_command_s_do(
