@@ -33,7 +33,7 @@ def describe_os_error(path: Path, exc: OSError) -> str:
         return f"{path}: a file stands where a folder is needed ({reason}); choose another path"
     if isinstance(exc, IsADirectoryError):
         return f"{path}: is a folder, a file is needed ({reason}); give a file name"
-    return f"{path}: cannot write ({reason})"
+    return f"{path}: cannot write ({reason}); choose a path in a folder you can write to"
 
 
 def _refuse_a_special_file(path: Path) -> None:

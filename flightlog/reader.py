@@ -25,6 +25,7 @@ NEEDS_HZ: dict[str, dict[str, float]] = {
 # in the default profile), so a 10 Hz topic comes out a little slower on average: 9.78-9.84 Hz
 # in v1.8 and older logs, 10.0 Hz in v1.15. A rate within this fraction of a need meets it.
 LOGGER_JITTER_FRACTION = 0.05
+CSV_START = b"t_s,"  # how a schema-v1 CSV starts: its first column is the time
 
 
 def read_log(path: str | Path) -> FlightLog:
@@ -33,6 +34,17 @@ def read_log(path: str | Path) -> FlightLog:
     if is_ulog(path):
         return read_ulog(path)
     if path.suffix.lower() == ".ulg" and path.is_file():
+        with path.open("rb") as f:
+            start = f.read(len(CSV_START))
+        if not start:
+            raise FlightLogError(
+                f"{path}: empty file (0 bytes); copy the log again from the vehicle"
+            )
+        if start == CSV_START:
+            raise FlightLogError(
+                f"{path}: named .ulg but a schema-v1 CSV (it starts with {start.decode()}); "
+                "rename it .csv"
+            )
         raise FlightLogError(
             f"{path}: named .ulg but does not start with the ULog magic bytes; "
             "copy the log again from the vehicle (or pass a schema-v1 CSV)"

@@ -242,7 +242,10 @@ def read_flight_log(path: str | Path, max_gap_s: float | None = None) -> FlightL
             f"{', '.join(REQUIRED_COLUMNS)}"
         )
     if not rows:
-        raise FlightLogError(f"{path}: header but no data rows")
+        raise FlightLogError(
+            f"{path}: header but no data rows (the recording stopped before its first row); "
+            "give a log of a flight"
+        )
     cols: dict[str, np.ndarray] = {}
     for j, name in enumerate(header):
         is_text = name in TEXT_COLUMNS

@@ -13,6 +13,7 @@ from flightlog.atomic_output import (
     check_not_an_input,
     check_writable_dir,
     check_writable_file,
+    describe_os_error,
     write_bytes_atomic,
     write_text_atomic,
 )
@@ -146,3 +147,12 @@ def test_an_output_spelled_another_way_is_still_recognised_as_the_input(tmp_path
         with pytest.raises(OutputError, match="is an input being read"):
             check_not_an_input(out, [flight])
     check_not_an_input(tmp_path / "other.ulg", [flight])
+
+
+def test_any_other_os_error_says_what_to_do(tmp_path):
+    """--out /proc/x said "cannot write (No such file or directory)" and nothing more."""
+    said = describe_os_error(tmp_path / "x", FileNotFoundError(2, "No such file or directory"))
+    assert said == (
+        f"{tmp_path / 'x'}: cannot write (No such file or directory); choose a path in a folder "
+        "you can write to"
+    )

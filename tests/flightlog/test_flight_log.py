@@ -55,6 +55,13 @@ def test_missing_required_column_is_named(tmp_path):
         read_flight_log(path)
 
 
+def test_a_header_alone_is_refused_with_what_to_give(tmp_path):
+    path = _write(tmp_path, [_row(0.0)])
+    path.write_text(path.read_text().splitlines()[0] + "\n")
+    with pytest.raises(FlightLogError, match=r"header but no data rows \(the recording stopped"):
+        read_flight_log(path)
+
+
 def test_nan_names_file_row_and_column(tmp_path):
     path = _write(tmp_path, [_row(0.0), _row(0.1), _row(0.2)])
     lines = path.read_text().splitlines()

@@ -24,9 +24,22 @@ def moded(*modes: str) -> FlightLog:
 
 def test_a_file_named_ulg_in_capitals_without_the_magic_bytes_is_refused(tmp_path):
     path = tmp_path / "FLIGHT.ULG"
-    path.write_text("t_s,pos_n_m\n0,0\n")
+    path.write_text("time,pos_n_m\n0,0\n")
     with pytest.raises(FlightLogError, match="named .ulg but does not start with the ULog magic"):
         read_log(path)
+
+
+def test_an_empty_ulg_and_a_csv_named_ulg_are_said_to_be_what_they_are(tmp_path):
+    """Both read 'does not start with the ULog magic bytes; ... (or pass a schema-v1 CSV)':
+    for the CSV, a fix it already was."""
+    empty = tmp_path / "empty.ulg"
+    empty.write_bytes(b"")
+    with pytest.raises(FlightLogError, match=r"empty.ulg: empty file \(0 bytes\); copy the log"):
+        read_log(empty)
+    csv = tmp_path / "flight.ulg"
+    csv.write_text("t_s,pos_n_m\n0,0\n")
+    with pytest.raises(FlightLogError, match=r"a schema-v1 CSV \(it starts with t_s,\); rename"):
+        read_log(csv)
 
 
 def test_a_missing_ulg_is_named_missing_not_foreign(tmp_path):

@@ -29,7 +29,8 @@ _BRIEF = ["--duration-s", "0.5"]  # a rover that were served would stop, not run
     ("argv", "message"),
     [
         (["--speed", "0"], "--speed 0.0: must be within"),
-        (["--vehicle", "no_such_quad"], "no such config file or preset"),
+        (["--vehicle", "no_such_quad"], "no such config file or preset; use a multirotor (f450"),
+        (["--vehicle", "husky"], "a rover (husky_50kg, roc6_150kg, dmrv_600kg)"),  # rovers too
         (["--effect", "lasers"], "unknown effect 'lasers'"),
         (["--effect", "rotor_drag.k_n_per_mps=[0.3,"], "not a TOML value"),
         (
