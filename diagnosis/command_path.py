@@ -321,7 +321,13 @@ def select_command_causes(
             rejected[f.name] = Cause(
                 f.name,
                 dict(f.params),
-                explained_fraction(before**2 - f.test_rmse_mps**2, total, noise_mse_mps2, least),
+                # one that made the error larger explains nothing
+                max(
+                    0.0,
+                    explained_fraction(
+                        before**2 - f.test_rmse_mps**2, total, noise_mse_mps2, least
+                    ),
+                ),
                 float(max(0.0, 1.0 - (f.test_rmse_mps / before) ** 2)),
                 f"held-out replay velocity RMSE {before:.4f} -> {f.test_rmse_mps:.4f} m/s"
                 f" (p {sig.p_value:.3g}){bound}{loose}",

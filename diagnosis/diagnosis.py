@@ -179,13 +179,12 @@ def diagnose(
     for i, source in enumerate(thrust_sources):
         progress(f"log {i + 1} thrust: {source}")
     base_names = {e.name for e in sim_config.effects}
-    battery_range_v = (vehicle.battery_empty_v, vehicle.battery_full_v)
-    not_ident = check_identifiability(logs, base_names, battery_range_v)
+    battery = BatteryModel(vehicle.battery_full_v, vehicle.battery_empty_v)
+    not_ident = check_identifiability(logs, base_names, battery)
     excluded = {n.name for n in not_ident}
     for n in not_ident:
         progress(f"not identifiable: {n.name} ({n.reason})")
     base = {e.name: effect_as_mapping(e) for e in sim_config.effects}
-    battery = BatteryModel(vehicle.battery_full_v, vehicle.battery_empty_v)
     causes: list[Cause] = []
     rejected: list[Cause] = []
     effects = {k: dict(v) for k, v in base.items()}
@@ -273,7 +272,8 @@ def diagnose(
     tracking = closed_loop(sim_config, extended_config, logs, test)
     verdict = [c.name for c in causes]
     if selection is not None and data is not None:
-        extra = _unexplained(selection, data, effects, battery, config)
+        named = [c.name for c in causes if c.name in FORCE_CAUSES]
+        extra = _unexplained(selection, data, base, effects, named, battery, config)
         if extra is not None:
             causes.append(extra)
             verdict.append(extra.name)
@@ -284,14 +284,17 @@ def diagnose(
     limit = max(config.unexplained_replay_ratio * floor_rmse, 0.05)
     if np.isfinite(left_rmse) and left_rmse > limit:
         ratio = left_rmse / max(floor_rmse, 1e-9)
+        named = [n for n in verdict if n != "unexplained"]
+        after = f"after the causes named ({', '.join(named)})" if named else "with no cause named"
         evidence = (
             f"held-out replay velocity RMSE {left_rmse:.3f} m/s stays {ratio:.1f}x "
-            f"the log's noise floor ({floor_rmse:.3f} m/s) after every candidate: the "
+            f"the log's noise floor ({floor_rmse:.3f} m/s) {after}: the "
             "simulation does not reproduce this flight (another controller, an effect outside "
             "the vocabulary, or disturbances)"
         )
         if "unexplained" not in verdict:  # else the force residual's row already names it
-            causes.append(Cause("unexplained", {"replay_rmse_mps": left_rmse}, 0.0, 1.0, evidence))
+            left = min((left_rmse / max(baseline.rmse_mps(), 1e-12)) ** 2, 1.0)
+            causes.append(Cause("unexplained", {"replay_rmse_mps": left_rmse}, 0.0, left, evidence))
             verdict.append("unexplained")
         warnings.append(evidence)
     if not test:
@@ -444,7 +447,7 @@ def _force_causes(
         cause = Cause(
             s.name,
             params,
-            s.explained_fraction,
+            max(0.0, s.explained_fraction),  # one that made the error larger explains nothing
             max(0.0, s.step_gain_fraction),
             f"held-out force residual RMS {s.before_rms_n:.3f} -> {s.after_rms_n:.3f} N "
             f"({verb}{p})",
@@ -517,15 +520,19 @@ def _added(
 def _unexplained(
     selection: ForceSelection,
     data: ForceData,
+    base: dict[str, dict[str, object]],
     effects: dict[str, dict[str, object]],
+    named: list[str],
     battery: BatteryModel,
     config: DiagnosisConfig,
 ) -> Cause | None:
-    """``unexplained`` if the held-out force residual left over, averaged over
-    ``config.persistence_s`` to drop white sensor noise, stays above the threshold."""
+    """``unexplained`` if the held-out force residual left over by ``effects`` (the config's
+    ``base`` and the force causes ``named``), averaged over ``config.persistence_s`` to drop
+    white sensor noise, stays above the threshold."""
     _, test_mask = train_test_masks(data, config.selection.block_s)
     test = data.take(test_mask)
     left = test.resid_ned_n - predicted_residual(effects, test, battery)
+    before = test.resid_ned_n - predicted_residual(base, test, battery)
     dt = float(np.median(np.diff(test.t_s))) if test.n_rows > 1 else 1.0
     size = max(1, round(config.persistence_s / dt))
     smooth = np.vstack(
@@ -545,16 +552,16 @@ def _unexplained(
     gust = gust_intensity_mps(effects, data, battery)
     if gust is not None:
         params["gust_intensity_mps"] = gust
-    share = min(selection.final_sse_n2 / max(selection.baseline_sse_n2, 1e-12), 1.0)
-    named = [s.name for s in selection.scores if s.accepted]
+    share = min(float(np.sum(left * left)) / max(float(np.sum(before * before)), 1e-12), 1.0)
     after = f"after the causes named ({', '.join(named)})" if named else "with no force cause named"
     return Cause(
         "unexplained",
         params,
-        float(share),
-        float(share),
+        0.0,
+        share,
         f"held-out force residual RMS {rms:.3f} N ({100 * rms / weight:.1f} % of the weight, "
-        f"averaged over {config.persistence_s} s) stays {after}, {100 * share:.0f} % of its "
-        "squared error: a disturbance such as gusts, or a vehicle the config does not describe "
-        "(another airframe or controller, its mass or thrust, an effect outside the vocabulary)",
+        f"averaged over {config.persistence_s} s) stays {after}: {100 * share:.0f} % of the "
+        "config's held-out squared error is left; a disturbance such as gusts, or a vehicle the "
+        "config does not describe (another airframe or controller, its mass or thrust, an "
+        "effect outside the vocabulary)",
     )

@@ -8,13 +8,14 @@ one check per requirement and runs them over the registry.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass
-from functools import partial
 
 import numpy as np
 
 from diagnosis.command_path import FLIGHT_CONTROL
+from diagnosis.force_model import BatteryModel
 from flightlog.schema import FlightLog
 from vehicle_sim.effects import EFFECT_CLASSES
 
@@ -23,12 +24,14 @@ MIN_NEAR_GROUND_SPAN_M = 0.05
 MIN_SPEED_SPAN_MPS = 3.0
 MIN_HEADING_SPREAD = 0.3  # smallest eigenvalue share of horizontal velocity directions
 MIN_VOLTAGE_DROP_V = 0.02
-# A logged battery voltage below one lithium cell's empty voltage is no pack reading (seen: a
-# real PX4 log's battery_status at 0.0-0.13 V, a flight controller without a power module).
-MIN_PACK_V = 3.0
-# The config's battery range [empty_v, full_v] widened by this fraction of its span each side:
-# a pack read mostly outside it is another pack, whose discharge the range cannot tell.
-BATTERY_RANGE_MARGIN = 0.1
+# A lithium cell's voltage [V]: from empty under load to a high-voltage cell charged. A pack of
+# n cells reads within n times this range, so readings tell the cell counts the pack can have;
+# a logged voltage below one cell's least is no pack reading (seen: a real PX4 log's
+# battery_status at 0.0-0.13 V, a flight controller without a power module).
+CELL_RANGE_V = (3.0, 4.45)
+# Percentiles of the logged voltage [%] read as the pack's least and most (a sag under a burst
+# of thrust, a spike, is not the pack).
+PACK_PERCENTILES = (5.0, 95.0)
 MIN_SETPOINT_STEP_MPS = 0.5
 MIN_SETPOINT_STEPS = 4
 
@@ -56,28 +59,35 @@ class NotIdentifiable:
     flight: str
 
 
-# A check returns None when the logs meet the requirement, else (reason, fix or None: the
+@dataclass(frozen=True)
+class Flights:
+    """What the checks read: the logs, and the config's battery (None: not known), against
+    which the logged voltage is read."""
+
+    logs: Sequence[FlightLog]
+    battery: BatteryModel | None = None
+
+
+# A check returns None when the flights meet the requirement, else (reason, fix or None: the
 # effect's own excitation flight).
-Check = Callable[[Sequence[FlightLog]], tuple[str, str | None] | None]
+Check = Callable[[Flights], tuple[str, str | None] | None]
 
 
 def check_identifiability(
-    logs: Sequence[FlightLog],
-    known: Collection[str] = (),
-    battery_range_v: tuple[float, float] | None = None,
+    logs: Sequence[FlightLog], known: Collection[str] = (), battery: BatteryModel | None = None
 ) -> tuple[NotIdentifiable, ...]:
     """The causes that ``logs`` cannot identify (empty when all can be); ``known``: effects the
     config already has (an effect that acts through drag is identifiable only if a drag is
-    known or identifiable); ``battery_range_v``: the config's (empty_v, full_v) [V], against
-    which the logged voltage is read (None: not checked). Requirements are checked in the
-    order of :data:`CHECKS`; a cause is listed once, with the first requirement it misses."""
+    known or identifiable); ``battery``: the config's, against which the logged voltage is
+    read (None: not). Requirements are checked in the order of :data:`CHECKS`; a cause is
+    listed once, with the first requirement it misses."""
     out: dict[str, NotIdentifiable] = {}
-    checks = {**CHECKS, "voltage_drop": partial(_voltage_drop, battery_range_v=battery_range_v)}
-    for requirement, check in checks.items():
+    flights = Flights(logs, battery)
+    for requirement, check in CHECKS.items():
         needing = [n for n, needs in _NEEDS.items() if requirement in needs and n not in out]
         if not needing:
             continue
-        failed = check(logs)
+        failed = check(flights)
         if failed is None:
             continue
         reason, fix = failed
@@ -102,7 +112,8 @@ def check_identifiability(
     return tuple(out.values())
 
 
-def _thrust(logs: Sequence[FlightLog]) -> tuple[str, str | None] | None:
+def _thrust(flights: Flights) -> tuple[str, str | None] | None:
+    logs = flights.logs
     if all(log.has("thrust_n") for log in logs):
         return None
     return (
@@ -115,7 +126,8 @@ def _horizontal_velocity(logs: Sequence[FlightLog]) -> np.ndarray:
     return np.vstack([log.stack("vel_n_mps", "vel_e_mps") for log in logs])
 
 
-def _speed_span(logs: Sequence[FlightLog]) -> tuple[str, str | None] | None:
+def _speed_span(flights: Flights) -> tuple[str, str | None] | None:
+    logs = flights.logs
     vel = _horizontal_velocity(logs)
     span = float(np.ptp(np.hypot(vel[:, 0], vel[:, 1])))
     if span >= MIN_SPEED_SPAN_MPS:
@@ -123,7 +135,8 @@ def _speed_span(logs: Sequence[FlightLog]) -> tuple[str, str | None] | None:
     return f"horizontal speed spans only {span:.1f} m/s", None
 
 
-def _crossing_headings(logs: Sequence[FlightLog]) -> tuple[str, str | None] | None:
+def _crossing_headings(flights: Flights) -> tuple[str, str | None] | None:
+    logs = flights.logs
     vel = _horizontal_velocity(logs)
     moving = vel[np.hypot(vel[:, 0], vel[:, 1]) > 1.0]
     spread = 0.0
@@ -136,7 +149,8 @@ def _crossing_headings(logs: Sequence[FlightLog]) -> tuple[str, str | None] | No
     return "flight directions do not cover two crossing headings", None
 
 
-def _near_ground(logs: Sequence[FlightLog]) -> tuple[str, str | None] | None:
+def _near_ground(flights: Flights) -> tuple[str, str | None] | None:
+    logs = flights.logs
     alt = np.concatenate([-log["pos_d_m"] for log in logs])
     low = alt[(alt > 0.01) & (alt < NEAR_GROUND_M)]
     if len(low) >= 20 and np.ptp(low) >= MIN_NEAR_GROUND_SPAN_M:
@@ -144,40 +158,59 @@ def _near_ground(logs: Sequence[FlightLog]) -> tuple[str, str | None] | None:
     return f"no altitude change below {NEAR_GROUND_M} m", None
 
 
-def _voltage_drop(
-    logs: Sequence[FlightLog], battery_range_v: tuple[float, float] | None = None
-) -> tuple[str, str | None] | None:
-    """A logged pack voltage that changes, and (given ``battery_range_v``, the config's
-    (empty_v, full_v) [V]) mostly lies within the config's battery."""
-    volts = [v[np.isfinite(v)] for v in (log["battery_v"] for log in logs if log.has("battery_v"))]
-    volts = [v for v in volts if v.size]
+def _voltage_drop(flights: Flights) -> tuple[str, str | None] | None:
+    """A logged pack voltage that changes, of a pack the config's battery can be (the same
+    cell count, when both tell one)."""
+    volts = [log["battery_v"] for log in flights.logs if log.has("battery_v")]
     if not volts:
         return "no battery_v column", None
-    every = np.concatenate(volts)
-    median = float(np.median(every))
-    if median < MIN_PACK_V:
+    finite = [v[np.isfinite(v)] for v in volts]
+    every = np.concatenate(finite)
+    if not every.size:
+        return "battery_v holds no finite value", None
+    least_v, median_v, most_v = np.percentile(
+        every, (PACK_PERCENTILES[0], 50.0, PACK_PERCENTILES[1])
+    )
+    battery = flights.battery
+    # (a config may model a pack below one cell: its own logs read as it)
+    floor_v = CELL_RANGE_V[0] if battery is None else min(CELL_RANGE_V[0], battery.empty_v)
+    if median_v < floor_v:
         return (
-            f"battery_v is no pack voltage (median {median:.2f} V, below one cell's "
-            f"{MIN_PACK_V:.1f} V)",
+            f"battery_v is no pack voltage (median {median_v:.2f} V, below one cell's "
+            f"{CELL_RANGE_V[0]:.1f} V)",
             "log the pack's voltage (a power module's battery_status.voltage_v)",
         )
-    if battery_range_v is not None:
-        empty_v, full_v = battery_range_v
-        margin = BATTERY_RANGE_MARGIN * (full_v - empty_v)
-        inside = (every >= empty_v - margin) & (every <= full_v + margin)
-        if np.mean(inside) < 0.5:
+    if battery is not None:
+        logged = cell_counts(least_v, most_v)
+        configured = cell_counts(battery.empty_v, battery.full_v)
+        if configured and not set(logged) & set(configured):
             return (
-                f"battery_v {every.min():.1f}-{every.max():.1f} V lies outside the config's "
-                f"battery ({empty_v:.1f}-{full_v:.1f} V)",
-                "give the vehicle's pack as the config's [battery] full_v and empty_v "
-                "(vehicle-sim config-from-log reads them from the log's parameters)",
+                f"battery_v {least_v:.1f}-{most_v:.1f} V is a pack of {_counts(logged)} "
+                f"cells, the config's battery ({battery.empty_v:.1f}-{battery.full_v:.1f} V) one "
+                f"of {_counts(configured)}",
+                "give this vehicle's pack as the config's [battery] full_v and empty_v (a config "
+                "from vehicle-sim config-from-log: check the log's BAT1_N_CELLS)",
             )
-    if max(float(np.ptp(v)) for v in volts) >= MIN_VOLTAGE_DROP_V:
+    if max(float(np.ptp(v)) for v in finite if v.size) >= MIN_VOLTAGE_DROP_V:
         return None
     return "battery voltage does not change", None
 
 
-def _setpoint_steps(logs: Sequence[FlightLog]) -> tuple[str, str | None] | None:
+def cell_counts(least_v: float, most_v: float) -> range:
+    """The cell counts a lithium pack that reads ``least_v`` to ``most_v`` [V] can have
+    (:data:`CELL_RANGE_V` per cell); empty when none."""
+    return range(math.ceil(most_v / CELL_RANGE_V[1]), math.floor(least_v / CELL_RANGE_V[0]) + 1)
+
+
+def _counts(counts: range) -> str:
+    """Cell counts in words: "4", "4-5", "no whole number of"."""
+    if not counts:
+        return "no whole number of"
+    return str(counts[0]) if len(counts) == 1 else f"{counts[0]}-{counts[-1]}"
+
+
+def _setpoint_steps(flights: Flights) -> tuple[str, str | None] | None:
+    logs = flights.logs
     steps = 0
     for log in logs:
         cmd = log.stack("cmd_vel_n_mps", "cmd_vel_e_mps", "cmd_vel_d_mps")

@@ -27,8 +27,9 @@ EXPLAINED_LEGEND = (
     "*explained*: the share of the held-out error above the noise floor (the force residual's "
     "for a force cause, the replay's for a command-path cause) that the cause removes, fitted "
     "on top of the causes named before it (0 % when it removes none); *confidence*: the share "
-    "of the error then left that it removes. A cause is named only when that removal is large, "
-    "significant (p) and its fit is not on its search bound."
+    "of the error then left that it removes (for `unexplained`: the share of the config's "
+    "held-out error left). A cause is named only when that removal is large, significant (p) "
+    "and its fit is not on its search bound."
 )
 
 
@@ -208,12 +209,9 @@ def _num(value: float) -> float | None:
 
 
 def _cause_row(cause: Cause) -> str:
-    """The cause table's row of ``cause``. A cause that made the error larger explains nothing
-    (its evidence says how much larger: a share of a small explainable part read -100 % for
-    0.8 % more on a real log); what is left unexplained is no share explained ("-": its
-    evidence gives the share left)."""
+    """The cause table's row of ``cause``."""
     params = ", ".join(f"{k} = {v:.4g}" for k, v in cause.params.items()) or "-"
-    explained = "-" if cause.name == "unexplained" else _percent(max(cause.explained_fraction, 0.0))
+    explained = _percent(cause.explained_fraction)
     return (
         f"| `{cause.name}` | {params} | {explained} | {cause.confidence:.2f} | {cause.evidence} |"
     )

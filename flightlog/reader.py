@@ -25,7 +25,6 @@ NEEDS_HZ: dict[str, dict[str, float]] = {
 # in the default profile), so a 10 Hz topic comes out a little slower on average: 9.78-9.84 Hz
 # in v1.8 and older logs, 10.0 Hz in v1.15. A rate within this fraction of a need meets it.
 LOGGER_JITTER_FRACTION = 0.05
-CSV_START = b"t_s,"  # how a schema-v1 CSV starts: its first column is the time
 
 
 def read_log(path: str | Path) -> FlightLog:
@@ -35,15 +34,15 @@ def read_log(path: str | Path) -> FlightLog:
         return read_ulog(path)
     if path.suffix.lower() == ".ulg" and path.is_file():
         with path.open("rb") as f:
-            start = f.read(len(CSV_START))
-        if not start:
+            first = f.readline(4096)
+        if not first:
             raise FlightLogError(
                 f"{path}: empty file (0 bytes); copy the log again from the vehicle"
             )
-        if start == CSV_START:
+        header = first.decode("utf-8", "replace").removeprefix("\ufeff").split(",")
+        if "t_s" in (name.strip() for name in header):  # the CSV reader's own header rules
             raise FlightLogError(
-                f"{path}: named .ulg but a schema-v1 CSV (it starts with {start.decode()}); "
-                "rename it .csv"
+                f"{path}: named .ulg but a schema-v1 CSV (its header has t_s); rename it .csv"
             )
         raise FlightLogError(
             f"{path}: named .ulg but does not start with the ULog magic bytes; "

@@ -98,6 +98,7 @@ def read_ulog_track(path: str | Path) -> ULogTrack:
     pos_ne = np.column_stack([np.asarray(pos[f], float) for f in ("x", "y")])
     valid = np.asarray(pos["xy_valid"]) > 0 if "xy_valid" in pos else np.ones(len(t_s), bool)
     params = ulog.initial_parameters
+    plausible = _plausible(pos, len(t_s))
     mav_type = int(params["MAV_TYPE"]) if "MAV_TYPE" in params else None
     return ULogTrack(
         name=path.name,
@@ -106,11 +107,11 @@ def read_ulog_track(path: str | Path) -> ULogTrack:
         xy_valid=valid,
         duration_s=duration_s,
         armed_spans_s=_armed_spans_s(topics.get("vehicle_status"), t0_us, duration_s),
-        origin_deg=_origin_deg(pos, _plausible(pos, len(t_s))),
+        origin_deg=_origin_deg(pos, plausible),
         vehicle="no airframe set" if px4.no_airframe_set(params) else px4.vehicle_name(mav_type),
         damage=damage_note_of(meta),
         eph_m=np.asarray(pos["eph"], float) if "eph" in pos else np.full(len(t_s), np.nan),
-        xy_resets=_xy_resets(pos, t_s, _plausible(pos, len(t_s))),
+        xy_resets=_xy_resets(pos, t_s, plausible),
     )
 
 

@@ -32,6 +32,7 @@ import numpy as np
 from flightlog.schema import GRAVITY_MPS2, FlightLog
 
 HOVER_SPEED_MPS = 0.3  # rows slower than this (and not landed) count as hovering
+MIN_HOVER_ROWS = 10  # hovering rows a hover thrust is read from, at least
 HOVER_PARAMETER = "MPC_THR_HOVER parameter"  # the hover thrust's source, when a parameter
 HOVER_ESTIMATED = "median produced thrust in hover"  # its source, when estimated from the flight
 
@@ -71,9 +72,9 @@ class LoggedGains:
 def estimated_hover_thrust(log: FlightLog) -> float | None:
     """The hover thrust (normalised, 0-1) the flight shows: the median produced thrust
     (``thrust_norm`` of a ``produced`` thrust source) over the rows slower than
-    HOVER_SPEED_MPS and not landed, when there are 10 or more and it is a thrust a vehicle
-    hovers at (:func:`is_hover_thrust`: not the zero of motors idle on the ground in a log
-    that does not say it landed); else None."""
+    HOVER_SPEED_MPS and not landed, when there are MIN_HOVER_ROWS or more and it is a thrust
+    a vehicle hovers at (:func:`is_hover_thrust`: not the zero of motors idle on the ground in
+    a log that does not say it landed); else None."""
     source = log.metadata.get("thrust_source")
     produced = isinstance(source, Mapping) and source.get("kind") == "produced"
     if not (produced and log.has("thrust_norm")):
@@ -82,7 +83,7 @@ def estimated_hover_thrust(log: FlightLog) -> float | None:
     rows = speed < HOVER_SPEED_MPS
     if log.has("landed"):
         rows &= log["landed"] == 0
-    if rows.sum() < 10:
+    if rows.sum() < MIN_HOVER_ROWS:
         return None
     hover = float(np.median(log["thrust_norm"][rows]))
     return hover if is_hover_thrust(hover) else None

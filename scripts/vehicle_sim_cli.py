@@ -42,7 +42,7 @@ from flightlog.schema import sidecar_path
 from scripts.one_line_parser import output_path
 from vehicle_sim import EFFECT_NAMES, SimConfigError, Simulator, load_sim_config
 from vehicle_sim.backends import BACKEND_NAMES
-from vehicle_sim.config import PRESET_NAMES
+from vehicle_sim.config import PRESET_NAMES, no_such_config
 from vehicle_sim.mavlink import (
     EndpointConfig,
     MavlinkEndpoint,
@@ -419,12 +419,8 @@ def _run(config: VehicleSimCliConfig, stop: threading.Event) -> int:
     if config.vehicle in ROVER_PRESETS:
         return _run_rover(config, stop)
     if config.vehicle not in PRESET_NAMES and not Path(config.vehicle).is_file():
-        print(
-            f"{PROG}: error: --vehicle {config.vehicle}: no such config file or preset; use a "
-            f"multirotor ({', '.join(PRESET_NAMES)}), a rover ({', '.join(ROVER_PRESETS)}) or "
-            "the path of a TOML file",
-            file=sys.stderr,
-        )
+        rovers = f"a rover ({', '.join(ROVER_PRESETS)})"
+        print(f"{PROG}: error: --vehicle {no_such_config(config.vehicle, rovers)}", file=sys.stderr)
         return 2
     if config.log_path is not None:
         try:  # found out now, not after a flight whose log would be lost

@@ -174,6 +174,18 @@ class SimConfig:
         return replace(self, effects=tuple(e for e in self.effects if e.name not in names))
 
 
+def no_such_config(src: str, others: str = "") -> str:
+    """The line for a ``src`` that is neither a preset nor a config file; ``others``: more
+    names the caller also takes, in words (vehicle-sim's rovers)."""
+    presets = ", ".join(PRESET_NAMES)
+    if others:
+        return (
+            f"{src}: no such config file or preset; use a multirotor ({presets}), {others} or "
+            "the path of a TOML file"
+        )
+    return f"{src}: no such config file or preset; use one of {presets} or the path of a TOML file"
+
+
 def load_sim_config(
     path_or_preset_name: str | Path,
     effects: Mapping[str, Mapping[str, Any] | None] | Iterable[Effect] | None = None,
@@ -195,10 +207,7 @@ def load_sim_config(
     else:
         path = Path(src)
         if not path.is_file():
-            raise SimConfigError(
-                f"{src}: no such config file or preset; use one of {', '.join(PRESET_NAMES)} "
-                "or the path of a TOML file"
-            )
+            raise SimConfigError(no_such_config(src))
     try:
         doc = tomllib.loads(path.read_text())
     except (UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:

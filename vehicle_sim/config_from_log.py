@@ -34,6 +34,7 @@ from flightlog.velocity_loop_gains import (
     HOVER_ESTIMATED,
     HOVER_PARAMETER,
     HOVER_SPEED_MPS,
+    MIN_HOVER_ROWS,
     acceleration_gains,
     estimated_hover_thrust,
     hover_thrust_for_gains,
@@ -88,12 +89,14 @@ def _thrust_not_read(log: FlightLog, hover_how: str) -> str:
     source = log.metadata.get("thrust_source")
     if hover_how != HOVER_PARAMETER or not log.has("thrust_norm"):
         return ""
-    if isinstance(source, Mapping) and source.get("kind") != "produced":
+    if not isinstance(source, Mapping):
+        return "the log does not say what its thrust is (thrust_source): not read as hover thrust"
+    if source.get("kind") != "produced":
         what = f"{source.get('kind')} ({source.get('topic')})"
         return f"the log's thrust is {what}, not produced: not read as the hover thrust"
     return (
-        f"no hovering stretch in the air (10 rows slower than {HOVER_SPEED_MPS} m/s at a "
-        "thrust a vehicle hovers at) to read the hover thrust from"
+        f"no hovering stretch in the air ({MIN_HOVER_ROWS} rows slower than {HOVER_SPEED_MPS} "
+        "m/s at a thrust a vehicle hovers at) to read the hover thrust from"
     )
 
 

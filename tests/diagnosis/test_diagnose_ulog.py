@@ -162,3 +162,24 @@ def test_the_rows_the_mapping_left_out_are_said_in_the_headline():
         "position or velocity invalid or dead reckoning, 100 without a velocity command"
     ], d.warnings
     assert rows_left_out_note(read_log(POSCTL)) is None  # 71 of 761 rows
+
+
+@pytest.mark.parametrize("ulog", [POSCTL, AUTO], ids=["real", "sitl"])
+def test_no_cause_explains_less_than_nothing_and_unexplained_says_what_is_left(ulog):
+    """PX4's position-control flight against iris: ground_effect's 4.808 -> 4.845 N read
+    'explained -100 %', and unexplained's evidence said its residual stayed 'after every
+    deterministic candidate' beside a row that had removed most of it. (The real flight's
+    replay is left unexplained, SITL's force residual.)"""
+    from flightlog.reader import read_log
+
+    d = diagnose([read_log(ulog)], load_sim_config("iris"))
+    assert all(0.0 <= c.explained_fraction <= 1.0 for c in d.causes), d.causes
+    (left,) = [c for c in d.causes if c.name == "unexplained"]
+    assert left.explained_fraction == 0.0 and 0.0 < left.confidence <= 1.0
+    named = [c.name for c in d.causes if c.name in d.verdict and c.name != "unexplained"]
+    assert ("with no" in left.evidence) == (not named), left.evidence
+    if "rms_force_n" in left.params:  # the force residual's; else the replay's
+        said = f"{100 * left.confidence:.0f} % of the config's held-out squared error is left"
+        assert said in left.evidence, left.evidence
+    else:
+        assert left.confidence == min((d.extended.rmse_mps() / d.baseline.rmse_mps()) ** 2, 1.0)

@@ -8,7 +8,8 @@ import pytest
 from diagnosis.diagnosis import diagnose
 from diagnosis.excitation import schedule_from_mapping
 from diagnosis.fly_schedule import fly_schedule
-from diagnosis.identifiability import FLIGHT_FOR, check_identifiability
+from diagnosis.force_model import BatteryModel
+from diagnosis.identifiability import FLIGHT_FOR, cell_counts, check_identifiability
 from diagnosis.replay import windows
 from experiments.hidden_effects import draw, fly_hidden
 from flightlog.schema import REQUIRED_COLUMNS, FlightLog
@@ -164,21 +165,49 @@ def test_battery_sag_is_not_read_from_a_voltage_that_is_no_pack_or_another_pack(
     """Two real PX4 logs' batteries: a flight controller without a power module (0.0-0.13 V)
     and a 6S pack (20.5-22.7 V) read against a 4S config (14.0-16.8 V). Either would have
     been taken as a discharge (clipped to empty, or to full on every row)."""
-    iris = (14.0, 16.8)
+    iris = BatteryModel(full_v=16.8, empty_v=14.0)
     none = synthetic(battery_v=np.linspace(0.13, 0.0, 100))
     reason = unidentifiable([none])["battery_sag"]
     assert reason.reason == "battery_v is no pack voltage (median 0.07 V, below one cell's 3.0 V)"
     assert "power module" in reason.flight
     six_s = [synthetic(battery_v=np.linspace(22.7, 20.5, 100))]
-    assert "battery_sag" not in unidentifiable(six_s)  # no range given: not read against one
-    other = {n.name: n for n in check_identifiability(six_s, battery_range_v=iris)}
+    assert "battery_sag" not in unidentifiable(six_s)  # no battery given: not read against one
+    other = {n.name: n for n in check_identifiability(six_s, battery=iris)}
     assert other["battery_sag"].reason == (
-        "battery_v 20.5-22.7 V lies outside the config's battery (14.0-16.8 V)"
+        "battery_v 20.6-22.6 V is a pack of 6 cells, the config's battery (14.0-16.8 V) one of 4"
     )
-    assert "config-from-log" in other["battery_sag"].flight
-    # a full pack read a little above the config's full voltage is the same pack
-    charged = [synthetic(battery_v=np.linspace(17.0, 16.2, 100))]
-    assert "battery_sag" not in {n.name for n in check_identifiability(charged, (), iris)}
+    assert "BAT1_N_CELLS" in other["battery_sag"].flight
+    # a 4S pack charged to 4.2 V a cell against a config-from-log's 4 x BAT1_V_CHARGED 4.05 V,
+    # and a sag to 3.0 V a cell in one row out of fifty: the same pack
+    low_full = BatteryModel(full_v=16.2, empty_v=14.4)
+    charged = np.linspace(16.8, 16.3, 100)
+    charged[::50] = 12.0
+    assert "battery_sag" not in {
+        n.name for n in check_identifiability([synthetic(battery_v=charged)], (), low_full)
+    }
+    # a config modelling a pack below one cell reads its own logs
+    toy = BatteryModel(full_v=2.0, empty_v=1.5)
+    own = [synthetic(battery_v=np.linspace(2.0, 1.8, 100))]
+    assert "battery_sag" not in {n.name for n in check_identifiability(own, (), toy)}
+
+
+def test_a_battery_column_of_nan_is_said_so():
+    blank = unidentifiable([synthetic(battery_v=np.full(100, np.nan))])["battery_sag"]
+    assert blank.reason == "battery_v holds no finite value"
+    some = np.linspace(16.0, 15.9, 100)
+    some[::3] = np.nan
+    assert "battery_sag" not in unidentifiable([synthetic(battery_v=some)])
+
+
+def cell_counts_of(least_v: float, most_v: float) -> list[int]:
+    return list(cell_counts(least_v, most_v))
+
+
+def test_cell_counts_are_those_a_lithium_pack_reading_so_can_have():
+    assert cell_counts_of(14.0, 16.8) == [4]  # iris' 4S
+    assert cell_counts_of(19.8, 26.7) == [6]  # a 6S of high-voltage cells
+    assert cell_counts_of(15.9, 16.8) == [4, 5]  # a charged pack that says little
+    assert cell_counts_of(9.0, 16.8) == []  # no lithium pack reads both
 
 
 def test_setpoint_steps_are_counted_over_every_log():

@@ -37,9 +37,10 @@ def test_an_empty_ulg_and_a_csv_named_ulg_are_said_to_be_what_they_are(tmp_path)
     with pytest.raises(FlightLogError, match=r"empty.ulg: empty file \(0 bytes\); copy the log"):
         read_log(empty)
     csv = tmp_path / "flight.ulg"
-    csv.write_text("t_s,pos_n_m\n0,0\n")
-    with pytest.raises(FlightLogError, match=r"a schema-v1 CSV \(it starts with t_s,\); rename"):
-        read_log(csv)
+    for text in ("t_s,pos_n_m\n0,0\n", "\ufeffpos_n_m, t_s\n0,0\n"):  # a spreadsheet's too
+        csv.write_text(text, encoding="utf-8")
+        with pytest.raises(FlightLogError, match=r"a schema-v1 CSV \(its header has t_s\); rename"):
+            read_log(csv)
 
 
 def test_a_missing_ulg_is_named_missing_not_foreign(tmp_path):
