@@ -8,7 +8,6 @@ one check per requirement and runs them over the registry.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass
 
@@ -16,6 +15,7 @@ import numpy as np
 
 from diagnosis.command_path import FLIGHT_CONTROL
 from diagnosis.force_model import BatteryModel
+from flightlog.battery_pack import CELL_RANGE_V, PackReading, cell_counts, counts_in_words
 from flightlog.schema import FlightLog
 from vehicle_sim.effects import EFFECT_CLASSES
 
@@ -24,14 +24,6 @@ MIN_NEAR_GROUND_SPAN_M = 0.05
 MIN_SPEED_SPAN_MPS = 3.0
 MIN_HEADING_SPREAD = 0.3  # smallest eigenvalue share of horizontal velocity directions
 MIN_VOLTAGE_DROP_V = 0.02
-# A lithium cell's voltage [V]: from empty under load to a high-voltage cell charged. A pack of
-# n cells reads within n times this range, so readings tell the cell counts the pack can have;
-# a logged voltage below one cell's least is no pack reading (seen: a real PX4 log's
-# battery_status at 0.0-0.13 V, a flight controller without a power module).
-CELL_RANGE_V = (3.0, 4.45)
-# Percentiles of the logged voltage [%] read as the pack's least and most (a sag under a burst
-# of thrust, a spike, is not the pack).
-PACK_PERCENTILES = (5.0, 95.0)
 MIN_SETPOINT_STEP_MPS = 0.5
 MIN_SETPOINT_STEPS = 4
 
@@ -160,53 +152,37 @@ def _near_ground(flights: Flights) -> tuple[str, str | None] | None:
 
 def _voltage_drop(flights: Flights) -> tuple[str, str | None] | None:
     """A logged pack voltage that changes, of a pack the config's battery can be (the same
-    cell count, when both tell one)."""
+    cell count, when both tell one: :mod:`flightlog.battery_pack`)."""
     volts = [log["battery_v"] for log in flights.logs if log.has("battery_v")]
     if not volts:
         return "no battery_v column", None
-    finite = [v[np.isfinite(v)] for v in volts]
-    every = np.concatenate(finite)
-    if not every.size:
+    pack = PackReading.of(volts)
+    if pack is None:
         return "battery_v holds no finite value", None
-    least_v, median_v, most_v = np.percentile(
-        every, (PACK_PERCENTILES[0], 50.0, PACK_PERCENTILES[1])
-    )
     battery = flights.battery
     # (a config may model a pack below one cell: its own logs read as it)
     floor_v = CELL_RANGE_V[0] if battery is None else min(CELL_RANGE_V[0], battery.empty_v)
-    if median_v < floor_v:
+    if not pack.is_pack(floor_v):
         return (
-            f"battery_v is no pack voltage (median {median_v:.2f} V, below one cell's "
+            f"battery_v is no pack voltage (median {pack.median_v:.2f} V, below one cell's "
             f"{CELL_RANGE_V[0]:.1f} V)",
             "log the pack's voltage (a power module's battery_status.voltage_v)",
         )
     if battery is not None:
-        logged = cell_counts(least_v, most_v)
         configured = cell_counts(battery.empty_v, battery.full_v)
-        if configured and not set(logged) & set(configured):
+        if configured and not set(pack.cells()) & set(configured):
             return (
-                f"battery_v {least_v:.1f}-{most_v:.1f} V is a pack of {_counts(logged)} "
-                f"cells, the config's battery ({battery.empty_v:.1f}-{battery.full_v:.1f} V) one "
-                f"of {_counts(configured)}",
+                f"battery_v {pack.least_v:.1f}-{pack.most_v:.1f} V is a pack of "
+                f"{counts_in_words(pack.cells())} cells, the config's battery "
+                f"({battery.empty_v:.1f}-{battery.full_v:.1f} V) one of "
+                f"{counts_in_words(configured)}",
                 "give this vehicle's pack as the config's [battery] full_v and empty_v (a config "
                 "from vehicle-sim config-from-log: check the log's BAT1_N_CELLS)",
             )
+    finite = [v[np.isfinite(v)] for v in volts]
     if max(float(np.ptp(v)) for v in finite if v.size) >= MIN_VOLTAGE_DROP_V:
         return None
     return "battery voltage does not change", None
-
-
-def cell_counts(least_v: float, most_v: float) -> range:
-    """The cell counts a lithium pack that reads ``least_v`` to ``most_v`` [V] can have
-    (:data:`CELL_RANGE_V` per cell); empty when none."""
-    return range(math.ceil(most_v / CELL_RANGE_V[1]), math.floor(least_v / CELL_RANGE_V[0]) + 1)
-
-
-def _counts(counts: range) -> str:
-    """Cell counts in words: "4", "4-5", "no whole number of"."""
-    if not counts:
-        return "no whole number of"
-    return str(counts[0]) if len(counts) == 1 else f"{counts[0]}-{counts[-1]}"
 
 
 def _setpoint_steps(flights: Flights) -> tuple[str, str | None] | None:

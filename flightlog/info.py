@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from flightlog import px4
+from flightlog.battery_pack import CELL_RANGE_V, PackReading, counts_in_words
 from flightlog.reader import NEEDS_HZ, log_rates_hz, rate_shortfalls
 from flightlog.schema import FlightLog
 from flightlog.ulog import damage_note, parameters_give_a_config
@@ -64,6 +65,8 @@ def describe_log(log: FlightLog) -> list[str]:
         lines.append("thrust: " + ("thrust_n" if log.has("thrust_n") else "thrust_norm"))
     else:
         lines.append("thrust: none")
+    if log.has("battery_v"):
+        lines.append(_battery_line(log["battery_v"]))
     rotor = meta.get("rotor_speed_source")
     if isinstance(rotor, dict):
         lines.append(
@@ -100,6 +103,22 @@ def describe_log(log: FlightLog) -> list[str]:
                 "vehicle-sim --log"
             )
     return lines
+
+
+def _battery_line(volts: np.ndarray) -> str:
+    """What the logged voltage (n,) [V] says of the pack (:mod:`.battery_pack`)."""
+    pack = PackReading.of([volts])
+    if pack is None:
+        return "battery: battery_v holds no finite value"
+    if not pack.is_pack():
+        return (
+            f"battery: median {pack.median_v:.2f} V is no pack voltage (below one cell's "
+            f"{CELL_RANGE_V[0]:.1f} V: no power module?); diagnose cannot examine battery sag"
+        )
+    return (
+        f"battery: {pack.least_v:.1f}-{pack.most_v:.1f} V, a pack of "
+        f"{counts_in_words(pack.cells())} cells"
+    )
 
 
 def describe_unusable_ulog(summary: dict, reason: str) -> list[str]:

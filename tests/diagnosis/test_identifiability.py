@@ -9,7 +9,7 @@ from diagnosis.diagnosis import diagnose
 from diagnosis.excitation import schedule_from_mapping
 from diagnosis.fly_schedule import fly_schedule
 from diagnosis.force_model import BatteryModel
-from diagnosis.identifiability import FLIGHT_FOR, cell_counts, check_identifiability
+from diagnosis.identifiability import FLIGHT_FOR, check_identifiability
 from diagnosis.replay import windows
 from experiments.hidden_effects import draw, fly_hidden
 from flightlog.schema import REQUIRED_COLUMNS, FlightLog
@@ -197,17 +197,6 @@ def test_a_battery_column_of_nan_is_said_so():
     some = np.linspace(16.0, 15.9, 100)
     some[::3] = np.nan
     assert "battery_sag" not in unidentifiable([synthetic(battery_v=some)])
-
-
-def cell_counts_of(least_v: float, most_v: float) -> list[int]:
-    return list(cell_counts(least_v, most_v))
-
-
-def test_cell_counts_are_those_a_lithium_pack_reading_so_can_have():
-    assert cell_counts_of(14.0, 16.8) == [4]  # iris' 4S
-    assert cell_counts_of(19.8, 26.7) == [6]  # a 6S of high-voltage cells
-    assert cell_counts_of(15.9, 16.8) == [4, 5]  # a charged pack that says little
-    assert cell_counts_of(9.0, 16.8) == []  # no lithium pack reads both
 
 
 def test_setpoint_steps_are_counted_over_every_log():
